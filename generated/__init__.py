@@ -1,0 +1,1 @@
+"""Generated numeric kernels, one module per curve (written by ``symvib generate``; do not edit)."""

@@ -1,0 +1,97 @@
+"""The ``symvib`` command line: one subcommand per job.
+
+``symvib derive SHAPE``   print the derivation of a catalogue shape (or of ``--z``/``--x``)
+``symvib audit``          the paper's printed equations against the derivation (errata)
+
+Every error the user can cause (an unknown shape, a malformed expression, a
+bad scene) is reported in one line naming the field, with exit status 2.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["main"]
+
+#: Exit status for bad input.
+EXIT_BAD_INPUT = 2
+
+
+def _cmd_derive(args) -> int:
+    from . import curve as _curve
+    from .derive import derive
+    from .shapes import shape
+
+    if args.z is not None:
+        if args.x is not None:
+            c = _curve.parametric(args.x, args.z, q=args.q or "q", name="user")
+        else:
+            c = _curve.graph(args.z, x=args.q or "x", name="user")
+    elif args.shape:
+        c = shape(args.shape).curve()
+    else:
+        raise ValueError("give a catalogue shape name, or --z (and --x) expressions")
+    d = derive(c, seconds=args.budget)
+    if args.latex:
+        for key, value in d.latex().items():
+            print(f"{key}: {value}")
+    else:
+        print(f"curve {c.name}: x = {c.x}, z = {c.z}, q = {c.q}")
+        print(f"  h = {c.h}, alpha = {c.alpha}, kappa = {c.kappa}")
+        for s, br in d.branches.items():
+            print(f"branch s = {s:+d}:")
+            print(f"  eq. 1: {d.eom(s).lhs} = 0")
+            print(f"  F_s  = {br.F.expr}    [route: {br.F.route}, verified: {br.F.verification}]")
+            print(f"  eq. 2: {c.qdot}**2 = {br.qdot2}")
+        check = d.check()
+        print("back-substitution of eq. 2 into eq. 1:",
+              ", ".join(f"s = {s:+d}: {how or 'FAILED'}" for s, how in check.items()))
+    return 0
+
+
+def _cmd_audit(args) -> int:
+    from .audit import audit, errata_markdown
+
+    verdicts = audit()
+    if args.write:
+        with open(args.write, "w", encoding="utf-8") as fh:
+            fh.write(errata_markdown(verdicts) + "\n")
+        print(f"wrote {args.write}")
+    for v in verdicts:
+        print(f"{v.shape:9s} {v.label:6s} {'matches' if v.matches else 'DIFFERS'}  {v.how}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="symvib", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("derive", help="derive eqs. 1-2 and the energies of a curve")
+    p.add_argument("shape", nargs="?", help="catalogue shape name")
+    p.add_argument("--z", help="z(q) (a graph in --q, default x, unless --x is given)")
+    p.add_argument("--x", help="x(q) for a parametric curve")
+    p.add_argument("--q", help="coordinate name")
+    p.add_argument("--budget", type=float, default=10.0, help="seconds per integration route")
+    p.add_argument("--latex", action="store_true", help="print LaTeX")
+    p.set_defaults(func=_cmd_derive)
+
+    p = sub.add_parser("audit", help="compare the paper's printed equations with the derivation")
+    p.add_argument("--write", metavar="PATH", help="write the errata table (Markdown) to PATH")
+    p.set_defaults(func=_cmd_audit)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``symvib`` command."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except (ValueError, KeyError) as exc:
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"symvib {args.command}: error: {message}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

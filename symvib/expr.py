@@ -1,0 +1,343 @@
+"""Safe parsing of user expressions (numbers and curve formulas).
+
+Every expression that reaches symvib from a file or the command line goes
+through :func:`parse`.  It never calls :func:`eval`: the text is parsed by
+:mod:`ast` and accepted only if every node is on a short whitelist (numbers,
+the declared symbols, ``+ - * / **``, unary minus and calls of a fixed set of
+mathematical functions).  The result is a small immutable tree of tuples that
+the numeric wing evaluates with :mod:`math` (:func:`evaluate`, :func:`number`)
+and the symbolic wing converts to SymPy (``symvib.curve.to_sympy``).
+
+This module imports neither SymPy nor NumPy.
+
+Examples
+--------
+>>> number("pi/4", field="limiters.right")
+0.7853981633974483
+>>> tree = parse("R*(1 - cos(phi))", symbols=("R", "phi"), field="curve.z")
+>>> sorted(tree.symbols)
+['R', 'phi']
+>>> evaluate(tree, {"R": 2.0, "phi": 0.0})
+0.0
+>>> parse("__import__('os').system('true')", field="curve.z")
+Traceback (most recent call last):
+...
+symvib.expr.ExpressionError: curve.z: name '__import__' is not allowed (known symbols: none; functions: ...
+"""
+from __future__ import annotations
+
+import ast
+import hashlib
+import math
+from dataclasses import dataclass
+
+__all__ = [
+    "ExpressionError",
+    "Parsed",
+    "FUNCTIONS",
+    "CONSTANTS",
+    "parse",
+    "evaluate",
+    "number",
+]
+
+#: Longest accepted expression text, in characters.
+MAX_LENGTH = 1000
+#: Deepest accepted nesting of the expression tree.
+MAX_DEPTH = 40
+#: Largest number of tree nodes.
+MAX_NODES = 400
+#: Largest absolute value of a constant exponent (``x**64`` is accepted, ``x**65`` is not).
+MAX_EXPONENT = 64
+#: Longest accepted integer literal, in digits.
+MAX_INT_DIGITS = 30
+
+#: Functions allowed in expressions: name -> (number of arguments, math implementation).
+FUNCTIONS: dict[str, tuple[int, object]] = {
+    "sin": (1, math.sin),
+    "cos": (1, math.cos),
+    "tan": (1, math.tan),
+    "asin": (1, math.asin),
+    "acos": (1, math.acos),
+    "atan": (1, math.atan),
+    "atan2": (2, math.atan2),
+    "sinh": (1, math.sinh),
+    "cosh": (1, math.cosh),
+    "tanh": (1, math.tanh),
+    "asinh": (1, math.asinh),
+    "acosh": (1, math.acosh),
+    "atanh": (1, math.atanh),
+    "exp": (1, math.exp),
+    "log": (1, math.log),
+    "sqrt": (1, math.sqrt),
+    "abs": (1, abs),
+}
+
+#: Named constants allowed in expressions.
+CONSTANTS: dict[str, float] = {"pi": math.pi, "e": math.e}
+
+_BINOPS = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
+_UNARY = {ast.USub: "neg", ast.UAdd: "pos"}
+
+
+class ExpressionError(ValueError):
+    """An expression was rejected; the message starts with the field it came from."""
+
+    def __init__(self, field: str, reason: str):
+        self.field = field
+        self.reason = reason
+        super().__init__(f"{field}: {reason}")
+
+
+@dataclass(frozen=True)
+class Parsed:
+    """A validated expression.
+
+    Attributes
+    ----------
+    text : str
+        The expression as given.
+    tree : tuple
+        Nested tuples: ``("num", "0.5")``, ``("sym", "R")``, ``("const", "pi")``,
+        ``("bin", "+", a, b)``, ``("neg", a)``, ``("call", "sin", a, ...)``.
+    symbols : frozenset of str
+        The declared symbols the expression uses.
+    """
+
+    text: str
+    tree: tuple
+    symbols: frozenset
+
+    @property
+    def canonical(self) -> str:
+        """A whitespace-independent text of the tree (stable across runs)."""
+        return _canonical(self.tree)
+
+    @property
+    def digest(self) -> str:
+        """SHA-256 of :attr:`canonical`."""
+        return hashlib.sha256(self.canonical.encode()).hexdigest()
+
+
+def _canonical(node: tuple) -> str:
+    kind = node[0]
+    if kind in ("num", "sym", "const"):
+        return node[1]
+    if kind == "bin":
+        return f"({_canonical(node[2])}{node[1]}{_canonical(node[3])})"
+    if kind == "neg":
+        return f"(-{_canonical(node[1])})"
+    return f"{node[1]}(" + ",".join(_canonical(a) for a in node[2:]) + ")"
+
+
+def _describe(symbols) -> str:
+    known = ", ".join(sorted(symbols)) or "none"
+    return f"(known symbols: {known}; functions: {', '.join(sorted(FUNCTIONS))}; constants: pi, e)"
+
+
+def parse(text: str, symbols=(), *, field: str = "expression") -> Parsed:
+    """Parse ``text`` into a validated expression tree.
+
+    Parameters
+    ----------
+    text : str
+        The expression, in Python syntax (``**`` for powers).
+    symbols : iterable of str
+        Names the expression may use besides functions and constants.
+    field : str
+        Where the text came from (``"curve.z"``); starts every error message.
+
+    Returns
+    -------
+    Parsed
+
+    Raises
+    ------
+    ExpressionError
+        On anything that is not a plain arithmetic expression of the allowed
+        names: attribute access, subscripts, lambdas, comprehensions, strings,
+        keyword arguments, unknown names, text longer than ``MAX_LENGTH`` or
+        nested deeper than ``MAX_DEPTH``.
+    """
+    allowed = frozenset(symbols)
+    if not isinstance(text, str):
+        if isinstance(text, bool) or not isinstance(text, (int, float)):
+            raise ExpressionError(field, f"expected a number or an expression string, got {type(text).__name__}")
+        text = repr(text)
+    if len(text) > MAX_LENGTH:
+        raise ExpressionError(field, f"expression is {len(text)} characters long; at most {MAX_LENGTH} are accepted")
+    if not text.strip():
+        raise ExpressionError(field, "empty expression")
+    # A cheap bound on nesting before the (recursive) Python parser sees the text.
+    depth = 0
+    for ch in text:
+        depth += ch == "("
+        depth -= ch == ")"
+        if depth > MAX_DEPTH:
+            raise ExpressionError(field, f"expression nested deeper than {MAX_DEPTH} levels")
+    try:
+        module = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as exc:
+        hint = " (use ** for powers, not ^)" if "^" in text else ""
+        raise ExpressionError(field, f"not a valid expression: {exc.msg}{hint}") from None
+    except (RecursionError, MemoryError, ValueError):
+        raise ExpressionError(field, "expression too complex to parse") from None
+    counter = [0]
+    used: set[str] = set()
+    tree = _convert(module.body, allowed, field, counter, used, 0, text)
+    return Parsed(text=text, tree=tree, symbols=frozenset(used))
+
+
+def _convert(node, allowed, field, counter, used, depth, text):
+    counter[0] += 1
+    if counter[0] > MAX_NODES:
+        raise ExpressionError(field, f"expression has more than {MAX_NODES} parts")
+    if depth > MAX_DEPTH:
+        raise ExpressionError(field, f"expression nested deeper than {MAX_DEPTH} levels")
+    rec = lambda n: _convert(n, allowed, field, counter, used, depth + 1, text)  # noqa: E731
+    if isinstance(node, ast.Constant):
+        value = node.value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ExpressionError(field, f"only numbers are allowed as constants, got {value!r}")
+        if isinstance(value, int) and len(str(abs(value))) > MAX_INT_DIGITS:
+            raise ExpressionError(field, f"integer literal longer than {MAX_INT_DIGITS} digits")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ExpressionError(field, "number is not finite")
+        literal = ast.get_source_segment(text.strip(), node) or repr(value)
+        return ("num", literal.replace("_", ""))
+    if isinstance(node, ast.Name):
+        name = node.id
+        if name in allowed:
+            used.add(name)
+            return ("sym", name)
+        if name in CONSTANTS:
+            return ("const", name)
+        if name in FUNCTIONS:
+            raise ExpressionError(field, f"function '{name}' must be called, as {name}(...)")
+        raise ExpressionError(field, f"name '{name}' is not allowed {_describe(allowed)}")
+    if isinstance(node, ast.BinOp):
+        op = _BINOPS.get(type(node.op))
+        if op is None:
+            hint = " (use ** for powers)" if isinstance(node.op, ast.BitXor) else ""
+            raise ExpressionError(field, f"operator {type(node.op).__name__} is not allowed{hint}")
+        left, right = rec(node.left), rec(node.right)
+        if op == "**":
+            _check_exponent(right, field)
+        return ("bin", op, left, right)
+    if isinstance(node, ast.UnaryOp):
+        kind = _UNARY.get(type(node.op))
+        if kind is None:
+            raise ExpressionError(field, f"operator {type(node.op).__name__} is not allowed")
+        operand = rec(node.operand)
+        return operand if kind == "pos" else ("neg", operand)
+    if isinstance(node, ast.Call):
+        if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
+            what = node.func.id if isinstance(node.func, ast.Name) else type(node.func).__name__
+            raise ExpressionError(field, f"call of '{what}' is not allowed {_describe(allowed)}")
+        if node.keywords:
+            raise ExpressionError(field, "keyword arguments are not allowed")
+        name = node.func.id
+        arity = FUNCTIONS[name][0]
+        if len(node.args) != arity or any(isinstance(a, ast.Starred) for a in node.args):
+            raise ExpressionError(field, f"{name}() takes {arity} argument{'s' * (arity > 1)}")
+        return ("call", name, *(rec(a) for a in node.args))
+    raise ExpressionError(field, f"syntax not allowed in an expression: {type(node).__name__}")
+
+
+def _constant_value(node):
+    """Value of a constant subtree, or None when it holds a symbol."""
+    kind = node[0]
+    if kind == "num":
+        return float(node[1])
+    if kind == "const":
+        return CONSTANTS[node[1]]
+    if kind == "neg":
+        inner = _constant_value(node[1])
+        return None if inner is None else -inner
+    if kind == "bin":
+        a, b = _constant_value(node[2]), _constant_value(node[3])
+        if a is None or b is None:
+            return None
+        try:
+            return _apply(node[1], a, b)
+        except (OverflowError, ZeroDivisionError, ValueError):
+            return None
+    return None
+
+
+def _check_exponent(node, field):
+    value = _constant_value(node)
+    if value is not None and (not math.isfinite(value) or abs(value) > MAX_EXPONENT):
+        raise ExpressionError(field, f"constant exponent {value:g} is larger than {MAX_EXPONENT} in magnitude")
+
+
+def _apply(op, a, b):
+    if op == "+":
+        return a + b
+    if op == "-":
+        return a - b
+    if op == "*":
+        return a * b
+    if op == "/":
+        return a / b
+    return math.pow(a, b)
+
+
+def evaluate(parsed: Parsed, values=None, *, field: str | None = None) -> float:
+    """Evaluate a parsed expression in double precision with :mod:`math`.
+
+    Parameters
+    ----------
+    parsed : Parsed
+    values : mapping of str to float
+        Values of the symbols the expression uses.
+    field : str, optional
+        Name for error messages (defaults to the one the text was parsed under).
+
+    Raises
+    ------
+    ExpressionError
+        When a symbol has no value, or the value is not finite
+        (overflow, division by zero, a function outside its domain).
+    """
+    values = dict(values or {})
+    name = field or "expression"
+    missing = sorted(parsed.symbols - set(values))
+    if missing:
+        raise ExpressionError(name, f"no value for symbol(s) {', '.join(missing)}")
+
+    def ev(node):
+        kind = node[0]
+        if kind == "num":
+            return float(node[1])
+        if kind == "const":
+            return CONSTANTS[node[1]]
+        if kind == "sym":
+            return float(values[node[1]])
+        if kind == "neg":
+            return -ev(node[1])
+        if kind == "bin":
+            return _apply(node[1], ev(node[2]), ev(node[3]))
+        return FUNCTIONS[node[1]][1](*(ev(a) for a in node[2:]))
+
+    try:
+        result = float(ev(parsed.tree))
+    except (OverflowError, ZeroDivisionError, ValueError) as exc:
+        raise ExpressionError(name, f"cannot evaluate '{parsed.text}': {exc}") from None
+    if not math.isfinite(result):
+        raise ExpressionError(name, f"'{parsed.text}' evaluates to {result}, not a finite number")
+    return result
+
+
+def number(text, *, field: str, symbols=None) -> float:
+    """Parse and evaluate a number written as a constant expression.
+
+    ``symbols`` optionally maps names to values that may appear
+    (for example the curve parameters in a limiter position).
+
+    >>> number("tan(0.05)", field="physics.mu")
+    0.05004170837554477
+    """
+    symbols = dict(symbols or {})
+    parsed = parse(text, symbols=tuple(symbols), field=field)
+    return evaluate(parsed, symbols, field=field)

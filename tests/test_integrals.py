@@ -1,0 +1,103 @@
+"""F_sigma routes: closed forms checked by numeric differentiation, budgets, mu -> 0."""
+import math
+import time
+
+import mpmath
+import pytest
+import sympy as sp
+
+from symvib import budget, integrals
+from symvib.integrals import antiderivative, frictionless_gap, regularize
+from symvib.shapes import shape
+from symvib.symbols import mu
+
+CLOSED = ["parabola", "parabola-x", "cycloid", "circle"]
+
+
+@pytest.mark.parametrize("name", CLOSED)
+@pytest.mark.parametrize("s", [1, -1])
+def test_closed_form_differentiates_back_numerically(name, s):
+    """d/dq of the closed form (mpmath finite differences, 30 digits) equals the integrand."""
+    c = shape(name).curve()
+    F = antiderivative(c, s)
+    assert F.closed and F.verification in ("symbolic", "numeric")
+    values = {p: sp.Rational(3, 4) for p in c.params}
+    values[mu] = sp.Rational(7, 100)
+    Fn = sp.lambdify(c.q, F.expr.subs(values), "mpmath")
+    fn = sp.lambdify(c.q, integrals.integrand(c, s).subs(values), "mpmath")
+    with mpmath.workdps(30):
+        for q in c.sample_points(5, seed=9):
+            assert mpmath.diff(Fn, q) == pytest.approx(fn(q), rel=1e-20, abs=1e-22)
+
+
+def test_paper_antiderivatives_by_hand():
+    """Closed forms derived by hand (physics.md) equal SymPy's up to a constant."""
+    R = sp.Symbol("R", positive=True)
+    p = sp.Symbol("p", positive=True)
+    phi = sp.Symbol("phi", real=True)
+    hand = {
+        "parabola": p * sp.exp(2 * mu * phi) / (2 * sp.cos(phi) ** 2),
+        "circle": R * sp.exp(2 * mu * phi) * (3 * mu * sp.sin(phi) - (1 - 2 * mu**2) * sp.cos(phi)) / (1 + 4 * mu**2),
+        "cycloid": R * sp.exp(mu * phi) * ((2 * mu * sp.sin(phi) - (1 - mu**2) * sp.cos(phi)) / (1 + mu**2) + 1),
+    }
+    for name, expected in hand.items():
+        got = antiderivative(shape(name).curve(), 1).expr
+        assert sp.simplify(sp.diff(got - expected, phi)) == 0, name
+
+
+def test_catenary_falls_back_to_numeric_route_with_provenance():
+    c = shape("catenary").curve()
+    F = antiderivative(c, 1, seconds=0.5)
+    assert F.route == "numeric" and not F.closed
+    assert [a.route for a in F.attempts] == list(integrals.ROUTES)
+    assert all(a.outcome.startswith(("timeout", "no closed form", "error")) for a in F.attempts)
+    # The numeric representation is usable: its derivative is the integrand.
+    assert sp.simplify(sp.diff(F.expr, c.q) - F.integrand) == 0
+    values = {c.params[0]: 1, mu: sp.Rational(1, 10)}
+    with mpmath.workdps(20):
+        val = sp.N(F.expr.subs(values).subs(c.q, 1), 20)
+        ref = mpmath.quad(sp.lambdify(c.q, F.integrand.subs(values), "mpmath"), [0, 1])
+        assert val == pytest.approx(ref, rel=1e-15)
+
+
+def _sleep_forever():
+    while True:
+        time.sleep(1)
+
+
+def test_budget_kills_a_job_that_never_ends():
+    outcome = budget.run(_sleep_forever, (), seconds=0.3)
+    assert outcome.status == "timeout" and outcome.value is None
+
+
+def test_budget_reports_errors():
+    outcome = budget.run(math.sqrt, (-1.0,), seconds=10)
+    assert outcome.status == "error" and "ValueError" in outcome.value
+
+
+def test_regularize_removes_constant_pole():
+    t = sp.Symbol("t", real=True)
+    F, regular = regularize(sp.exp(mu * t) / mu + sp.sin(t), t)
+    assert not regular
+    assert sp.limit(F, mu, 0) == t + sp.sin(t)
+    assert sp.simplify(sp.diff(F, t) - sp.diff(sp.exp(mu * t) / mu + sp.sin(t), t)) == 0
+    assert regularize(sp.exp(mu * t) * sp.cos(t), t) == (sp.exp(mu * t) * sp.cos(t), True)
+
+
+@pytest.mark.parametrize("name", CLOSED)
+def test_frictionless_limit_is_energy_conservation(name):
+    """At mu = 1e-12 the closed form gives F(q) - F(q0) = z(q) - z(q0) in double precision."""
+    c = shape(name).curve()
+    values = {p: v for p, v in zip(c.params, shape(name).defaults.values())}
+    for s in (1, -1):
+        F = antiderivative(c, s)
+        assert F.mu_regular
+        assert frictionless_gap(F, c, values) < 1e-9
+
+
+def test_bad_branch_and_route():
+    c = shape("circle").curve()
+    with pytest.raises(ValueError, match="branch"):
+        antiderivative(c, 0)
+    with pytest.raises(ValueError, match="unknown route"):
+        antiderivative(c, 1, routes=("magic",))
