@@ -1,6 +1,7 @@
 """The ``symvib`` command line: one subcommand per job.
 
 ``symvib derive SHAPE``   print the derivation of a catalogue shape (or of ``--z``/``--x``)
+``symvib generate``       write the kernel modules of the catalogue into generated/ (``--check``)
 ``symvib audit``          the paper's printed equations against the derivation (errata)
 
 Every error the user can cause (an unknown shape, a malformed expression, a
@@ -62,6 +63,35 @@ def _cmd_audit(args) -> int:
     return 0
 
 
+def _cmd_generate(args) -> int:
+    from . import codegen
+    from .kernels import generated_dir
+
+    if args.z is not None or args.x is not None:
+        if args.z is None:
+            raise ValueError("--x needs --z too (a parametric curve is x(q), z(q))")
+        if not args.out:
+            raise ValueError("a curve from expressions is written where --out says")
+        from .shapes import Shape
+
+        kind = "parametric" if args.x is not None else "graph"
+        user = Shape(name=args.name or "user", kind=kind, q=args.q or ("q" if args.x else "x"), z=args.z,
+                     x=args.x)
+        path = codegen.generate(user, args.out, name=user.module, source=user.source())
+        print(f"wrote {path}")
+        return 0
+    out = args.out or generated_dir()
+    if args.check:
+        problems = codegen.stale(out)
+        for line in problems:
+            print(line)
+        print("generated kernels are current" if not problems else f"{len(problems)} problem(s)")
+        return 1 if problems else 0
+    for path in codegen.generate_catalogue(out, names=args.shapes or None):
+        print(f"wrote {path}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="symvib", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -74,6 +104,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--budget", type=float, default=10.0, help="seconds per integration route")
     p.add_argument("--latex", action="store_true", help="print LaTeX")
     p.set_defaults(func=_cmd_derive)
+
+    p = sub.add_parser("generate", help="write the numeric kernel modules (generated/)")
+    p.add_argument("shapes", nargs="*", help="catalogue shapes (default: all)")
+    p.add_argument("--out", help="output folder (default: the project's generated/)")
+    p.add_argument("--check", action="store_true", help="exit 1 when a module in the folder is stale")
+    p.add_argument("--z", help="z(q) of a user curve (graph unless --x is given)")
+    p.add_argument("--x", help="x(q) of a user curve")
+    p.add_argument("--q", help="coordinate name of a user curve")
+    p.add_argument("--name", help="name of a user curve")
+    p.set_defaults(func=_cmd_generate)
 
     p = sub.add_parser("audit", help="compare the paper's printed equations with the derivation")
     p.add_argument("--write", metavar="PATH", help="write the errata table (Markdown) to PATH")

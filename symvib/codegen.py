@@ -1,0 +1,427 @@
+"""The one bridge: derivation -> plain NumPy kernel module.
+
+:func:`module_text` turns a :class:`~symvib.derive.Derivation` into the source
+of a Python module that needs only NumPy (and :mod:`math` for the scalar
+path): one function per kernel and per branch, common subexpressions
+eliminated (:func:`sympy.cse`), no ``Piecewise``, no ``select``, no
+``sign()``.  Functions broadcast over NumPy arrays of ``q``, the state and the
+parameters; every kernel also has a ``*_scalar`` twin built on :mod:`math`,
+which is several times faster for one float (root finding in the driver).
+
+Kernels (argument order in each docstring and in ``SIGNATURES``); ``cp`` are
+the curve parameters in declaration order, ``_p``/``_m`` the branches
+``s = +1``/``-1``:
+
+============================  =========================================================
+``x z h alpha kappa``         geometry, ``(q, *cp)``
+``dx dz dh dalpha``           ``x' z' h' alpha'``, ``(q, *cp)``
+``F_p dF_p ddF_p``            ``F_s`` (eq. 2), its integrand and derivative, ``(q, mu, *cp)``
+``w_p qdot2_p``               ``w(q; C)`` and ``qdot**2`` (eq. 2), ``(q, C, g, mu, *cp)``
+``qddot_p``                   eq. 1 solved for ``qddot``, ``(q, qdot, g, mu, *cp)``
+``N_w``                       normal force per mass ``kappa w + g cos(alpha)``, ``(q, w, g, *cp)``
+``F_N P_mu Ek Ep E``          energy analysis (physics.md), state form ``(q, qdot, ...)``
+``domain q_scale``            the regular interval of ``q`` and its scale, ``(*cp)``
+============================  =========================================================
+
+On the numeric route ``F_s`` is a composite Gauss-Legendre quadrature of
+``dF_s`` from ``Q_REF``, with panels no wider than ``PANEL * q_scale``.
+
+The output is deterministic (no timings, sorted data), so generating twice
+gives the same bytes; the header records the inputs' hash
+(:mod:`symvib.provenance`), and a digest of the body so hand edits show.
+
+Examples
+--------
+>>> from symvib.derive import derive
+>>> text = module_text(derive("circle"), {"name": "circle"})
+>>> "def F_p(q, mu, R):" in text and "import sympy" not in text
+True
+"""
+from __future__ import annotations
+
+import hashlib
+import re
+from pathlib import Path
+
+import numpy as np
+import sympy as sp
+from sympy.printing.numpy import NumPyPrinter
+from sympy.printing.pycode import PythonCodePrinter
+
+from . import provenance
+from .curve import CurveError
+from .derive import Derivation, derive
+from .symbols import C, g, m, mu
+
+__all__ = ["module_text", "generate", "generate_catalogue", "stale", "KERNEL_NAMES", "DIGEST_PREFIX"]
+
+#: Gauss-Legendre nodes per panel of a numeric-route antiderivative.
+QUAD_NODES = 16
+#: Widest panel of a numeric-route antiderivative, in units of ``q_scale``.
+PANEL = 0.25
+#: First line of every generated module (what follows is hashed into it).
+DIGEST_PREFIX = "# symvib generated kernel module; body sha256: "
+#: Names a curve parameter may not have in a kernel module.
+KERNEL_RESERVED = frozenset({"q", "qdot", "numpy", "math"})
+
+_Q = sp.Symbol("q", real=True)
+_QDOT = sp.Symbol("qdot", real=True)
+_W = sp.Symbol("w", real=True)
+_BRANCH = {1: "p", -1: "m"}
+
+
+class _NumPy(NumPyPrinter):
+    suffix = ""
+
+    def __init__(self):
+        super().__init__({"fully_qualified_modules": True, "allow_unknown_functions": False})
+
+    def _print_AppliedUndef(self, expr):
+        # The only undefined functions in a kernel are calls of F_p / F_m.
+        return f"{expr.func.__name__}{self.suffix}(" + ", ".join(self.doprint(a) for a in expr.args) + ")"
+
+
+class _Math(PythonCodePrinter):
+    suffix = "_scalar"
+
+    def __init__(self):
+        super().__init__({"fully_qualified_modules": True, "allow_unknown_functions": False})
+
+    _print_AppliedUndef = _NumPy._print_AppliedUndef
+
+
+def _function(name: str, args: tuple, expr: sp.Expr, doc: str, printer) -> str:
+    """Source of one kernel: cse'd assignments, then the return."""
+    replacements, (reduced,) = sp.cse([expr], symbols=sp.numbered_symbols("_t"), order="canonical")
+    lines = [f"def {name}({', '.join(args)}):", f'    """{doc}"""']
+    for sym, sub in replacements:
+        lines.append(f"    {sym} = {printer.doprint(sub)}")
+    body = printer.doprint(reduced)
+    used = {str(s) for s in expr.free_symbols} | _called_args(expr)
+    if set(args) - used:
+        # Broadcast over every argument even where the expression ignores some
+        # (h = R on a circle), so that kernels map arrays to arrays of one shape.
+        body = (f"_broadcast({body}, {', '.join(args)})" if isinstance(printer, _NumPy)
+                else f"float({body})")
+    lines.append(f"    return {body}")
+    return "\n".join(lines)
+
+
+def _called_args(expr) -> set:
+    return {str(s) for f in expr.atoms(sp.core.function.AppliedUndef) for a in f.args for s in a.free_symbols}
+
+
+def _kernel_exprs(d: Derivation) -> list:
+    """(name, argument names, expression, one-line description) of every closed-form kernel."""
+    c = d.curve
+    cp = tuple(p.name for p in c.params)
+    to_kernel = {c.q: _Q, c.qdot: _QDOT}
+    K = lambda e: sp.sympify(e).xreplace(to_kernel)  # noqa: E731
+    geo = ("q", *cp)
+    out = [
+        ("x", geo, K(c.x), "x(q): horizontal position"),
+        ("z", geo, K(c.z), "z(q): height"),
+        ("h", geo, K(c.h), "h(q) = sqrt(x'^2 + z'^2): metric, ds = h dq"),
+        ("alpha", geo, K(c.alpha), "alpha(q): tangent angle, h sin(alpha) = z', h cos(alpha) = x'"),
+        ("kappa", geo, K(c.kappa), "kappa(q) = alpha'/h: curvature"),
+        ("dx", geo, K(c.xp), "x'(q)"),
+        ("dz", geo, K(c.zp), "z'(q)"),
+        ("dh", geo, K(c.hp), "h'(q)"),
+        ("dalpha", geo, K(c.alphap), "alpha'(q)"),
+    ]
+    for s, br in d.branches.items():
+        b = _BRANCH[s]
+        sign = "+" if s > 0 else "-"
+        f = K(br.F.integrand)
+        out.append((f"dF_{b}", ("q", "mu", *cp), f,
+                    f"F_{sign}'(q) = exp({sign}2 mu alpha) (z' {sign} mu x'): integrand of eq. 2"))
+        out.append((f"ddF_{b}", ("q", "mu", *cp), sp.diff(f, _Q), f"F_{sign}''(q)"))
+        if br.F.closed:
+            out.append((f"F_{b}", ("q", "mu", *cp), K(br.F.expr),
+                        f"F_{sign}(q): antiderivative of eq. 2 (route: {br.F.route})"))
+        out.append((f"w_{b}", ("q", "C", "g", "mu", *cp),
+                    K(sp.exp(-2 * s * mu * c.alpha)) * (C - 2 * g * sp.Symbol(f"__F_{b}")),
+                    f"w(q; C) = exp({'-' if s > 0 else ''}2 mu alpha) [C - 2 g F_{sign}(q)] (eq. 2, s = {s:+d})"))
+        out.append((f"qdot2_{b}", ("q", "C", "g", "mu", *cp),
+                    K(sp.exp(-2 * s * mu * c.alpha) / c.h**2) * (C - 2 * g * sp.Symbol(f"__F_{b}")),
+                    f"qdot^2(q; C) = w / h^2 (eq. 2, s = {s:+d})"))
+        out.append((f"qddot_{b}", ("q", "qdot", "g", "mu", *cp), K(br.qddot(c.qdot)),
+                    f"qddot = -A qdot^2 - B (eq. 1, s = {s:+d})"))
+    e = d.energies
+    out += [
+        ("N_w", ("q", "w", "g", *cp), K(c.kappa) * _W + g * K(sp.cos(c.alpha)),
+         "N = kappa w + g cos(alpha): normal force per unit mass"),
+        ("F_N", ("q", "qdot", "g", "m", *cp), K(e["F_N"]), "F_N = m (kappa v^2 + g cos(alpha))"),
+        ("P_mu", ("q", "qdot", "g", "m", "mu", *cp), K(e["P_mu"]), "P_mu = -mu |F_N| |v|: power of friction"),
+        ("Ek", ("q", "qdot", "m", *cp), K(e["Ek"]), "Ek = m v^2 / 2"),
+        ("Ep", ("q", "g", "m", *cp), K(e["Ep"]), "Ep = m g z"),
+        ("E", ("q", "qdot", "g", "m", *cp), K(e["E"]), "E = Ek + Ep"),
+        ("q_scale", cp, c.q_scale, "characteristic length of q"),
+    ]
+    return out
+
+
+def _literal(values) -> str:
+    return "(" + ", ".join(repr(float(v)) for v in values) + ",)"
+
+
+_BROADCAST = '''
+
+def _broadcast(value, *args):
+    """value as an array of the broadcast shape of args."""
+    return value * numpy.ones(numpy.broadcast(*args).shape)
+'''
+
+_QUAD_HELPERS = '''
+_GL_X = {x}
+_GL_W = {w}
+_GL_XA = numpy.array(_GL_X)
+_GL_WA = numpy.array(_GL_W)
+
+
+def _antiderivative(f, q, q_ref, args, width):
+    """Integral of f from q_ref to q by composite Gauss-Legendre (broadcasts)."""
+    q = numpy.asarray(q, dtype=float)
+    q_ref = numpy.asarray(q_ref, dtype=float)
+    length = q - q_ref
+    width = numpy.asarray(width, dtype=float)
+    panels = int(max(1, numpy.ceil(numpy.max(numpy.abs(length) / width)))) if length.size else 1
+    edges = numpy.arange(panels)[..., None] / panels
+    t = (edges + (_GL_XA + 1.0) / (2.0 * panels))
+    shape = numpy.broadcast(q, *[numpy.asarray(a) for a in args]).shape
+    nodes = q_ref[..., None, None] + length[..., None, None] * t
+    bargs = [numpy.asarray(a, dtype=float)[..., None, None] for a in args]
+    values = f(nodes, *bargs)
+    total = numpy.sum(values * (_GL_WA / (2.0 * panels)), axis=(-2, -1))
+    return numpy.broadcast_to(total * length, shape) * 1.0
+
+
+def _antiderivative_scalar(f, q, q_ref, args, width):
+    """Scalar twin of _antiderivative (floats, math)."""
+    length = q - q_ref
+    panels = max(1, math.ceil(abs(length) / width))
+    step = length / panels
+    total = 0.0
+    for k in range(panels):
+        left = q_ref + k * step
+        for xk, wk in zip(_GL_X, _GL_W):
+            total += wk * f(left + 0.5 * step * (xk + 1.0), *args)
+    return 0.5 * step * total
+'''
+
+
+def module_text(d: Derivation, source: dict) -> str:
+    """The full text of the kernel module for derivation ``d``.
+
+    ``source`` is the curve's defining data (hashed into the header).
+    """
+    c = d.curve
+    cp = tuple(p.name for p in c.params)
+    clash = sorted(set(cp) & KERNEL_RESERVED)
+    if clash:
+        raise CurveError(f"parameter name(s) {', '.join(clash)} are reserved in kernel modules; rename them")
+    kernels = _kernel_exprs(d)
+    numeric = {s: not br.F.closed for s, br in d.branches.items()}
+    F_sub = {}
+    for s in (1, -1):
+        b = _BRANCH[s]
+        F_sub[sp.Symbol(f"__F_{b}")] = sp.Function(f"F_{b}")(_Q, mu, *c.params)
+    np_printer, math_printer = _NumPy(), _Math()
+    parts = []
+    signatures = {}
+    for name, args, expr, doc in kernels:
+        expr = expr.xreplace(F_sub)
+        signatures[name] = args
+        argdoc = f"{doc}.\n\n    Arguments: ({', '.join(args)})."
+        parts.append(_function(name, args, expr, argdoc, np_printer))
+        parts.append(_function(name + "_scalar", args, expr, argdoc + " Floats only (math).", math_printer))
+    # Numeric-route antiderivatives.
+    needs_quad = any(numeric.values())
+    for s in (1, -1):
+        if not numeric[s]:
+            continue
+        b = _BRANCH[s]
+        sign = "+" if s > 0 else "-"
+        args = ("q", "mu", *cp)
+        signatures[f"F_{b}"] = args
+        call_args = ", ".join(("mu", *cp))
+        ref = np_printer.doprint(d.branches[s].F.q_ref.xreplace({c.q: _Q}))
+        ref_s = math_printer.doprint(d.branches[s].F.q_ref.xreplace({c.q: _Q}))
+        scale = ", ".join(cp)
+        doc = (f"F_{sign}(q): integral of dF_{b} from Q_REF (numeric route: no closed form).\n\n"
+               f"    Arguments: ({', '.join(args)}).")
+        parts.append(
+            f"def F_{b}({', '.join(args)}):\n    \"\"\"{doc}\"\"\"\n"
+            f"    return _antiderivative(dF_{b}, q, {ref}, ({call_args},), PANEL * q_scale({scale}))")
+        parts.append(
+            f"def F_{b}_scalar({', '.join(args)}):\n    \"\"\"{doc} Floats only (math).\"\"\"\n"
+            f"    return _antiderivative_scalar(dF_{b}_scalar, q, {ref_s}, ({call_args},), "
+            f"PANEL * q_scale_scalar({scale}))")
+    # Domain as numbers.
+    lo, hi = c.domain
+    dom = lambda e, p: "math.inf" if e == sp.oo else "-math.inf" if e == -sp.oo else p.doprint(e)  # noqa: E731
+    signatures["domain"] = cp
+    parts.append(f"def domain({', '.join(cp)}):\n    \"\"\"Open interval of q where the curve is regular.\n\n"
+                 f"    Arguments: ({', '.join(cp)}).\"\"\"\n"
+                 f"    return ({dom(lo, math_printer)}, {dom(hi, math_printer)})")
+    routes = {s: br.F.route for s, br in d.branches.items()}
+    header = _header(d, source, routes)
+    consts = [
+        f"NAME = {source.get('name', c.name)!r}",
+        f"COORDINATE = {c.q.name!r}",
+        f"PARAMS = {cp!r}",
+        f"F_ROUTES = {{1: {routes[1]!r}, -1: {routes[-1]!r}}}",
+        f"Q_REF = {float(d.branches[1].F.q_ref.subs({p: 1 for p in c.params})) if needs_quad else 0.0!r}",
+        f"PANEL = {PANEL!r}",
+        f"INPUT_HASH = {provenance.input_hash(source)!r}",
+        f"SYMPY_VERSION = {sp.__version__!r}",
+        f"GENERATOR_VERSION = {provenance.GENERATOR_VERSION!r}",
+        f"SOURCE = {_py_literal(source)}",
+        "SIGNATURES = {\n" + "".join(f"    {k!r}: {v!r},\n" for k, v in sorted(signatures.items())) + "}",
+    ]
+    quad = ""
+    if needs_quad:
+        x, w = np.polynomial.legendre.leggauss(QUAD_NODES)
+        quad = _QUAD_HELPERS.format(x=_literal(x), w=_literal(w))
+    body = (header + "import math\n\nimport numpy\n\n" + "\n".join(consts) + "\n" + _BROADCAST + quad
+            + "\n\n" + "\n\n\n".join(parts) + "\n")
+    digest = hashlib.sha256(body.encode()).hexdigest()
+    return f"{DIGEST_PREFIX}{digest}\n" + body
+
+
+def _py_literal(obj) -> str:
+    """A Python literal of plain data with dict keys sorted (deterministic)."""
+    if isinstance(obj, dict):
+        return "{" + ", ".join(f"{k!r}: {_py_literal(obj[k])}" for k in sorted(obj)) + "}"
+    if isinstance(obj, (list, tuple)):
+        inner = ", ".join(_py_literal(v) for v in obj)
+        return f"[{inner}]" if isinstance(obj, list) else f"({inner}{',' if len(obj) == 1 else ''})"
+    return repr(obj)
+
+
+def _header(d: Derivation, source: dict, routes: dict) -> str:
+    c = d.curve
+    lines = [
+        f'"""Kernels of the curve {source.get("name", c.name)!r}: generated by `symvib generate`; do not edit.',
+        "",
+        f"Curve ({c.kind}): x = {c.x}, z = {c.z}, coordinate {c.q} (passed as q),",
+        f"parameters {', '.join(p.name for p in c.params) or 'none'}, domain ({c.domain[0]}, {c.domain[1]}).",
+        f"Geometry: h = {c.h}, alpha = {c.alpha}, kappa = {c.kappa}.",
+        "",
+        "Phase trajectory (eq. 2), branch s = +1 (p) and -1 (m):",
+        "    w(q; C) = exp(-2 s mu alpha) [C - 2 g F_s(q)],  qdot^2 = w / h^2.",
+    ]
+    for s in (1, -1):
+        F = d.branches[s].F
+        text = str(F.expr) if F.closed else f"numeric quadrature of {F.integrand} from {F.q_ref}"
+        lines.append(f"F_{_BRANCH[s]} (route {routes[s]}): {text}")
+    lines += [
+        "",
+        f"SymPy {sp.__version__}; generator {provenance.GENERATOR_VERSION}; "
+        f"input hash {provenance.input_hash(source)}.",
+        "Each function's docstring gives its argument order; SIGNATURES lists them all.",
+        '"""',
+    ]
+    return "\n".join(_wrap(line) for line in lines) + "\n"
+
+
+def _wrap(line: str, width: int = 100) -> str:
+    if len(line) <= width:
+        return line
+    return "\n    ".join(line[i:i + width] for i in range(0, len(line), width))
+
+
+def module_name(name: str) -> str:
+    """Python module name for a curve name (``parabola-x`` -> ``parabola_x``)."""
+    out = re.sub(r"\W", "_", name)
+    return out if out[:1].isalpha() else "c_" + out
+
+
+def generate(curve, out_dir, *, name: str | None = None, source: dict | None = None,
+             seconds: float | None = None) -> Path:
+    """Derive ``curve`` and write its kernel module into ``out_dir``; returns the path.
+
+    ``curve`` is a catalogue name, a :class:`~symvib.shapes.Shape` or a
+    :class:`~symvib.curve.Curve` (then give ``source``, its defining data).
+    """
+    from .integrals import ROUTE_SECONDS
+    from .shapes import Shape, shape
+
+    if isinstance(curve, str):
+        curve = shape(curve)
+    if isinstance(curve, Shape):
+        source = curve.source() if source is None else source
+        name = name or curve.module
+        curve = curve.curve()
+    if source is None:
+        raise ValueError("generate() needs the curve's defining data (source) to hash")
+    d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds)
+    text = module_text(d, source)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = name if name and name.endswith(".tmp") else module_name(name or curve.name)
+    path = out / f"{stem}.py"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _generate_one(args):
+    shape_name, out_dir = args
+    return str(generate(shape_name, out_dir))
+
+
+def generate_catalogue(out_dir, *, names=None, processes: int | None = None) -> list:
+    """Write the kernel module of every catalogue shape (in parallel processes)."""
+    import multiprocessing as mproc
+    from concurrent.futures import ProcessPoolExecutor
+
+    from .shapes import CATALOGUE
+
+    names = sorted(CATALOGUE) if names is None else list(names)
+    jobs = [(n, str(out_dir)) for n in names]
+    if processes == 1 or len(jobs) == 1:
+        return [_generate_one(j) for j in jobs]
+    # Not multiprocessing.Pool: its daemonic workers may not start the budgeted
+    # children that run SymPy's integrations.
+    ctx = mproc.get_context("fork" if "fork" in mproc.get_all_start_methods() else "spawn")
+    with ProcessPoolExecutor(processes or min(len(jobs), mproc.cpu_count()), mp_context=ctx) as pool:
+        return list(pool.map(_generate_one, jobs))
+
+
+def stale(out_dir, *, names=None) -> list:
+    """Problems with the catalogue modules in ``out_dir`` (empty when all are current).
+
+    A module is stale when it is missing, its input hash differs from the
+    current one (the shape's data or the generator changed), or its body does
+    not match its recorded digest (edited by hand).  No derivation is run.
+    """
+    from .shapes import CATALOGUE
+
+    out = Path(out_dir)
+    names = sorted(CATALOGUE) if names is None else list(names)
+    problems = []
+    for n in names:
+        shape_ = CATALOGUE[n]
+        path = out / f"{module_name(shape_.module)}.py"
+        if not path.exists():
+            problems.append(f"{path}: missing")
+            continue
+        problems += _file_problems(path, provenance.input_hash(shape_.source()))
+    expected = {f"{module_name(CATALOGUE[n].module)}.py" for n in names} | {"__init__.py"}
+    if names == sorted(CATALOGUE):
+        for extra in sorted(p.name for p in out.glob("*.py")):
+            if extra not in expected:
+                problems.append(f"{out / extra}: not a catalogue shape (remove it)")
+    return problems
+
+
+def _file_problems(path: Path, want_hash: str) -> list:
+    text = path.read_text(encoding="utf-8")
+    first, _, body = text.partition("\n")
+    problems = []
+    if not first.startswith(DIGEST_PREFIX) or first[len(DIGEST_PREFIX):] != hashlib.sha256(body.encode()).hexdigest():
+        problems.append(f"{path}: edited by hand (body digest mismatch)")
+    match = re.search(r"^INPUT_HASH = '([0-9a-f]{64})'$", body, re.M)
+    if not match or match.group(1) != want_hash:
+        problems.append(f"{path}: stale (inputs or generator changed); run `symvib generate`")
+    return problems

@@ -1,0 +1,42 @@
+"""Hashes that tie a generated kernel module to its inputs (no SymPy, no NumPy).
+
+A module's input hash covers the curve's defining data (canonical JSON of its
+expression texts, parameters, domain and hints) and the source code of the
+symbolic wing that turns them into kernels.  Both wings compute it: the code
+generator writes it into the module header, the numeric wing recomputes it to
+find a cached user curve or to tell that a committed module is stale.
+
+>>> h = input_hash({"kind": "graph", "z": "x**2", "q": "x"})
+>>> len(h)
+64
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from functools import lru_cache
+from pathlib import Path
+
+__all__ = ["GENERATOR_VERSION", "GENERATOR_SOURCES", "generator_digest", "input_hash"]
+
+#: Bumped by hand when the kernel format changes in a way the sources do not show.
+GENERATOR_VERSION = "1"
+#: Modules whose code decides what a generated kernel module contains.
+GENERATOR_SOURCES = ("symbols.py", "expr.py", "curve.py", "integrals.py", "derive.py", "codegen.py")
+
+
+@lru_cache(maxsize=None)
+def generator_digest() -> str:
+    """SHA-256 over the generator's own source files (line endings normalized)."""
+    here = Path(__file__).resolve().parent
+    digest = hashlib.sha256(GENERATOR_VERSION.encode())
+    for name in GENERATOR_SOURCES:
+        digest.update(name.encode())
+        digest.update((here / name).read_bytes().replace(b"\r\n", b"\n"))
+    return digest.hexdigest()
+
+
+def input_hash(source: dict) -> str:
+    """Hash of a curve's defining data together with :func:`generator_digest`."""
+    canonical = json.dumps(source, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256((canonical + generator_digest()).encode()).hexdigest()

@@ -1,0 +1,185 @@
+"""Generated kernels: accuracy against mpmath, no SymPy at run time, determinism, staleness."""
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import mpmath
+import numpy as np
+import pytest
+import sympy as sp
+
+from symvib import codegen, kernels
+from symvib.derive import derive
+from symvib.integrals import ROUTES
+from symvib.shapes import CATALOGUE, shape
+from symvib.symbols import C, g, m, mu
+
+ROOT = Path(__file__).resolve().parents[1]
+GENERATED = ROOT / "generated"
+#: Agreement required with a 30-digit evaluation, relative to the kernel's magnitude over the sample.
+KERNEL_RTOL = 1e-13
+POINTS = 12
+
+
+def _derivation_like_module(name):
+    mod = kernels.load(name)
+    numeric = mod.F_ROUTES[1] == "numeric"
+    return mod, derive(name, routes=() if numeric else ROUTES)
+
+
+def _reference(d, expr, name, s_by_suffix):
+    """Replace the F placeholders of w/qdot2 by F itself (an Integral on the numeric route)."""
+    subs = {}
+    for b, s in s_by_suffix.items():
+        subs[sp.Symbol(f"__F_{b}")] = d.branches[s].F.expr.xreplace({d.curve.q: sp.Symbol("q", real=True)})
+    return expr.xreplace(subs)
+
+
+@pytest.mark.parametrize("name", sorted(CATALOGUE))
+def test_every_kernel_matches_mpmath(name):
+    mod, d = _derivation_like_module(name)
+    c = d.curve
+    rng = np.random.default_rng(abs(hash(name)) % 2**32)
+    defaults = shape(name).defaults
+    q_sym = sp.Symbol("q", real=True)
+    exprs = {k: (args, expr) for k, args, expr, _ in codegen._kernel_exprs(d)}
+    for b, s in {"p": 1, "m": -1}.items():
+        if not d.branches[s].F.closed:
+            exprs[f"F_{b}"] = (("q", "mu", *mod.PARAMS), d.branches[s].F.expr.xreplace({c.q: q_sym}))
+    scale = float(c.q_scale.subs({p: defaults[p.name] for p in c.params}))
+    lo, hi = mod.domain(*[defaults[p] for p in mod.PARAMS])
+    lo = max(lo, -2 * scale)
+    hi = min(hi, 2 * scale)
+    width = hi - lo
+    values = {
+        "q": lo + width * (0.05 + 0.9 * rng.random(POINTS)),
+        "qdot": rng.uniform(-8, 8, POINTS),
+        "w": rng.uniform(0, 40, POINTS),
+        "C": rng.uniform(0, 60, POINTS),
+        "g": np.full(POINTS, 9.81),
+        "m": np.full(POINTS, 0.2),
+        "mu": rng.uniform(0, 0.5, POINTS),
+        **{p: defaults[p] * rng.uniform(0.7, 1.3, POINTS) for p in mod.PARAMS},
+    }
+    symbols = {"q": q_sym, "qdot": sp.Symbol("qdot", real=True), "w": sp.Symbol("w", real=True),
+               "C": C, "g": g, "m": m, "mu": mu, **{p.name: p for p in c.params}}
+    checked = 0
+    for kname, (args, expr) in sorted(exprs.items()):
+        expr = _reference(d, expr, kname, {"p": 1, "m": -1})
+        kernel = getattr(mod, kname)
+        scalar = getattr(mod, kname + "_scalar")
+        arrays = [values[a] for a in args]
+        got = np.asarray(kernel(*arrays), dtype=float)
+        assert got.shape == (POINTS,), kname
+        f = sp.lambdify([symbols[a] for a in args], expr, "mpmath")
+        with mpmath.workdps(30):
+            ref = []
+            for i in range(POINTS):
+                point = [mpmath.mpf(float(a[i])) for a in arrays]
+                ref.append(float(f(*point)) if not expr.has(sp.Integral) else float(_quad_value(expr, args, symbols, point)))
+        ref = np.array(ref)
+        magnitude = max(np.max(np.abs(ref)), 1e-300)
+        err = np.max(np.abs(got - ref)) / magnitude
+        assert err < KERNEL_RTOL, f"{name}.{kname}: relative error {err:.2e}"
+        sgot = np.array([scalar(*[float(a[i]) for a in arrays]) for i in range(POINTS)])
+        serr = np.max(np.abs(sgot - ref)) / magnitude
+        assert serr < KERNEL_RTOL, f"{name}.{kname}_scalar: relative error {serr:.2e}"
+        checked += 1
+    assert checked >= len(mod.SIGNATURES) - 2  # all but domain (tested below) and nothing else skipped
+
+
+def _quad_value(expr, args, symbols, point):
+    subs = {symbols[a]: sp.Float(v, 30) for a, v in zip(args, point)}
+    e = expr.xreplace(subs)
+    if isinstance(e, sp.Integral):
+        (u, a, b), = e.limits
+        fn = sp.lambdify(u, e.function, "mpmath")
+        return mpmath.quad(fn, [float(a), float(b)])
+    # w or qdot2 with an Integral inside.
+    integ = next(iter(e.atoms(sp.Integral)))
+    value = _quad_value(integ, (), {}, ())
+    return sp.N(e.xreplace({integ: sp.Float(value, 30)}), 30)
+
+
+def test_domain_kernels():
+    assert kernels.load("cycloid").domain(0.05) == pytest.approx((-np.pi, np.pi))
+    assert kernels.load("circle").domain(0.5) == (-np.inf, np.inf)
+
+
+def test_kernels_broadcast_over_scenes():
+    k = kernels.load("parabola")
+    q = np.linspace(-1, 1, 7)[:, None]
+    p = np.array([0.5, 1.0, 2.0])[None, :]
+    assert k.w_p(q, 50.0, 9.81, 0.05, p).shape == (7, 3)
+    assert k.h(q, p).shape == (7, 3)
+    c = kernels.load("circle")
+    assert c.h(q, 0.5).shape == (7, 1)  # constant in q, still one value per q
+    assert kernels.load("catenary").F_p(q, 0.1, p).shape == (7, 3)
+
+
+def test_numeric_layer_imports_no_sympy():
+    code = (
+        "import sys, numpy as np\n"
+        "from symvib.kernels import load\n"
+        "for name in ('parabola', 'catenary'):\n"
+        "    k = load(name)\n"
+        "    k.w_p(np.linspace(-0.5, 0.5, 5), 50.0, 9.81, 0.05, 1.0)\n"
+        "    k.F_m_scalar(0.3, 0.05, 1.0)\n"
+        "assert 'sympy' not in sys.modules, 'sympy was imported'\n"
+        "print('ok')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr
+
+
+def test_generation_is_deterministic(tmp_path):
+    a = codegen.generate("cycloid", tmp_path / "a")
+    b = codegen.generate("cycloid", tmp_path / "b")
+    assert a.read_bytes() == b.read_bytes()
+    committed = GENERATED / "cycloid.py"
+    if kernels.load("cycloid").SYMPY_VERSION == sp.__version__:
+        assert a.read_bytes() == committed.read_bytes(), "generated/ differs from a fresh generation"
+
+
+def test_generate_check_passes_on_the_repository():
+    out = subprocess.run([sys.executable, "-m", "symvib.cli", "generate", "--check", "--out", str(GENERATED)],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stdout + out.stderr
+
+
+def test_generate_check_detects_edits_and_missing_files(tmp_path):
+    copy = tmp_path / "generated"
+    shutil.copytree(GENERATED, copy)
+    assert codegen.stale(copy) == []
+    path = copy / "circle.py"
+    path.write_text(path.read_text().replace("R*numpy.sin(q)", "R*numpy.sin(q)*1.0000001"))
+    (copy / "ellipse.py").unlink()
+    (copy / "old_shape.py").write_text("")
+    problems = "\n".join(codegen.stale(copy))
+    assert "circle.py: edited by hand" in problems
+    assert "ellipse.py: missing" in problems
+    assert "old_shape.py: not a catalogue shape" in problems
+    out = subprocess.run([sys.executable, "-m", "symvib.cli", "generate", "--check", "--out", str(copy)],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 1
+
+
+def test_user_curve_generated_once_and_cached(tmp_path, monkeypatch):
+    monkeypatch.setenv(kernels.CACHE_ENV, str(tmp_path))
+    source = {"name": "bowl", "kind": "graph", "q": "x", "z": "x**2/(2*b)", "params": {"b": "positive"}}
+    k = kernels.load(source)
+    assert k.PARAMS == ("b",) and k.h_scalar(1.0, 1.0) == pytest.approx(np.sqrt(2))
+    files = list(tmp_path.glob("bowl_*.py"))
+    assert len(files) == 1
+    # A second load must not run the generator again.
+    monkeypatch.setattr(codegen, "generate", lambda *a, **k: (_ for _ in ()).throw(AssertionError("regenerated")))
+    assert kernels.load(dict(source)).INPUT_HASH == k.INPUT_HASH
+
+
+def test_reserved_parameter_names():
+    from symvib.curve import CurveError, graph
+
+    with pytest.raises(CurveError, match="reserved in kernel modules"):
+        codegen.module_text(derive(graph("x**2/numpy")), {"name": "bad"})
