@@ -1,0 +1,220 @@
+"""Typed, immutable records of a simulation: status, events, energy budget, result.
+
+Like SciPy's ``OdeResult`` messages or diffrax's result codes, the outcome of
+a run is an explicit :class:`Status`, and each event a typed :class:`Event`.
+
+Examples
+--------
+>>> Status.ARRESTED.value, EventKind.IMPACT.value
+('arrested', 'impact')
+"""
+from __future__ import annotations
+
+import enum
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Status", "EventKind", "Event", "EnergyBudget", "Samples", "ZenoInfo", "Result", "MESSAGES"]
+
+
+class Status(enum.Enum):
+    """Why a run stopped."""
+
+    ARRESTED = "arrested"
+    RESTING_ON_LIMITER = "resting_on_limiter"
+    T_MAX = "t_max"
+    MAX_EVENTS = "max_events"
+    LEFT_DOMAIN = "left_domain"
+
+
+#: One sentence per status, for reports.
+MESSAGES = {
+    Status.ARRESTED: "friction holds the particle at rest (|tan alpha| <= mu)",
+    Status.RESTING_ON_LIMITER: "the particle rests against a limiter that gravity pushes it into",
+    Status.T_MAX: "the time bound t_max was reached",
+    Status.MAX_EVENTS: "the event bound max_events was reached",
+    Status.LEFT_DOMAIN: "the particle reached an end of the curve's regular domain (a singular point)",
+}
+
+
+class EventKind(enum.Enum):
+    """What happened at an event."""
+
+    IMPACT = "impact"
+    REVERSAL = "reversal"
+    ARREST = "arrest"
+    REST_ON_LIMITER = "rest_on_limiter"
+    NORMAL_SIGN_CHANGE = "normal_sign_change"
+
+
+@dataclass(frozen=True)
+class Event:
+    """One event.
+
+    Attributes
+    ----------
+    kind : EventKind
+    t, q : float
+        Time and position.
+    qdot_before, qdot_after : float
+        Generalized velocity just before and after (``-k`` times it at an impact).
+    energy : float
+        Total mechanical energy just after the event.
+    detail : str
+        Extra facts (a Zeno accumulation, a plastic impact).
+    """
+
+    kind: EventKind
+    t: float
+    q: float
+    qdot_before: float
+    qdot_after: float
+    energy: float
+    detail: str = ""
+
+    def to_dict(self) -> dict:
+        out = {"kind": self.kind.value, "t": self.t, "q": self.q, "qdot_before": self.qdot_before,
+               "qdot_after": self.qdot_after, "energy": self.energy}
+        if self.detail:
+            out["detail"] = self.detail
+        return out
+
+
+@dataclass(frozen=True)
+class EnergyBudget:
+    """``E0 - E_final = W_friction + W_impacts``, with the residual of that balance.
+
+    ``friction_work`` is the integral of ``mu |F_N|`` along the path (a
+    quadrature independent of the closed-form ``w(q)``), ``impact_loss`` the
+    sum of ``(1 - k^2) m w / 2`` over impacts.
+    """
+
+    initial: float
+    final: float
+    friction_work: float
+    impact_loss: float
+
+    @property
+    def residual(self) -> float:
+        return self.initial - self.final - self.friction_work - self.impact_loss
+
+    @property
+    def relative_residual(self) -> float:
+        """Residual relative to the initial energy (or to the dissipated energy if E0 is 0)."""
+        scale = max(abs(self.initial), abs(self.friction_work) + abs(self.impact_loss), math.ulp(1.0))
+        return abs(self.residual) / scale
+
+    def to_dict(self) -> dict:
+        return {"initial": self.initial, "final": self.final, "friction_work": self.friction_work,
+                "impact_loss": self.impact_loss, "residual": self.residual}
+
+
+@dataclass(frozen=True)
+class ZenoInfo:
+    """An accumulation of impacts at a limiter, summed as a geometric series.
+
+    ``ratio`` is the limit ratio of successive bounce times,
+    ``k sqrt(a_down / a_up)`` with the decelerations up and down the local
+    slope; ``simulated`` impacts were computed event by event before the
+    remaining infinitely many were summed (``remaining_time``).
+    """
+
+    limiter: str
+    ratio: float
+    simulated: int
+    remaining_time: float
+    accumulation_time: float
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Per-interval samples for plotting (read-only arrays of one length).
+
+    ``interval`` numbers the motion intervals; ``branch`` is ``s = sigma sign(N)``.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qdot: np.ndarray
+    F_N: np.ndarray
+    P_mu: np.ndarray
+    Ek: np.ndarray
+    Ep: np.ndarray
+    E: np.ndarray
+    interval: np.ndarray
+    branch: np.ndarray
+
+    def __post_init__(self):
+        for name in self.__dataclass_fields__:
+            getattr(self, name).setflags(write=False)
+
+
+@dataclass(frozen=True)
+class Result:
+    """The outcome of :func:`symvib.driver.simulate` (immutable)."""
+
+    scene: object
+    status: Status
+    events: tuple
+    samples: Samples | None
+    energy_budget: EnergyBudget
+    t_final: float
+    q_final: float
+    qdot_final: float
+    zeno: ZenoInfo | None = None
+    stats: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def message(self) -> str:
+        return MESSAGES[self.status]
+
+    def count(self, kind: EventKind) -> int:
+        return sum(e.kind is kind for e in self.events)
+
+    def to_dict(self, *, samples: bool = False) -> dict:
+        """JSON-ready data: status, events, energy budget (and samples if asked)."""
+        out = {
+            "scene": getattr(self.scene, "name", ""),
+            "status": self.status.value,
+            "message": self.message,
+            "t_final": self.t_final,
+            "q_final": self.q_final,
+            "qdot_final": self.qdot_final,
+            "events": [e.to_dict() for e in self.events],
+            "energy_budget": self.energy_budget.to_dict(),
+        }
+        if self.zeno is not None:
+            out["zeno"] = {k: getattr(self.zeno, k) for k in self.zeno.__dataclass_fields__}
+        if samples and self.samples is not None:
+            out["samples"] = {k: getattr(self.samples, k).tolist() for k in self.samples.__dataclass_fields__}
+        return out
+
+    def to_json(self, **kwargs) -> str:
+        return json.dumps(self.to_dict(**kwargs), indent=2)
+
+    def event_table(self, coordinate: str = "q") -> str:
+        """A readable table of the events and a summary."""
+        qd = coordinate + "dot"
+        head = f"{'#':>5} {'kind':<19} {'t [s]':>18} {coordinate:>14} {qd + ' before':>14} {qd + ' after':>14} {'E [J]':>14}"
+        lines = [head, "-" * len(head)]
+        for i, e in enumerate(self.events, 1):
+            lines.append(f"{i:>5} {e.kind.value:<19} {e.t:>18.12f} {e.q:>14.9f} {e.qdot_before:>14.8f} "
+                         f"{e.qdot_after:>14.8f} {e.energy:>14.9f}")
+        b = self.energy_budget
+        lines += [
+            "",
+            f"status: {self.status.value} ({self.message}) at t = {self.t_final:.12g} s, "
+            f"{coordinate} = {self.q_final:.12g}",
+            f"events: {len(self.events)} ({self.count(EventKind.IMPACT)} impacts, "
+            f"{self.count(EventKind.REVERSAL)} reversals)",
+            f"energy: initial {b.initial:.12g} J, final {b.final:.12g} J, friction work {b.friction_work:.12g} J, "
+            f"impact loss {b.impact_loss:.12g} J, residual {b.residual:.3g} J ({b.relative_residual:.2g} relative)",
+        ]
+        if self.zeno is not None:
+            z = self.zeno
+            lines.append(f"Zeno accumulation at the {z.limiter} limiter: ratio {z.ratio:.9g}, {z.simulated} "
+                         f"impacts simulated, remaining time {z.remaining_time:.3g} s summed")
+        return "\n".join(lines)

@@ -1,0 +1,189 @@
+"""High-precision references that share no code with the driver (mpmath).
+
+:func:`phase_reference` follows the same physics as the driver but none of
+its numerics: the phase trajectory is evaluated from the SymPy closed form
+(or an mpmath quadrature of ``F_s'``) at ``dps`` digits, events are
+bracketed on a grid and refined with ``mpmath.findroot``, and interval times
+are tanh-sinh quadratures (``mpmath.quad``) of ``h / sqrt(w)``, which treat
+the inverse square root at turning points natively.  It is slow (tens of
+milliseconds per event) and meant for tests and benchmarks.
+
+Examples
+--------
+>>> from symvib.scene import scene_from_dict
+>>> s = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+...     "physics": {"mu": 3, "restitution": 1}, "limiters": {"right": "pi/4"},
+...     "initial": {"q": "pi/12", "qdot": 3.8}})
+>>> [(e.kind, round(float(e.q), 9)) for e in phase_reference(s)]
+[('arrest', 0.350089206)]
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mpmath
+import sympy as sp
+
+from .derive import derive
+from .symbols import g as g_sym
+from .symbols import mu as mu_sym
+
+__all__ = ["RefEvent", "phase_reference"]
+
+#: Grid steps used to bracket the first event ahead.
+GRID = 400
+#: Search window in units of q_scale where no limiter bounds the motion.
+WINDOW = 2
+
+
+@dataclass(frozen=True)
+class RefEvent:
+    """An event of the reference (mpmath numbers)."""
+
+    kind: str
+    t: object
+    q: object
+    qdot_before: object
+    qdot_after: object
+
+
+class _Model:
+    def __init__(self, scene, dps):
+        self.dps = dps
+        d = derive(scene.shape.curve(), routes=("sympy", "split", "tangent-angle"))
+        c = d.curve
+        with mpmath.workdps(dps):
+            vals = {p: sp.Float(repr(v), dps) for p, v in zip(c.params, scene.param_values)}
+            vals[g_sym] = sp.Float(repr(scene.g), dps)
+            vals[mu_sym] = sp.Float(repr(scene.mu), dps)
+        lam = lambda e: sp.lambdify(c.q, sp.sympify(e).subs(vals), "mpmath")  # noqa: E731
+        self.h, self.alpha, self.z = lam(c.h), lam(c.alpha), lam(c.z)
+        self.xp, self.zp, self.kappa = lam(c.xp), lam(c.zp), lam(c.kappa)
+        self.F, self.dF = {}, {}
+        for s, br in d.branches.items():
+            self.dF[s] = lam(br.F.integrand)
+            if br.F.closed:
+                self.F[s] = lam(br.F.expr)
+            else:
+                f, ref = self.dF[s], float(br.F.q_ref.subs(vals))
+                self.F[s] = (lambda f_, r_: (lambda q: mpmath.quad(f_, [r_, q])))(f, ref)
+        self.g = mpmath.mpf(repr(scene.g))
+        self.mu = mpmath.mpf(repr(scene.mu))
+        self.scale = float(c.q_scale.subs(vals))
+
+    def N(self, q, w):
+        return self.kappa(q) * w + self.g * self.xp(q) / self.h(q)
+
+
+def phase_reference(scene, *, dps: int = 30, max_events: int | None = None) -> list:
+    """Events of ``scene`` computed at ``dps`` digits (see the module docstring).
+
+    Stops at arrest, rest, ``max_events`` events, or ``scene.t_max``; a Zeno
+    accumulation is not summed (cap it with ``max_events``).
+    """
+    max_events = scene.max_events if max_events is None else max_events
+    with mpmath.workdps(dps):
+        M = _Model(scene, dps)
+        mp = mpmath.mpf
+        q = mp(repr(scene.q0))
+        w = (M.h(q) * mp(repr(scene.qdot0))) ** 2
+        sigma = 0 if scene.qdot0 == 0 else (1 if scene.qdot0 > 0 else -1)
+        k = mp(repr(scene.k))
+        left = None if scene.left is None else mp(repr(scene.left))
+        right = None if scene.right is None else mp(repr(scene.right))
+        t = mp(0)
+        events = []
+
+        def at_limiter(x):
+            return 1 if right is not None and x == right else -1 if left is not None and x == left else 0
+
+        def rest(x):
+            sin, cos = M.zp(x) / M.h(x), M.xp(x) / M.h(x)
+            side = at_limiter(x)
+            if side and -sin * side > 0:
+                return "rest_on_limiter", 0
+            if abs(sin) <= M.mu * abs(cos) * (1 + mp("1e-9")):
+                return "arrest", 0
+            return "slide", 1 if -sin > 0 else -1
+
+        def vel(x, w_, s_):
+            return s_ * mpmath.sqrt(max(w_, 0)) / M.h(x)
+
+        if sigma == 0:
+            what, sigma = rest(q)
+            if what != "slide":
+                return [RefEvent(what, t, q, mp(0), mp(0))]
+        elif at_limiter(q) == sigma:
+            events.append(RefEvent("impact", t, q, vel(q, w, sigma), -k * vel(q, w, sigma)))
+            w, sigma = k * k * w, -sigma
+        nsign = 1 if M.N(q, w) >= 0 else -1
+        flip = False
+        while len(events) < max_events:
+            if not flip:
+                n0 = M.N(q, w)
+                nsign = 1 if n0 > 0 else -1 if n0 < 0 else (1 if M.xp(q) >= 0 else -1)
+            flip = False
+            s = sigma * nsign
+            C = w * mpmath.exp(2 * s * M.mu * M.alpha(q)) + 2 * M.g * M.F[s](q)
+            G = lambda x: C - 2 * M.g * M.F[s](x)  # noqa: E731
+            Nn = lambda x: nsign * M.N(x, mpmath.exp(-2 * s * M.mu * M.alpha(x)) * max(G(x), 0))  # noqa: E731
+            bound = right if sigma > 0 else left
+            kind = "impact"
+            if bound is None:
+                bound, kind = q + sigma * WINDOW * M.scale, "pass"
+            # Bracket the first zero of G or N on a grid, then refine.
+            prev = q
+            found = None
+            for i in range(1, GRID + 1):
+                x = q + (bound - q) * mp(i) / GRID
+                if G(x) <= 0:
+                    found = ("reversal", prev, x)
+                    break
+                if Nn(x) < 0:
+                    found = ("normal_sign_change", prev, x)
+                    break
+                prev = x
+            if found is None:
+                qb = bound
+            else:
+                what, a, b = found
+                f = G if what == "reversal" else Nn
+                qb = mpmath.findroot(f, (a, b), solver="anderson")
+                kind = what
+            wb = max(mpmath.exp(-2 * s * M.mu * M.alpha(qb)) * G(qb), mp(0)) if kind != "reversal" else mp(0)
+            def integrand(x):
+                # tanh-sinh puts nodes within rounding of a turning point, where
+                # G rounds to 0; their weight is negligible.
+                Gx = G(x)
+                return M.h(x) * mpmath.exp(s * M.mu * M.alpha(x)) / mpmath.sqrt(Gx) if Gx > 0 else mp(0)
+
+            pts = [q + (qb - q) * mp(j) / 4 for j in range(5)]
+            dt = abs(mpmath.quad(integrand, pts))
+            if t + dt > scene.t_max:
+                break
+            t += dt
+            if kind == "pass":
+                q, w = qb, wb
+                continue
+            if kind == "normal_sign_change":
+                v = vel(qb, wb, sigma)
+                events.append(RefEvent(kind, t, qb, v, v))
+                q, w, nsign, flip = qb, wb, -nsign, True
+                continue
+            if kind == "impact":
+                v = vel(qb, wb, sigma)
+                events.append(RefEvent("impact", t, qb, v, -k * v))
+                q, w, sigma = qb, k * k * wb, -sigma
+                if w == 0:
+                    what, sigma = rest(q)
+                    if what != "slide":
+                        events.append(RefEvent(what, t, q, mp(0), mp(0)))
+                        break
+                continue
+            what, direction = rest(qb)
+            if what != "slide":
+                events.append(RefEvent(what, t, qb, mp(0), mp(0)))
+                break
+            events.append(RefEvent("reversal", t, qb, mp(0), mp(0)))
+            q, w, sigma = qb, mp(0), direction
+        return events
