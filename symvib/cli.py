@@ -1,6 +1,7 @@
 """The ``symvib`` command line: one subcommand per job.
 
 ``symvib derive SHAPE``   print the derivation of a catalogue shape (or of ``--z``/``--x``)
+``symvib run SCENE.toml`` simulate a scene: event table, ``--json PATH``, ``--plot DIR``
 ``symvib generate``       write the kernel modules of the catalogue into generated/ (``--check``)
 ``symvib audit``          the paper's printed equations against the derivation (errata)
 
@@ -92,6 +93,38 @@ def _cmd_generate(args) -> int:
     return 0
 
 
+def _cmd_run(args) -> int:
+    from .driver import simulate
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    changes = {}
+    if args.restitution is not None:
+        changes["k"] = args.restitution
+    if args.t_max is not None:
+        changes["t_max"] = args.t_max
+    if args.max_events is not None:
+        changes["max_events"] = args.max_events
+    if changes:
+        scene = scene.replace(**changes)
+    result = simulate(scene)
+    print(f"scene {scene.name}: {scene.shape.name}, mu = {scene.mu:.6g}, k = {scene.k:g}, "
+          f"limiters {scene.left} .. {scene.right}, {scene.shape.q}0 = {scene.q0:.6g}, "
+          f"{scene.shape.q}dot0 = {scene.qdot0:.6g}")
+    print(result.event_table(scene.shape.q))
+    if args.json:
+        from pathlib import Path
+
+        Path(args.json).write_text(result.to_json(samples=args.samples) + "\n", encoding="utf-8")
+        print(f"wrote {args.json}")
+    if args.plot:
+        from .plots import save_run_figures
+
+        for path in save_run_figures(result, args.plot):
+            print(f"wrote {path}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="symvib", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -104,6 +137,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--budget", type=float, default=10.0, help="seconds per integration route")
     p.add_argument("--latex", action="store_true", help="print LaTeX")
     p.set_defaults(func=_cmd_derive)
+
+    p = sub.add_parser("run", help="simulate a scene file event by event")
+    p.add_argument("scene", help="scene TOML file")
+    p.add_argument("--json", metavar="PATH", help="write the result as JSON")
+    p.add_argument("--samples", action="store_true", help="include the samples in the JSON")
+    p.add_argument("--plot", metavar="DIR", help="write the phase portrait and energy figures (PNG)")
+    p.add_argument("--restitution", type=float, help="override physics.restitution")
+    p.add_argument("--t-max", type=float, help="override run.t_max")
+    p.add_argument("--max-events", type=int, help="override run.max_events")
+    p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("generate", help="write the numeric kernel modules (generated/)")
     p.add_argument("shapes", nargs="*", help="catalogue shapes (default: all)")

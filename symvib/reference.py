@@ -47,10 +47,14 @@ class RefEvent:
     qdot_after: object
 
 
+#: Budget (seconds) of each closed-form route when the reference derives a curve.
+ROUTE_SECONDS = 2.0
+
+
 class _Model:
     def __init__(self, scene, dps):
         self.dps = dps
-        d = derive(scene.shape.curve(), routes=("sympy", "split", "tangent-angle"))
+        d = derive(scene.shape.curve(), seconds=ROUTE_SECONDS)
         c = d.curve
         with mpmath.workdps(dps):
             vals = {p: sp.Float(repr(v), dps) for p, v in zip(c.params, scene.param_values)}
@@ -59,20 +63,47 @@ class _Model:
         lam = lambda e: sp.lambdify(c.q, sp.sympify(e).subs(vals), "mpmath")  # noqa: E731
         self.h, self.alpha, self.z = lam(c.h), lam(c.alpha), lam(c.z)
         self.xp, self.zp, self.kappa = lam(c.xp), lam(c.zp), lam(c.kappa)
-        self.F, self.dF = {}, {}
+        self.F, self.dF, self.closed = {}, {}, {}
         for s, br in d.branches.items():
             self.dF[s] = lam(br.F.integrand)
+            self.closed[s] = br.F.closed
             if br.F.closed:
                 self.F[s] = lam(br.F.expr)
-            else:
-                f, ref = self.dF[s], float(br.F.q_ref.subs(vals))
-                self.F[s] = (lambda f_, r_: (lambda q: mpmath.quad(f_, [r_, q])))(f, ref)
         self.g = mpmath.mpf(repr(scene.g))
         self.mu = mpmath.mpf(repr(scene.mu))
         self.scale = float(c.q_scale.subs(vals))
 
     def N(self, q, w):
         return self.kappa(q) * w + self.g * self.xp(q) / self.h(q)
+
+    def G(self, s, q0, G0, grid):
+        """``G(x) = C - 2 g F_s(x)`` with ``G(q0) = G0``.
+
+        Closed form when there is one; otherwise ``G0 - 2 g Integral_{q0}^{x} F_s'``
+        by tanh-sinh quadrature from the nearest point of ``grid`` (values cached
+        along it), so that every quadrature is short.
+        """
+        if self.closed[s]:
+            C = G0 + 2 * self.g * self.F[s](q0)
+            return lambda x: C - 2 * self.g * self.F[s](x)
+        f = self.dF[s]
+        cache = {0: G0}
+        pts = [q0] + list(grid)
+
+        def value_at(i):
+            if i not in cache:
+                cache[i] = value_at(i - 1) - 2 * self.g * mpmath.quad(f, [pts[i - 1], pts[i]])
+            return cache[i]
+
+        direction = 1 if pts[-1] >= q0 else -1
+
+        def G(x):
+            i = 0
+            while i + 1 < len(pts) and (pts[i + 1] - x) * direction <= 0:
+                i += 1
+            return value_at(i) - 2 * self.g * mpmath.quad(f, [pts[i], x])
+
+        return G
 
 
 def phase_reference(scene, *, dps: int = 30, max_events: int | None = None) -> list:
@@ -124,18 +155,17 @@ def phase_reference(scene, *, dps: int = 30, max_events: int | None = None) -> l
                 nsign = 1 if n0 > 0 else -1 if n0 < 0 else (1 if M.xp(q) >= 0 else -1)
             flip = False
             s = sigma * nsign
-            C = w * mpmath.exp(2 * s * M.mu * M.alpha(q)) + 2 * M.g * M.F[s](q)
-            G = lambda x: C - 2 * M.g * M.F[s](x)  # noqa: E731
-            Nn = lambda x: nsign * M.N(x, mpmath.exp(-2 * s * M.mu * M.alpha(x)) * max(G(x), 0))  # noqa: E731
             bound = right if sigma > 0 else left
             kind = "impact"
             if bound is None:
                 bound, kind = q + sigma * WINDOW * M.scale, "pass"
+            grid = [q + (bound - q) * mp(i) / GRID for i in range(1, GRID + 1)]
+            G = M.G(s, q, w * mpmath.exp(2 * s * M.mu * M.alpha(q)), grid)
+            Nn = lambda x: nsign * M.N(x, mpmath.exp(-2 * s * M.mu * M.alpha(x)) * max(G(x), 0))  # noqa: E731
             # Bracket the first zero of G or N on a grid, then refine.
             prev = q
             found = None
-            for i in range(1, GRID + 1):
-                x = q + (bound - q) * mp(i) / GRID
+            for x in grid:
                 if G(x) <= 0:
                     found = ("reversal", prev, x)
                     break

@@ -62,6 +62,12 @@ class Shape:
     alpha: str | None = None
     q_scale: str = "1"
     doc: str = ""
+    q_unit: str = ""
+
+    @property
+    def unit(self) -> str:
+        """Unit of the coordinate: ``q_unit``, else m for a graph and rad otherwise."""
+        return self.q_unit or ("m" if self.kind == "graph" else "rad")
 
     @property
     def module(self) -> str:

@@ -1,0 +1,124 @@
+"""Scenes: loading, expressions, and a clear error naming the field for every bad input."""
+import math
+from pathlib import Path
+
+import pytest
+
+from symvib.scene import Scene, SceneError, load_scene, scene_from_dict
+
+SCENES = Path(__file__).resolve().parents[1] / "symvib" / "scenes"
+
+
+def base(**over):
+    data = {
+        "name": "t",
+        "curve": {"shape": "parabola"},
+        "parameters": {"p": 1.0},
+        "physics": {"g": 9.81, "m": 0.2, "alpha0": 0.05, "restitution": 0.8},
+        "limiters": {"left": "-pi/6", "right": "pi/4"},
+        "initial": {"q": 0.0, "qdot": 7.0},
+    }
+    for key, value in over.items():
+        section, _, field = key.partition("__")
+        if field:
+            if value is None:
+                data[section].pop(field, None)
+            else:
+                data.setdefault(section, {})[field] = value
+        elif value is None:
+            data.pop(section, None)
+        else:
+            data[section] = value
+    return data
+
+
+def test_paper_scene_files_load():
+    s = load_scene(SCENES / "paper-parabola.toml")
+    assert s.shape.name == "parabola" and s.mu == pytest.approx(math.tan(0.05))
+    assert s.left == pytest.approx(-math.pi / 6) and s.right == pytest.approx(math.pi / 4)
+    c = load_scene(SCENES / "paper-circle-3.8.toml")
+    assert c.mu == pytest.approx(abs(math.tan(3.0))) and c.left is None
+    assert {p.stem for p in SCENES.glob("*.toml")} >= {"paper-parabola", "paper-cycloid", "paper-circle-3.8",
+                                                       "paper-circle-7"}
+
+
+def test_expressions_and_user_curves():
+    s = scene_from_dict(base(physics__alpha0=None, physics__mu="tan(0.05)", limiters__right="asin(1/2)"))
+    assert s.mu == pytest.approx(math.tan(0.05)) and s.right == pytest.approx(math.pi / 6)
+    u = scene_from_dict(base(curve={"z": "x**2/(2*b)", "name": "bowl"}, parameters={"b": 2.0},
+                             limiters={"left": -1, "right": "b/2"}))
+    assert u.shape.kind == "graph" and u.shape.q == "x" and u.right == 1.0
+    v = scene_from_dict(base(curve={"x": "R*sin(phi)", "z": "R*(1 - cos(phi))", "q": "phi"},
+                             parameters={"R": 0.5}))
+    assert v.shape.kind == "parametric" and v.param_dict == {"R": 0.5}
+
+
+def test_replace_revalidates():
+    s = scene_from_dict(base())
+    assert s.replace(k=1.0).k == 1.0
+    assert s.replace(params={"p": 2.0}).param_dict == {"p": 2.0}
+    with pytest.raises(SceneError, match="physics.restitution"):
+        s.replace(k=1.5)
+    with pytest.raises(SceneError, match=r"parameters.R: not a parameter"):
+        s.replace(params={"R": 1.0})
+
+
+@pytest.mark.parametrize("over, field, text", [
+    (dict(physics__restitution=1.2), "physics.restitution", "must be in [0, 1]"),
+    (dict(physics__restitution=-0.1), "physics.restitution", "must be in [0, 1]"),
+    (dict(physics__restitution=None), "physics.restitution", "missing"),
+    (dict(physics__alpha0=None, physics__mu=-0.1), "physics.mu", ">= 0"),
+    (dict(physics__mu=0.1), "physics", "not both"),
+    (dict(physics__alpha0=2.0), "physics.alpha0", "[0, pi/2)"),
+    (dict(limiters__left="pi/4", limiters__right="-pi/6"), "limiters", "must be left of"),
+    (dict(initial__q=1.0), "initial.q", "outside the limiters"),
+    (dict(initial__q=-1.0), "initial.q", "outside the limiters"),
+    (dict(limiters__right="2"), "limiters.right", "outside the curve's regular domain"),
+    (dict(parameters={"p": 1.0, "R": 2.0}), "parameters.R", "unknown symbol"),
+    (dict(parameters={}), "parameters.p", "missing"),
+    (dict(parameters=None), "parameters", "missing section"),
+    (dict(parameters={"p": -1.0}), "parameters.p", "must be positive"),
+    (dict(initial__qdot=float("nan")), "initial.qdot", "finite"),
+    (dict(physics__g=float("inf")), "physics.g", "finite"),
+    (dict(physics__m=0), "physics.m", "must be positive"),
+    (dict(initial__qdot="nan"), "initial.qdot", "not allowed"),
+    (dict(initial=None), "initial", "missing section"),
+    (dict(physics=None), "physics", "missing section"),
+    (dict(curve=None), "curve", "missing section"),
+    (dict(initial__qdot=None), "initial.qdot", "missing"),
+    (dict(curve={"shape": "helix"}), "curve.shape", "unknown shape 'helix'"),
+    (dict(curve={"shape": "parabola", "z": "x"}), "curve.z", "not both"),
+    (dict(curve={"z": "x**2/(2*b)"}, parameters={"p": 1}), "parameters.p", "unknown symbol"),
+    (dict(curve={"z": "__import__('os').system('true')"}), "curve.z", "not allowed"),
+    (dict(physics__restitusion=0.5), "physics.restitusion", "unknown key"),
+    (dict(extra={"a": 1}), "extra", "unknown section"),
+    (dict(run={"t_max": -1}), "run.t_max", "must be positive"),
+    (dict(run={"max_events": 0}), "run.max_events", "positive integer"),
+    (dict(limiters__right="pi/4 +"), "limiters.right", "not a valid expression"),
+    (dict(initial__q="p*"), "initial.q", "not a valid expression"),
+    (dict(initial__q="x"), "initial.q", "name 'x' is not allowed"),
+    (dict(initial__qdot=True), "initial.qdot", "must be a number"),
+])
+def test_bad_scenes_name_the_field(over, field, text):
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(base(**over))
+    assert info.value.field == field, str(info.value)
+    assert text in str(info.value)
+
+
+def test_bad_files(tmp_path):
+    with pytest.raises(SceneError, match="no such file"):
+        load_scene(tmp_path / "missing.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[curve\nshape = 1")
+    with pytest.raises(SceneError, match="not valid TOML"):
+        load_scene(bad)
+
+
+def test_scene_is_immutable_and_round_trips():
+    s = scene_from_dict(base())
+    with pytest.raises(Exception):
+        s.k = 0.5  # type: ignore[misc]
+    again = scene_from_dict(s.to_dict())
+    assert again == s
+    assert isinstance(again, Scene)
