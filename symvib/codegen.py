@@ -90,20 +90,41 @@ class _Math(PythonCodePrinter):
     _print_AppliedUndef = _NumPy._print_AppliedUndef
 
 
-def _function(name: str, args: tuple, expr: sp.Expr, doc: str, printer) -> str:
-    """Source of one kernel: cse'd assignments, then the return."""
-    replacements, (reduced,) = sp.cse([expr], symbols=sp.numbered_symbols("_t"), order="canonical")
+def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
+    """Source of one kernel: cse'd assignments, then the return (a tuple for an ``sp.Tuple``).
+
+    An expression may hold placeholders ``_e0, _e1, ...`` (:data:`_PRE`): they are
+    computed first, so that SymPy does not rewrite ``exp(a)**2`` as ``exp(2 a)``.
+    """
+    pre = []
+    if isinstance(expr, tuple) and len(expr) == 2 and isinstance(expr[0], dict):
+        pre = sorted(expr[0].items(), key=lambda kv: kv[0].name)
+        expr = expr[1]
+    exprs = list(expr) if isinstance(expr, sp.Tuple) else [expr]
+    replacements, reduced = sp.cse([e for _, e in pre] + exprs, symbols=sp.numbered_symbols("_t"),
+                                   order="canonical")
+    pre_reduced, reduced = reduced[:len(pre)], reduced[len(pre):]
     lines = [f"def {name}({', '.join(args)}):", f'    """{doc}"""']
     for sym, sub in replacements:
         lines.append(f"    {sym} = {printer.doprint(sub)}")
-    body = printer.doprint(reduced)
-    used = {str(s) for s in expr.free_symbols} | _called_args(expr)
-    if set(args) - used:
-        # Broadcast over every argument even where the expression ignores some
-        # (h = R on a circle), so that kernels map arrays to arrays of one shape.
-        body = (f"_broadcast({body}, {', '.join(args)})" if isinstance(printer, _NumPy)
-                else f"float({body})")
-    lines.append(f"    return {body}")
+    for (sym, _), red in zip(pre, pre_reduced):
+        lines.append(f"    {sym} = {printer.doprint(red)}")
+    bodies = []
+    placeholders = {str(sym) for sym, _ in pre}
+    for part, red in zip(exprs, reduced):
+        body = printer.doprint(red)
+        used = {str(s) for s in part.free_symbols} | _called_args(part)
+        for sym, value in pre:
+            if str(sym) in used:
+                used |= {str(x) for x in value.free_symbols}
+        used -= placeholders
+        if set(args) - used:
+            # Broadcast over every argument even where the expression ignores some
+            # (h = R on a circle), so that kernels map arrays to arrays of one shape.
+            body = (f"_broadcast({body}, {', '.join(args)})" if isinstance(printer, _NumPy)
+                    else f"float({body})")
+        bodies.append(body)
+    lines.append(f"    return {', '.join(bodies)}" if len(bodies) > 1 else f"    return {bodies[0]}")
     return "\n".join(lines)
 
 
@@ -147,6 +168,14 @@ def _kernel_exprs(d: Derivation) -> list:
                     f"qdot^2(q; C) = w / h^2 (eq. 2, s = {s:+d})"))
         out.append((f"qddot_{b}", ("q", "qdot", "g", "mu", *cp), K(br.qddot(c.qdot)),
                     f"qddot = -A qdot^2 - B (eq. 1, s = {s:+d})"))
+        # What the driver's time quadrature needs at a node, fused so that shared
+        # subexpressions are computed once: F_s' = e^2 (z' + s mu x') with
+        # e = exp(s mu alpha), then h, e, kappa, cos(alpha).
+        e1 = sp.Symbol("_e0")
+        out.append((f"node_{b}", ("q", "mu", *cp),
+                    ({e1: K(sp.exp(s * mu * c.alpha))},
+                     sp.Tuple(e1**2 * K(c.zp + s * mu * c.xp), K(c.h), e1, K(c.kappa), K(c.xp / c.h))),
+                    f"(F_{sign}', h, exp({sign}mu alpha), kappa, cos(alpha)) at once, for the time quadrature"))
     e = d.energies
     out += [
         ("N_w", ("q", "w", "g", *cp), K(c.kappa) * _W + g * K(sp.cos(c.alpha)),
@@ -230,7 +259,8 @@ def module_text(d: Derivation, source: dict) -> str:
     parts = []
     signatures = {}
     for name, args, expr, doc in kernels:
-        expr = expr.xreplace(F_sub)
+        if not isinstance(expr, tuple):
+            expr = expr.xreplace(F_sub)
         signatures[name] = args
         argdoc = f"{doc}.\n\n    Arguments: ({', '.join(args)})."
         parts.append(_function(name, args, expr, argdoc, np_printer))

@@ -14,6 +14,7 @@ import enum
 import json
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -50,9 +51,8 @@ class EventKind(enum.Enum):
     NORMAL_SIGN_CHANGE = "normal_sign_change"
 
 
-@dataclass(frozen=True)
-class Event:
-    """One event.
+class Event(NamedTuple):
+    """One event (an immutable named tuple).
 
     Attributes
     ----------
@@ -76,6 +76,7 @@ class Event:
     detail: str = ""
 
     def to_dict(self) -> dict:
+        """JSON-ready fields."""
         out = {"kind": self.kind.value, "t": self.t, "q": self.q, "qdot_before": self.qdot_before,
                "qdot_after": self.qdot_after, "energy": self.energy}
         if self.detail:

@@ -96,6 +96,20 @@ def load(curve, *, check: bool = True):
         curve = Shape(**curve)
     if not isinstance(curve, Shape):
         raise TypeError(f"load() needs a shape name, a Shape or its data, not {type(curve).__name__}")
+    key = repr(curve.source())
+    module = _LOADED.get(key)
+    if module is not None:
+        return module
+    module = _load(curve, check)
+    _LOADED[key] = module
+    return module
+
+
+#: Modules already loaded in this process, by their shape's defining data.
+_LOADED: dict = {}
+
+
+def _load(curve: Shape, check: bool):
     source = curve.source()
     want = provenance.input_hash(source)
     if CATALOGUE.get(curve.name) == curve:

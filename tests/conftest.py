@@ -14,3 +14,11 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+def pytest_configure(config):
+    # The suite runs the driver's core as plain Python (no compile time); the
+    # numba engine is compared with it in tests/test_backends.py.
+    import os
+
+    os.environ.setdefault("SYMVIB_BACKEND", "python")

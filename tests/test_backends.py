@@ -1,0 +1,42 @@
+"""The compiled (numba) core gives the events of the plain-Python core."""
+from pathlib import Path
+
+import pytest
+
+from symvib.driver import backend_available, simulate
+from symvib.scene import load_scene, scene_from_dict
+
+SCENES = Path(__file__).resolve().parents[1] / "symvib" / "scenes"
+
+pytestmark = [pytest.mark.slow,
+              pytest.mark.skipif(not backend_available("numba"), reason="numba is not installed")]
+
+
+def scenes():
+    out = [load_scene(SCENES / f"{n}.toml").replace(k=k) for n in ("paper-parabola", "paper-cycloid",
+                                                                 "paper-circle-3.8", "paper-circle-7")
+           for k in (1.0, 0.8)]
+    base = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
+            "physics": {"alpha0": 0.05, "restitution": 0.8}, "initial": {"q": -0.6, "qdot": 0.0}}
+    out.append(scene_from_dict({**base, "limiters": {"right": -0.3}}))  # Zeno
+    out.append(scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+                                "physics": {"alpha0": 0.02, "restitution": 1.0},
+                                "initial": {"q": 0.0, "qdot": 11.0}}))  # loops, N changes sign
+    return out
+
+
+@pytest.mark.parametrize("scene", scenes(), ids=lambda s: f"{s.name}-k{s.k}")
+def test_numba_matches_python(scene):
+    a = simulate(scene, backend="python")
+    b = simulate(scene, backend="numba")
+    assert a.status is b.status
+    assert [e.kind for e in a.events] == [e.kind for e in b.events]
+    for x, y in zip(a.events, b.events):
+        assert x.t == pytest.approx(y.t, abs=1e-13) and x.q == pytest.approx(y.q, abs=1e-13)
+    assert a.energy_budget.friction_work == pytest.approx(b.energy_budget.friction_work, rel=1e-12)
+    assert len(a.samples.t) == len(b.samples.t)
+
+
+def test_unknown_backend():
+    with pytest.raises(ValueError, match="unknown backend"):
+        backend_available("cuda")
