@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-__all__ = ["EVENT_NAMES", "STATUS_NAMES", "simulate", "samples"]
+__all__ = ["EVENT_NAMES", "STATUS_NAMES", "simulate", "samples", "sweep", "SUMMARY", "SCALARS"]
 
 try:
     jit  # noqa: B018 - set by the combined engine module before this source
@@ -27,6 +27,12 @@ except NameError:  # imported on its own: plain Python
 
     def jit(fn):
         return fn
+
+    pjit = jit
+    prange = range
+
+    def cp_tuple(row):
+        return tuple(row)
 
 IMPACT, REVERSAL, ARREST, REST_ON_LIMITER, NORMAL_SIGN_CHANGE = 0, 1, 2, 3, 4
 RUNNING, ARRESTED, RESTING, T_MAX, MAX_EVENTS, LEFT_DOMAIN = 0, 1, 2, 3, 4, 5
@@ -720,3 +726,54 @@ def simulate(scal, cp, R, keep):
     E_final = energy(q, w, m, g, cp)
     qdot_final = qdot_of(q, w, sigma, cp) if sigma != 0 else 0.0
     return (status, ne, events, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale)
+
+
+#: Columns of a sweep's per-scene summary.
+SUMMARY = ("status", "events", "impacts", "reversals", "normal_sign_changes", "t_final", "q_final",
+           "qdot_final", "friction_work", "impact_loss", "E0", "E_final", "zeno_ratio")
+
+
+@pjit
+def sweep(scal_rows, cp_rows, R, max_log):
+    """Run many scenes of one curve (rows of :data:`SCALARS` values and of parameters).
+
+    Returns the per-scene summary (columns :data:`SUMMARY`) and, when
+    ``max_log > 0``, the first ``max_log`` events of each scene (kind, t, q,
+    qdot_before, qdot_after, energy).  Scenes run in parallel threads on the
+    numba backend (``prange``).
+    """
+    n = scal_rows.shape[0]
+    out = np.zeros((n, len(SUMMARY)))
+    logs = np.zeros((n, max(max_log, 1), 6))
+    for i in prange(n):
+        cp = cp_tuple(cp_rows[i])
+        (status, ne, events, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale) = simulate(
+            scal_rows[i], cp, R, False)
+        impacts = 0
+        reversals = 0
+        flips = 0
+        for j in range(ne):
+            kind = int(events[j, 0])
+            if kind == IMPACT:
+                impacts += 1
+            elif kind == REVERSAL:
+                reversals += 1
+            elif kind == NORMAL_SIGN_CHANGE:
+                flips += 1
+            if j < max_log:
+                for c in range(6):
+                    logs[i, j, c] = events[j, c]
+        out[i, 0] = status
+        out[i, 1] = ne
+        out[i, 2] = impacts
+        out[i, 3] = reversals
+        out[i, 4] = flips
+        out[i, 5] = t
+        out[i, 6] = q
+        out[i, 7] = qdot_final
+        out[i, 8] = Wf
+        out[i, 9] = Wimp
+        out[i, 10] = E0
+        out[i, 11] = E_final
+        out[i, 12] = zeno[0]
+    return out, logs

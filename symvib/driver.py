@@ -102,7 +102,7 @@ def _resolve(backend: str) -> str:
 
 @lru_cache(maxsize=None)
 def engine(module_file: str, backend: str):
-    """``(simulate, samples)`` of the core bound to one kernel module, on a backend (cached).
+    """``(simulate, samples, sweep)`` of the core bound to one kernel module, on a backend (cached).
 
     The core's source (:mod:`symvib.core`) is appended to the kernel module's
     source; on the numba backend every ``*_scalar`` kernel and every core
@@ -114,12 +114,16 @@ def engine(module_file: str, backend: str):
 
     kernel_src = _strip_future(Path(module_file).read_text(encoding="utf-8"))
     core_src = _strip_future(Path(core.__file__).read_text(encoding="utf-8"))
+    ncp = len(_params_of(kernel_src))
+    cp_tuple = ("def cp_tuple(row):\n    return (" + "".join(f"row[{i}], " for i in range(ncp)) + ")\n\n")
     if backend == "numba":
         names = [n for n in _kernel_functions(kernel_src)]
-        text = ("import numba\n\njit = numba.njit(cache=True)\n" + kernel_src + "\n"
-                + "\n".join(f"{n} = jit({n})" for n in names) + "\n\n" + core_src)
+        text = ("import numba\n\njit = numba.njit(cache=True)\npjit = numba.njit(cache=True, parallel=True)\n"
+                "prange = numba.prange\n" + kernel_src + "\n"
+                + "\n".join(f"{n} = jit({n})" for n in names) + "\n\n@jit\n" + cp_tuple + core_src)
     else:
-        text = "def jit(fn):\n    return fn\n\n" + kernel_src + "\n" + core_src
+        text = ("def jit(fn):\n    return fn\n\n\npjit = jit\nprange = range\n\n" + kernel_src + "\n"
+                + cp_tuple + core_src)
     digest = hashlib.sha256(text.encode()).hexdigest()[:20]
     stem = f"engine_{Path(module_file).stem}_{backend}_{digest}"
     if backend == "numba":
@@ -136,14 +140,21 @@ def engine(module_file: str, backend: str):
         # numba's on-disk cache re-imports the module by name when it loads.
         sys.modules[name] = module
         spec.loader.exec_module(module)
-        return module.simulate, module.samples
+        return module.simulate, module.samples, module.sweep
     namespace = {"__name__": f"symvib._engines.{stem}"}
     exec(compile(text, f"<engine {stem}>", "exec"), namespace)  # noqa: S102 - generated code and our core
-    return namespace["simulate"], namespace["samples"]
+    return namespace["simulate"], namespace["samples"], namespace["sweep"]
 
 
 def _strip_future(text: str) -> str:
     return text.replace("from __future__ import annotations\n", "")
+
+
+def _params_of(text: str) -> tuple:
+    import ast
+    import re
+
+    return ast.literal_eval(re.search(r"^PARAMS = (.*)$", text, re.M).group(1))
 
 
 def _kernel_functions(text: str) -> list:
@@ -177,7 +188,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         mod = load(scene.shape)
         entry = (scene.shape, mod, *engine(mod.__file__, _resolve(backend)))
         _BOUND[(id(scene.shape), backend)] = entry
-    _, mod, sim, sample_fn = entry
+    _, mod, sim, sample_fn, _ = entry
     R = _rule(nodes)
     cp = tuple(float(v) for v in scene.param_values)
     scal = np.array([scene.g, scene.m, scene.mu, scene.k, scene.left is not None,
