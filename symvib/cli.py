@@ -4,6 +4,8 @@
 ``symvib run SCENE.toml`` simulate a scene: event table, ``--json PATH``, ``--plot DIR``
 ``symvib generate``       write the kernel modules of the catalogue into generated/ (``--check``)
 ``symvib audit``          the paper's printed equations against the derivation (errata)
+``symvib bench ...``      work-precision and stability (options: ``symvib bench --help``)
+``symvib sweep ...``      parameter sweeps (options: ``symvib sweep --help``)
 
 Every error the user can cause (an unknown shape, a malformed expression, a
 bad scene) is reported in one line naming the field, with exit status 2.
@@ -157,6 +159,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--q", help="coordinate name of a user curve")
     p.add_argument("--name", help="name of a user curve")
     p.set_defaults(func=_cmd_generate)
+
+    # Jobs whose options live in their own module (main(argv) -> exit status).
+    for name, module, text in (("bench", "symvib.bench", "work-precision charts and the stability suite"),
+                               ("sweep", "symvib.sweep", "parameter sweeps over many scenes")):
+        p = sub.add_parser(name, help=text, add_help=False)
+        p.add_argument("rest", nargs=argparse.REMAINDER)
+        p.set_defaults(func=(lambda m: lambda a: __import__(m, fromlist=["main"]).main(a.rest))(module))
 
     p = sub.add_parser("audit", help="compare the paper's printed equations with the derivation")
     p.add_argument("--write", metavar="PATH", help="write the errata table (Markdown) to PATH")
