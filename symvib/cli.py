@@ -1,5 +1,6 @@
 """The ``symvib`` command line: one subcommand per job.
 
+``symvib paper``          reproduce the paper: report, figures, errata (the main job)
 ``symvib derive SHAPE``   print the derivation of a catalogue shape (or of ``--z``/``--x``)
 ``symvib run SCENE.toml`` simulate a scene: event table, ``--json PATH``, ``--plot DIR``
 ``symvib generate``       write the kernel modules of the catalogue into generated/ (``--check``)
@@ -127,6 +128,14 @@ def _cmd_run(args) -> int:
     return 0
 
 
+def _cmd_paper(args) -> int:
+    from .paper import main as paper_main
+
+    if not 0.0 <= args.restitution < 1.0:
+        raise ValueError(f"--restitution: the k < 1 run needs 0 <= k < 1, got {args.restitution}")
+    return paper_main(args.out, low_k=args.restitution, quiet=args.quiet)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="symvib", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -139,6 +148,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--budget", type=float, default=10.0, help="seconds per integration route")
     p.add_argument("--latex", action="store_true", help="print LaTeX")
     p.set_defaults(func=_cmd_derive)
+
+    p = sub.add_parser("paper", help="reproduce the paper: report, figures, errata (the main job)")
+    p.add_argument("--out", default="symvib-paper", help="output folder (default: symvib-paper)")
+    p.add_argument("--restitution", type=float, default=0.8, help="k of the run beside k = 1 (default 0.8)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=_cmd_paper)
 
     p = sub.add_parser("run", help="simulate a scene file event by event")
     p.add_argument("scene", help="scene TOML file")

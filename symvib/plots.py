@@ -153,8 +153,12 @@ def _h(result, q):
     return float(load(result.scene.shape).h_scalar(q, *result.scene.param_values))
 
 
-def save_run_figures(result, out_dir, *, prefix: str | None = None) -> list:
-    """Write the phase portrait, the five energy figures and E(t) as PNG; returns the paths."""
+def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None) -> list:
+    """Write the phase portrait, the five energy figures and E(t) as PNG; returns the paths.
+
+    ``only`` restricts them to some names: ``"phase"``, ``"F_N"``, ``"P_mu"``,
+    ``"Ek"``, ``"Ep"``, ``"E"``, ``"energy-time"``.
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     prefix = prefix or result.scene.name
@@ -162,6 +166,8 @@ def save_run_figures(result, out_dir, *, prefix: str | None = None) -> list:
     figures = [("phase", phase_portrait)] + [(k, (lambda kk: lambda r, ax: energy_vs_q(r, kk, ax))(k))
                                              for k in QUANTITIES] + [("energy-time", energy_vs_t)]
     for name, draw in figures:
+        if only is not None and name not in only:
+            continue
         fig, ax = plt.subplots(figsize=FIGSIZE, dpi=DPI)
         draw(result, ax)
         fig.tight_layout()

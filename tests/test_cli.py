@@ -1,0 +1,50 @@
+"""The command line: run (table, JSON, figures), derive, audit, and one-line errors for bad input."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENE = ROOT / "symvib" / "scenes" / "paper-circle-3.8.toml"
+
+
+def cli(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, "-m", "symvib.cli", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, env={"SYMVIB_BACKEND": "python", "PATH": "/usr/bin:/bin",
+                                        "HOME": str(Path.home())})
+
+
+def test_run_prints_table_and_writes_json_and_figures(tmp_path):
+    out = cli("run", SCENE, "--json", tmp_path / "r.json", "--plot", tmp_path / "fig")
+    assert out.returncode == 0, out.stderr
+    assert "impact" in out.stdout and "status: arrested" in out.stdout
+    data = json.loads((tmp_path / "r.json").read_text())
+    assert data["status"] == "arrested"
+    assert [e["kind"] for e in data["events"]] == ["impact", "reversal", "reversal", "arrest"]
+    assert set(data["energy_budget"]) == {"initial", "final", "friction_work", "impact_loss", "residual"}
+    assert abs(data["energy_budget"]["residual"]) < 1e-12 * data["energy_budget"]["initial"]
+    assert len(list((tmp_path / "fig").glob("*.png"))) == 7
+
+
+def test_bad_scene_is_one_line_naming_the_field(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SCENE.read_text().replace("restitution = 1.0", "restitution = 1.7"))
+    out = cli("run", bad)
+    assert out.returncode == 2
+    assert out.stderr.strip() == ("symvib run: error: physics.restitution: must be in [0, 1] "
+                                  "(1 = ideally elastic, 0 = plastic), got 1.7")
+    injected = tmp_path / "evil.toml"
+    injected.write_text(SCENE.read_text().replace('q = "pi/12"', 'q = "__import__(\'os\').system(\'echo hi\')"'))
+    out = cli("run", injected)
+    assert out.returncode == 2 and "initial.q" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_derive_and_audit():
+    out = cli("derive", "circle")
+    assert out.returncode == 0 and "route: sympy" in out.stdout and "s = +1: symbolic" in out.stdout
+    out = cli("derive", "--z", "x**2/(2*p)", "--budget", "5")
+    assert out.returncode == 0 and "xdot" in out.stdout
+    out = cli("derive", "--z", "import os")
+    assert out.returncode == 2 and "curve.z" in out.stderr
+    out = cli("audit")
+    assert out.returncode == 0 and "DIFFERS" in out.stdout
