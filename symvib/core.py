@@ -172,7 +172,8 @@ def root_G(s, C, a, b, Ga, Gb, g2, mu, cp):
 
 @jit
 def crit_f(s, x, mu, cp):
-    return dFs(s, x, mu, cp)
+    """z' + s mu x': the sign of F_s' = exp(2 s mu alpha) (z' + s mu x'), without the exponential."""
+    return dz_scalar(x, *cp) + s * mu * dx_scalar(x, *cp)
 
 @jit
 def root_crit(s, a, b, fa, fb, mu, cp):
@@ -213,9 +214,10 @@ def map_new(q0, lo, hi, mu, cp, step):
     x0 = min(max(k0 * step, lo_in), hi_in)
     region[0] = x0
     region[1] = x0
-    region[2] = region[4] = dF_p_scalar(x0, mu, *cp)
-    region[3] = region[5] = dF_m_scalar(x0, mu, *cp)
-    safe = is_safe(x0, cp) and is_safe(q0, cp)
+    zp, xp = dz_scalar(x0, *cp), dx_scalar(x0, *cp)
+    region[2] = region[4] = zp + mu * xp
+    region[3] = region[5] = zp - mu * xp
+    safe = xp > 0.0 and kappa_scalar(x0, *cp) >= 0.0 and is_safe(q0, cp)
     region[6] = region[7] = x0
     region[8] = region[9] = 1.0 if safe else 0.0
     if not safe:
@@ -257,12 +259,13 @@ def map_extend(region, roots, count, target, mu, cp, step):
     while target > region[1] and region[1] < region[13]:
         k = region[11] + 1.0
         x = min(k * step, region[13])
-        fp, fm = dF_p_scalar(x, mu, *cp), dF_m_scalar(x, mu, *cp)
+        zp, xp = dz_scalar(x, *cp), dx_scalar(x, *cp)
+        fp, fm = zp + mu * xp, zp - mu * xp
         a = region[1]
         roots = crossing(roots, count, 0, a, x, region[4], fp, mu, cp)
         roots = crossing(roots, count, 1, a, x, region[5], fm, mu, cp)
         if region[9] != 0.0:
-            if is_safe(x, cp):
+            if xp > 0.0 and kappa_scalar(x, *cp) >= 0.0:
                 region[7] = x
             else:
                 region[9] = 0.0
@@ -270,12 +273,13 @@ def map_extend(region, roots, count, target, mu, cp, step):
     while target < region[0] and region[0] > region[12]:
         k = region[10] - 1.0
         x = max(k * step, region[12])
-        fp, fm = dF_p_scalar(x, mu, *cp), dF_m_scalar(x, mu, *cp)
+        zp, xp = dz_scalar(x, *cp), dx_scalar(x, *cp)
+        fp, fm = zp + mu * xp, zp - mu * xp
         b = region[0]
         roots = crossing(roots, count, 0, b, x, region[2], fp, mu, cp)
         roots = crossing(roots, count, 1, b, x, region[3], fm, mu, cp)
         if region[8] != 0.0:
-            if is_safe(x, cp):
+            if xp > 0.0 and kappa_scalar(x, *cp) >= 0.0:
                 region[6] = x
             else:
                 region[8] = 0.0

@@ -197,8 +197,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
                      scene.max_events], dtype=float)
     (status, ne, ev, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale) = sim(scal, cp, R, samples)
     detail = "plastic" if scene.k == 0.0 else ""
-    events = [Event(_KINDS[int(row[0])], float(row[1]), float(row[2]), float(row[3]), float(row[4]),
-                    float(row[5]), detail if row[0] == core.IMPACT else "") for row in ev[:ne].tolist()]
+    events = [Event(_KINDS[int(r[0])], r[1], r[2], r[3], r[4], r[5], detail if r[0] == core.IMPACT else "")
+              for r in ev[:ne].tolist()]
     zinfo = None
     if zeno[0] > 0.0:
         zinfo = ZenoInfo("right" if zeno[3] > 0 else "left", float(zeno[0]), int(zeno[1]), float(zeno[2]), float(t))

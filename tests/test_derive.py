@@ -4,7 +4,6 @@ import sympy as sp
 
 from symvib import curve as dv
 from symvib.derive import derive
-from symvib.shapes import CATALOGUE, shape
 from symvib.symbols import C, g, m, mu
 
 
@@ -40,14 +39,19 @@ def test_numeric_route_shapes_derive_and_check(name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", sorted(CATALOGUE))
-def test_every_shape_at_default_budget(name):
+@pytest.mark.parametrize("name", ["parabola", "parabola-x", "cycloid", "circle", "catenary"])
+def test_shapes_at_the_default_budget(name):
+    """Closed forms within the default budget; the catenary's three routes end (timeout or no
+    closed form) and the numeric route stands in.  (Ellipse and quartic take the same path at a
+    short budget in test_numeric_route_shapes_derive_and_check.)"""
     d = derive(name)
     assert all(d.check().values())
     for br in d.branches.values():
         assert br.F.route in ("sympy", "split", "tangent-angle", "numeric")
         if br.F.route == "numeric":
             assert len(br.F.attempts) == 3
+            assert all(a.outcome.startswith(("timeout", "no closed form", "error")) for a in br.F.attempts)
+    assert (name == "catenary") == (d.branches[1].F.route == "numeric")
 
 
 def test_residual_detects_a_wrong_trajectory():
