@@ -71,6 +71,15 @@ def _cmd_generate(args) -> int:
     from . import codegen
     from .kernels import generated_dir
 
+    if args.scene is not None:
+        from .scene import load_scene
+
+        if not args.out:
+            raise ValueError("--scene: the curve of a scene file is written where --out says")
+        shape = load_scene(args.scene).shape
+        path = codegen.generate(shape, args.out, name=shape.module, source=shape.source(), seconds=args.budget)
+        print(f"wrote {path}")
+        return 0
     if args.z is not None or args.x is not None:
         if args.z is None:
             raise ValueError("--x needs --z too (a parametric curve is x(q), z(q))")
@@ -81,7 +90,7 @@ def _cmd_generate(args) -> int:
         kind = "parametric" if args.x is not None else "graph"
         user = Shape(name=args.name or "user", kind=kind, q=args.q or ("q" if args.x else "x"), z=args.z,
                      x=args.x)
-        path = codegen.generate(user, args.out, name=user.module, source=user.source())
+        path = codegen.generate(user, args.out, name=user.module, source=user.source(), seconds=args.budget)
         print(f"wrote {path}")
         return 0
     out = args.out or generated_dir()
@@ -169,10 +178,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("shapes", nargs="*", help="catalogue shapes (default: all)")
     p.add_argument("--out", help="output folder (default: the project's generated/)")
     p.add_argument("--check", action="store_true", help="exit 1 when a module in the folder is stale")
+    p.add_argument("--scene", help="a scene file whose curve to generate (with --out)")
     p.add_argument("--z", help="z(q) of a user curve (graph unless --x is given)")
     p.add_argument("--x", help="x(q) of a user curve")
     p.add_argument("--q", help="coordinate name of a user curve")
     p.add_argument("--name", help="name of a user curve")
+    p.add_argument("--budget", type=float, default=None,
+                   help="seconds per integration route for a user curve (default 10)")
     p.set_defaults(func=_cmd_generate)
 
     # Jobs whose options live in their own module (main(argv) -> exit status).

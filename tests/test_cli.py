@@ -48,3 +48,18 @@ def test_derive_and_audit():
     assert out.returncode == 2 and "curve.z" in out.stderr
     out = cli("audit")
     assert out.returncode == 0 and "DIFFERS" in out.stdout
+
+
+def test_generate_for_a_scene_and_an_expression(tmp_path):
+    scene = tmp_path / "bowl.toml"
+    scene.write_text(SCENE.read_text().replace('shape = "circle"', 'z = "x**2/(2*b)"\nname = "bowl"')
+                     .replace("R = 0.5", "b = 0.5").replace('right = "pi/4"', "right = 0.5")
+                     .replace('q = "pi/12"', "q = 0.1"))
+    out = cli("generate", "--scene", scene, "--out", tmp_path / "k")
+    assert out.returncode == 0, out.stderr
+    text = (tmp_path / "k" / "bowl.py").read_text()
+    assert "def w_p(q, C, g, mu, b):" in text and "import sympy" not in text
+    out = cli("generate", "--z", "x**4", "--name", "quartic_user", "--out", tmp_path / "k", "--budget", "0.5")
+    assert out.returncode == 0 and (tmp_path / "k" / "quartic_user.py").exists()
+    out = cli("generate", "--scene", scene)
+    assert out.returncode == 2 and "--out" in out.stderr
