@@ -171,30 +171,65 @@ def root_G(s, C, a, b, Ga, Gb, g2, mu, cp):
     return x
 
 @jit
-def crit_f(s, x, mu, cp):
-    """z' + s mu x': the sign of F_s' = exp(2 s mu alpha) (z' + s mu x'), without the exponential."""
-    return dz_scalar(x, *cp) + s * mu * dx_scalar(x, *cp)
+def illinois_point(a, b, fa, fb):
+    """Next point of the Illinois method (regula falsi, or bisection if that leaves the bracket)."""
+    x = b - fb * (b - a) / (fb - fa)
+    if not (min(a, b) < x < max(a, b)):
+        x = 0.5 * (a + b)
+    return x
+
 
 @jit
-def root_crit(s, a, b, fa, fb, mu, cp):
-    """Illinois (modified regula falsi) for F_s' = 0 on a bracket."""
+def illinois_update(a, b, fa, fb, x, fx):
+    """The bracket after evaluating f(x) = fx: halve the stale end's value (Illinois); done?"""
+    if (fx > 0.0) == (fb > 0.0):
+        fa = 0.5 * fa
+    else:
+        a, fa = b, fb
+    b, fb = x, fx
+    return a, b, fa, fb, fx == 0.0 or abs(b - a) <= ROOT_RTOL * abs(b) + 1e-300
+
+
+@jit
+def root_crit(p, a, b, fa, fb):
+    """Root of crit_f between a and b (values fa, fb of opposite signs)."""
+    if fa == 0.0:
+        return a
     for _ in range(ROOT_MAXITER):
-        if fa == 0.0:
-            return a
-        if fb == 0.0:
-            return b
-        x = b - fb * (b - a) / (fb - fa)
-        if not (min(a, b) < x < max(a, b)):
-            x = 0.5 * (a + b)
-        fx = crit_f(s, x, mu, cp)
-        if (fx > 0.0) == (fb > 0.0):
-            fa = 0.5 * fa
-        else:
-            a, fa = b, fb
-        b, fb = x, fx
-        if abs(b - a) <= ROOT_RTOL * abs(b) + 1e-300:
-            return b
+        x = illinois_point(a, b, fa, fb)
+        a, b, fa, fb, done = illinois_update(a, b, fa, fb, x, crit_f(x, p))
+        if done:
+            break
     return b
+
+
+@jit
+def root_normal(p, a, b, fa, fb):
+    """Root of normal_on between a and b (values fa, fb of opposite signs)."""
+    for _ in range(ROOT_MAXITER):
+        x = illinois_point(a, b, fa, fb)
+        a, b, fa, fb, done = illinois_update(a, b, fa, fb, x, normal_on(x, p))
+        if done:
+            break
+    return b
+
+
+@jit
+def root_time(p, a, b, fa, fb):
+    """Where time_excess vanishes between a and b (values fa, fb of opposite signs)."""
+    for _ in range(ROOT_MAXITER):
+        x = illinois_point(a, b, fa, fb)
+        a, b, fa, fb, done = illinois_update(a, b, fa, fb, x, time_excess(x, p))
+        if done:
+            break
+    return b
+
+
+@jit
+def crit_f(x, p):
+    """z' + s mu x' at x, p = (s, mu, cp): the sign of F_s' = exp(2 s mu alpha) (z' + s mu x')."""
+    s, mu, cp = p
+    return dz_scalar(x, *cp) + s * mu * dx_scalar(x, *cp)
 
 # --- the map of the curve: critical points and where N > 0 surely, scanned lazily -----
 # Lattice points x_k = k * step are scanned outward from the start as the particle
@@ -250,7 +285,7 @@ def crossing(roots, count, row, x_old, x_new, f_old, f_new, mu, cp):
         return add_root(roots, count, row, x_new)
     if f_old != 0.0 and (f_old > 0.0) != (f_new > 0.0):
         s = 1 if row == 0 else -1
-        return add_root(roots, count, row, root_crit(s, x_old, x_new, f_old, f_new, mu, cp))
+        return add_root(roots, count, row, root_crit((s, mu, cp), x_old, x_new, f_old, f_new))
     return roots
 
 @jit
@@ -302,28 +337,15 @@ def next_crit(roots, count, s, a, b, sigma):
     return best
 
 @jit
-def normal_on(x, s, C, nsgn, g, g2, mu, cp):
+def normal_on(x, p):
+    """The normal force per unit mass at x on the current branch, times its expected sign.
+
+    p = (s, C, nsgn, g, g2, mu, cp).
+    """
+    s, C, nsgn, g, g2, mu, cp = p
     G = C - g2 * Fs(s, x, mu, cp)
     w = math.exp(-2.0 * s * mu * alpha_scalar(x, *cp)) * max(G, 0.0)
     return nsgn * N_w_scalar(x, w, g, *cp)
-
-@jit
-def root_N(a, b, fa, fb, s, C, nsgn, g, g2, mu, cp):
-    for _ in range(ROOT_MAXITER):
-        if fb == 0.0:
-            return b
-        x = b - fb * (b - a) / (fb - fa)
-        if not (min(a, b) < x < max(a, b)):
-            x = 0.5 * (a + b)
-        fx = normal_on(x, s, C, nsgn, g, g2, mu, cp)
-        if (fx > 0.0) == (fb > 0.0):
-            fa = 0.5 * fa
-        else:
-            a, fa = b, fb
-        b, fb = x, fx
-        if abs(b - a) <= ROOT_RTOL * abs(b) + 1e-300:
-            return b
-    return b
 
 # --- event location -------------------------------------------------------------
 @jit
@@ -374,12 +396,13 @@ def locate(q, sigma, s, Ga, P, region, roots, count, X):
     if safe_lo <= min(q, qe) and max(q, qe) <= safe_hi:
         return kind_out, qe, Ge, roots
     nsgn = 1.0 if s * sigma > 0 else -1.0
+    pn = (s, C, nsgn, g, g2, mu, cp)
     prev, fprev = q, 1e-300
     for j in range(X.shape[0]):
         x = q + (qe - q) * 0.5 * (X[j] + 1.0)
-        fx = normal_on(x, s, C, nsgn, g, g2, mu, cp)
+        fx = normal_on(x, pn)
         if fx < 0.0:
-            r = root_N(prev, x, fprev, fx, s, C, nsgn, g, g2, mu, cp)
+            r = root_normal(pn, prev, x, fprev, fx)
             return _NSIGN, r, C - g2 * Fs(s, r, mu, cp), roots
         prev, fprev = x, fx
     return kind_out, qe, Ge, roots
@@ -498,6 +521,15 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
             out[j, 0] = T - out[j, 0]
     return T, Wf, o
 
+@jit
+def time_excess(x, p):
+    """Time from the start of an interval to x, minus a target (for the t_max stop)."""
+    q, Ga, C, s, sigma, g, mu, scale, cp, R, work, dummy, target = p
+    Gx = max(C - 2.0 * g * Fs(s, x, mu, cp), 0.0)
+    T, _, _ = quad(q, x, Ga, Gx, s, sigma, g, mu, scale, cp, R, work, False, dummy, 0)
+    return T - target
+
+
 # --- rest and impacts ---------------------------------------------------------------
 @jit
 def rest(q, side, mu, cp):
@@ -615,27 +647,11 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
         kind, qb, Gb, roots = locate(q, sigma, s, Ga, P, region, roots, count, X)
         T, Wi, _ = quad(q, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, False, dummy, 0)
         if t + T > t_max:
-            # Stop inside this interval where t reaches t_max (Illinois on the time).
+            # Stop inside this interval where t reaches t_max.
             target = t_max - t
             C = Ga + 2.0 * g * Fs(s, q, mu, cp)
-            a, fa = q, -target
-            b, fb = qb, T - target
-            Tq, Wq = T, Wi
-            for _ in range(ROOT_MAXITER):
-                x = b - fb * (b - a) / (fb - fa)
-                if not (min(a, b) < x < max(a, b)):
-                    x = 0.5 * (a + b)
-                Gx = max(C - 2.0 * g * Fs(s, x, mu, cp), 0.0)
-                Tq, Wq, _ = quad(q, x, Ga, Gx, s, sigma, g, mu, scale, cp, R, work, False, dummy, 0)
-                fx = Tq - target
-                if (fx > 0.0) == (fb > 0.0):
-                    fa = 0.5 * fa
-                else:
-                    a, fa = b, fb
-                b, fb = x, fx
-                if abs(b - a) <= ROOT_RTOL * abs(b) + 1e-300 or fx == 0.0:
-                    break
-            qe = b
+            pt = (q, Ga, C, s, sigma, g, mu, scale, cp, R, work, dummy, target)
+            qe = root_time(pt, q, qb, -target, T - target)
             Ge = max(C - 2.0 * g * Fs(s, qe, mu, cp), 0.0)
             Tq, Wq, _ = quad(q, qe, Ga, Ge, s, sigma, g, mu, scale, cp, R, work, False, dummy, 0)
             if keep_intervals:

@@ -1,5 +1,4 @@
-"""Gauss-Legendre rules with cumulative integration, and safeguarded root finders
-for the driver (NumPy only).
+"""Gauss-Legendre rules with cumulative integration for the driver (NumPy only).
 
 A :class:`ChebRule` holds, for ``n`` Gauss-Legendre points on ``[-1, 1]``
 (interior points: an integrand may be 0/0 at an end), the quadrature weights
@@ -24,19 +23,13 @@ True
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 from numpy.polynomial import legendre as _leg
 
-__all__ = ["ChebRule", "rule", "safe_newton", "brent"]
-
-#: Relative step at which root finders stop (a few units in the last place).
-ROOT_RTOL = 4 * np.finfo(float).eps
-#: Iterations after which a root finder gives up (never reached on a bracketed monotone function).
-ROOT_MAXITER = 200
+__all__ = ["ChebRule", "rule"]
 
 
 @dataclass(frozen=True)
@@ -67,88 +60,3 @@ def rule(n: int) -> ChebRule:
     for a in (x, weights, cumulative, to_coeffs, weighted):
         a.setflags(write=False)
     return ChebRule(n, x, weights, cumulative, to_coeffs, weighted)
-
-
-def safe_newton(f, df, a: float, b: float, fa: float, fb: float, *, xtol: float = 0.0) -> float:
-    """Root of ``f`` in ``[a, b]`` where ``fa`` and ``fb`` have opposite signs (or one is 0).
-
-    Newton steps from the better end, falling back to bisection whenever a
-    step would leave the bracket or fails to halve it (``rtsafe``).  Stops
-    when the bracket is narrower than ``xtol + ROOT_RTOL * |x|``.
-    """
-    if fa == 0.0:
-        return a
-    if fb == 0.0:
-        return b
-    if (fa > 0) == (fb > 0):
-        raise ValueError(f"root not bracketed: f({a}) = {fa}, f({b}) = {fb}")
-    lo, hi = (a, b) if fa < 0 else (b, a)  # f(lo) < 0 < f(hi)
-    x = a if abs(fa) < abs(fb) else b
-    dx_old = abs(b - a)
-    dx = dx_old
-    fx = fa if x == a else fb
-    dfx = df(x)
-    for _ in range(ROOT_MAXITER):
-        tol = xtol + ROOT_RTOL * abs(x)
-        newton_ok = dfx != 0.0 and ((x - hi) * dfx - fx) * ((x - lo) * dfx - fx) < 0.0
-        if not newton_ok or abs(2.0 * fx) > abs(dx_old * dfx):
-            dx_old, dx = dx, 0.5 * (hi - lo)
-            x = lo + dx
-        else:
-            dx_old, dx = dx, fx / dfx
-            x -= dx
-        if abs(dx) <= tol or abs(hi - lo) <= tol:
-            return x
-        fx = f(x)
-        if fx == 0.0:
-            return x
-        dfx = df(x)
-        if fx < 0:
-            lo = x
-        else:
-            hi = x
-    return x
-
-
-def brent(f, a: float, b: float, fa: float, fb: float, *, xtol: float = 0.0) -> float:
-    """Brent's method on a bracket (no derivative); see :func:`safe_newton`."""
-    if fa == 0.0:
-        return a
-    if fb == 0.0:
-        return b
-    if (fa > 0) == (fb > 0):
-        raise ValueError(f"root not bracketed: f({a}) = {fa}, f({b}) = {fb}")
-    c, fc = a, fa
-    d = e = b - a
-    for _ in range(ROOT_MAXITER):
-        if (fb > 0) == (fc > 0):
-            c, fc = a, fa
-            d = e = b - a
-        if abs(fc) < abs(fb):
-            a, b, c = b, c, b
-            fa, fb, fc = fb, fc, fb
-        tol = xtol + ROOT_RTOL * abs(b)
-        m = 0.5 * (c - b)
-        if abs(m) <= tol or fb == 0.0:
-            return b
-        if abs(e) >= tol and abs(fa) > abs(fb):
-            s = fb / fa
-            if a == c:
-                p, qq = 2.0 * m * s, 1.0 - s
-            else:
-                qq, r = fa / fc, fb / fc
-                p = s * (2.0 * m * qq * (qq - r) - (b - a) * (r - 1.0))
-                qq = (qq - 1.0) * (r - 1.0) * (s - 1.0)
-            if p > 0:
-                qq = -qq
-            p = abs(p)
-            if 2.0 * p < min(3.0 * m * qq - abs(tol * qq), abs(e * qq)):
-                e, d = d, p / qq
-            else:
-                d = e = m
-        else:
-            d = e = m
-        a, fa = b, fb
-        b += d if abs(d) > tol else math.copysign(tol, m)
-        fb = f(b)
-    return b
