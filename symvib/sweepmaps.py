@@ -1,0 +1,104 @@
+"""Maps of a sweep over two of its varied fields.
+
+For each scene of a :class:`~symvib.sweep.SweepResult`: the number of
+impacts, the arrest (or rest) time and position, and the share of the lost
+energy that went into impacts, ``W_impacts / (W_friction + W_impacts)``,
+drawn over the first two varied fields: as an image on a grid sweep (with
+more than two axes, at the first value of the others, said in the title),
+as coloured points on a random sweep, as a line over a one-field sweep.
+
+Matplotlib runs on its ``Agg`` backend (no screen needed).
+
+Examples
+--------
+>>> from symvib.scene import scene_from_dict
+>>> from symvib.sweep import sweep
+>>> import tempfile
+>>> base = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
+...     "physics": {"mu": 0.05, "restitution": 0.8}, "limiters": {"left": -0.5, "right": 0.7},
+...     "initial": {"q": 0, "qdot": 7}})
+>>> res = sweep(base, {"qdot": "3:12:3", "mu": "0.05:0.2:2"}, backend="python")
+>>> [p.name for p in sweep_maps(res, tempfile.mkdtemp())]
+['impacts.png', 't_final.png', 'q_final.png', 'impact_share.png']
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+__all__ = ["sweep_maps", "MAPS"]
+
+#: Mapped quantities: column (or SweepResult attribute) -> (label, unit).
+MAPS = {
+    "impacts": ("number of impacts", ""),
+    "t_final": ("arrest (or rest) time", "s"),
+    "q_final": ("arrest (or rest) position", None),
+    "impact_share": ("share of the energy lost to impacts", ""),
+}
+FIGSIZE = (6.4, 4.8)
+DPI = 120
+
+
+def _values(res, name):
+    return res.impact_share if name == "impact_share" else np.asarray(res[name], dtype=float)
+
+
+def _label(res, fld):
+    scene = res.spec.scene
+    unit = {"initial.q": scene.shape.unit, "initial.qdot": f"{scene.shape.unit}/s", "physics.g": "m/s²",
+            "physics.m": "kg", "limiters.left": scene.shape.unit, "limiters.right": scene.shape.unit,
+            "run.t_max": "s"}.get(fld, "")
+    return f"{fld} [{unit}]" if unit else fld
+
+
+def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
+    """Write one PNG per quantity of :data:`MAPS` into ``out_dir``; returns the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    axes = res.spec.axes
+    scene = res.spec.scene
+    paths = []
+    for name in names:
+        label, unit = MAPS[name]
+        if unit is None:
+            unit = scene.shape.unit
+        values = _values(res, name)
+        fig, ax = plt.subplots(figsize=FIGSIZE, dpi=DPI)
+        note = ""
+        if len(axes) == 1:
+            x = res[axes[0].field]
+            order = np.argsort(x)
+            ax.plot(x[order], values[order], ".-")
+            ax.set_xlabel(_label(res, axes[0].field))
+            ax.set_ylabel(f"{label} [{unit}]" if unit else label)
+        else:
+            xf, yf = axes[0].field, axes[1].field
+            if res.spec.mode == "grid":
+                grid = values.reshape(res.spec.shape)
+                index = (slice(None), slice(None)) + (0,) * (len(axes) - 2)
+                z = grid[index]
+                xs, ys = np.asarray(axes[0].values), np.asarray(axes[1].values)
+                mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
+                if len(axes) > 2:
+                    note = " at " + ", ".join(f"{a.field} = {a.values[0]:g}" for a in axes[2:])
+            else:
+                mesh = ax.scatter(res[xf], res[yf], c=values, s=8, cmap="viridis")
+            bar = fig.colorbar(mesh, ax=ax)
+            bar.set_label(f"{label} [{unit}]" if unit else label)
+            ax.set_xlabel(_label(res, xf))
+            ax.set_ylabel(_label(res, yf))
+        varied = {a.field for a in axes}
+        fixed = "" if "physics.restitution" in varied else f", k = {scene.k:g}"
+        fixed += "" if varied & {"physics.mu", "physics.alpha0"} else f", $\\mu$ = {scene.mu:.4g}"
+        ax.set_title(f"{scene.name}: {label}{note}\n({res.count} scenes{fixed})", fontsize=10)
+        fig.tight_layout()
+        path = out / f"{name}.png"
+        fig.savefig(path)
+        plt.close(fig)
+        paths.append(path)
+    return paths
