@@ -189,6 +189,7 @@ class SweepSpec:
     seed: int = 0
     chunk: int = DEFAULT_CHUNK
     log_events: int = 0
+    nodes: int = 16
 
     @property
     def shape(self) -> tuple:
@@ -201,7 +202,8 @@ class SweepSpec:
 
     def to_dict(self) -> dict:
         return {"scene": self.scene.to_dict(), "axes": [a.to_dict() for a in self.axes], "mode": self.mode,
-                "count": self.count, "seed": self.seed, "chunk": self.chunk, "log_events": self.log_events}
+                "count": self.count, "seed": self.seed, "chunk": self.chunk, "log_events": self.log_events,
+                "nodes": self.nodes}
 
     @classmethod
     def from_dict(cls, data: dict) -> "SweepSpec":
@@ -209,7 +211,7 @@ class SweepSpec:
         axes = tuple(Axis(a["key"], a["field"], tuple(a["values"]) if "values" in a else None,
                           a.get("low"), a.get("high")) for a in data["axes"])
         return cls(scene, axes, data["mode"], int(data["count"]), int(data["seed"]), int(data["chunk"]),
-                   int(data["log_events"]))
+                   int(data["log_events"]), int(data["nodes"]))
 
     def rows(self, index: int) -> tuple:
         """Row numbers and varied values (one array per axis) of chunk ``index``."""
@@ -303,7 +305,7 @@ def _domain(scene: Scene, values) -> tuple:
 
 
 def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
-              chunk: int = DEFAULT_CHUNK, log_events: int = 0) -> SweepSpec:
+              chunk: int = DEFAULT_CHUNK, log_events: int = 0, nodes: int = 16) -> SweepSpec:
     """Validate a sweep definition.
 
     Parameters
@@ -317,6 +319,8 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
         Number of random samples; ``None`` for a grid.
     seed, chunk, log_events : int
         Random seed, scenes per chunk, events kept per scene.
+    nodes : int
+        Gauss-Legendre nodes per quadrature panel (as :func:`symvib.driver.simulate`).
     """
     if not isinstance(scene, Scene):
         raise SceneError("scene", f"must be a Scene, got {type(scene).__name__}")
@@ -337,10 +341,11 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
         count = math.prod(len(a.values) for a in axes)
     if count > MAX_SCENES:
         raise SceneError("vary", f"{count} scenes is more than a sweep may hold ({MAX_SCENES})")
-    for label, value, least in (("chunk", chunk, 1), ("log_events", log_events, 0), ("seed", seed, 0)):
+    for label, value, least in (("chunk", chunk, 1), ("log_events", log_events, 0), ("seed", seed, 0),
+                                ("nodes", nodes, 2)):
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
             raise SceneError(label, f"must be an integer >= {least}, got {value!r}")
-    spec = SweepSpec(scene, axes, "grid" if random is None else "random", count, seed, chunk, log_events)
+    spec = SweepSpec(scene, axes, "grid" if random is None else "random", count, seed, chunk, log_events, nodes)
     # Every corner of the box of varied values is a valid scene (the linear
     # constraints then hold inside it); each chunk is checked row by row too.
     corners = [(min(a.values), max(a.values)) if a.values is not None else (a.low, a.high) for a in axes]
@@ -362,7 +367,7 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
     fn = _sweep_function(spec.scene, backend)
     from .driver import _rule
 
-    summary, logs = fn(scal, cp, _rule(16), spec.log_events)
+    summary, logs = fn(scal, cp, _rule(spec.nodes), spec.log_events)
     out = {"row": rows}
     for axis, v in zip(spec.axes, values):
         out[axis.field] = np.asarray(v, dtype=float)
@@ -516,8 +521,8 @@ def _prepare(out: Path, spec: SweepSpec, overwrite: bool) -> list:
 
 
 def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0, chunk: int = DEFAULT_CHUNK,
-          log_events: int = 0, out=None, overwrite: bool = False, scheduler=None, progress: bool = False,
-          backend: str = "auto") -> SweepResult:
+          log_events: int = 0, nodes: int = 16, out=None, overwrite: bool = False, scheduler=None,
+          progress: bool = False, backend: str = "auto") -> SweepResult:
     """Run ``scene`` for every combination (or random sample) of the ``vary`` fields.
 
     Parameters
@@ -526,7 +531,7 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
         Base scene.
     vary : dict
         Field key -> grid axis or random range (see :func:`make_spec`).
-    random, seed, chunk, log_events
+    random, seed, chunk, log_events, nodes
         See :func:`make_spec`.
     out : path, optional
         Folder for the manifest and chunk files; an existing sweep there is
@@ -543,7 +548,7 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
     -------
     SweepResult
     """
-    spec = make_spec(scene, vary, random=random, seed=seed, chunk=chunk, log_events=log_events)
+    spec = make_spec(scene, vary, random=random, seed=seed, chunk=chunk, log_events=log_events, nodes=nodes)
     definition = spec.to_dict()
     out = None if out is None else Path(out)
     done = _prepare(out, spec, overwrite) if out is not None else []
@@ -661,7 +666,7 @@ def _sweep_file(path: Path) -> dict:
         raise SceneError(str(path), "no such sweep file") from None
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(str(path), f"not valid TOML: {exc}") from None
-    known = {"scene", "vary", "random", "seed", "chunk", "log_events", "out"}
+    known = {"scene", "vary", "random", "seed", "chunk", "log_events", "nodes", "out"}
     for key in data:
         if key not in known:
             raise SceneError(f"{path.name}:{key}", f"unknown key; known: {', '.join(sorted(known))}")
@@ -684,6 +689,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--seed", type=int)
     ap.add_argument("--chunk", type=int, help=f"scenes per chunk (default {DEFAULT_CHUNK})")
     ap.add_argument("--log-events", type=int, metavar="L", help="keep the first L events of every scene")
+    ap.add_argument("--nodes", type=int, help="Gauss-Legendre nodes per quadrature panel (default 16)")
     ap.add_argument("-o", "--out", help="output folder (resumed if it holds the same sweep)")
     ap.add_argument("--overwrite", action="store_true", help="replace a different sweep in the output folder")
     ap.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address (tcp://...)")
@@ -724,7 +730,7 @@ def _main(args) -> int:
         return value if value is not None else conf.get(name, default)
 
     res = sweep(scene, vary, random=pick("random", None), seed=pick("seed", 0), chunk=pick("chunk", DEFAULT_CHUNK),
-                log_events=pick("log_events", 0), out=out, overwrite=args.overwrite, scheduler=args.scheduler,
+                log_events=pick("log_events", 0), nodes=pick("nodes", 16), out=out, overwrite=args.overwrite, scheduler=args.scheduler,
                 progress=not args.quiet, backend=args.backend)
     names = res.status_names()
     status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in core.STATUS_NAMES if np.any(names == s))
