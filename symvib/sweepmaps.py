@@ -3,8 +3,9 @@
 For each scene of a :class:`~symvib.sweep.SweepResult`: the number of
 impacts, the arrest (or rest) time and position, and the share of the lost
 energy that went into impacts, ``W_impacts / (W_friction + W_impacts)``,
-drawn over the first two varied fields: as an image on a grid sweep (with
-more than two axes, at the first value of the others, said in the title),
+drawn over the first two varied fields that take more than one value: as an
+image on a grid sweep (with more axes, at the first value of the others, said
+in the title),
 as coloured points on a random sweep, as a line over a one-field sweep.
 
 Matplotlib runs on its ``Agg`` backend (no screen needed).
@@ -40,6 +41,8 @@ MAPS = {
     "q_final": ("arrest (or rest) position", None),
     "impact_share": ("share of the energy lost to impacts", ""),
 }
+#: Quantities that are counts (drawn with one colour per value).
+INTEGER_MAPS = ("impacts",)
 FIGSIZE = (6.4, 4.8)
 DPI = 120
 
@@ -56,12 +59,24 @@ def _label(res, fld):
     return f"{fld} [{unit}]" if unit else fld
 
 
+def _at_first(res, others):
+    """Rows where every axis in ``others`` is at its first grid value (all rows if none)."""
+    sel = np.ones(res.count, dtype=bool)
+    for a in others:
+        if a.values is not None:
+            sel &= res[a.field] == a.values[0]
+    return sel
+
+
 def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
     """Write one PNG per quantity of :data:`MAPS` into ``out_dir``; returns the paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    axes = res.spec.axes
+    spread = [a for a in res.spec.axes if a.values is None or len(a.values) > 1] or list(res.spec.axes)
+    shown = spread[:2]
     scene = res.spec.scene
+    others = [a for a in res.spec.axes if a not in shown]
+    note = " at " + ", ".join(f"{a.field} = {a.values[0]:g}" for a in others) if others else ""
     paths = []
     for name in names:
         label, unit = MAPS[name]
@@ -69,30 +84,33 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
             unit = scene.shape.unit
         values = _values(res, name)
         fig, ax = plt.subplots(figsize=FIGSIZE, dpi=DPI)
-        note = ""
-        if len(axes) == 1:
-            x = res[axes[0].field]
-            order = np.argsort(x)
-            ax.plot(x[order], values[order], ".-")
-            ax.set_xlabel(_label(res, axes[0].field))
+        colour = {"cmap": "viridis"}
+        if name in INTEGER_MAPS and np.all(np.isfinite(values)):
+            top = int(values.max()) if values.size else 0
+            # one colour per count, ticks on the integers
+            colour = {"cmap": plt.get_cmap("viridis", top + 1), "vmin": -0.5, "vmax": top + 0.5}
+        if len(shown) == 1:
+            x = res[shown[0].field]
+            sel = _at_first(res, others)
+            order = np.argsort(x[sel])
+            ax.plot(x[sel][order], values[sel][order], ".-")
+            ax.set_xlabel(_label(res, shown[0].field))
             ax.set_ylabel(f"{label} [{unit}]" if unit else label)
         else:
-            xf, yf = axes[0].field, axes[1].field
+            xf, yf = shown[0].field, shown[1].field
             if res.spec.mode == "grid":
                 grid = values.reshape(res.spec.shape)
-                index = (slice(None), slice(None)) + (0,) * (len(axes) - 2)
+                index = tuple(slice(None) if a in shown else 0 for a in res.spec.axes)
                 z = grid[index]
-                xs, ys = np.asarray(axes[0].values), np.asarray(axes[1].values)
-                mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", cmap="viridis")
-                if len(axes) > 2:
-                    note = " at " + ", ".join(f"{a.field} = {a.values[0]:g}" for a in axes[2:])
+                xs, ys = np.asarray(shown[0].values), np.asarray(shown[1].values)
+                mesh = ax.pcolormesh(xs, ys, z.T, shading="nearest", **colour)
             else:
-                mesh = ax.scatter(res[xf], res[yf], c=values, s=8, cmap="viridis")
+                mesh = ax.scatter(res[xf], res[yf], c=values, s=8, **colour)
             bar = fig.colorbar(mesh, ax=ax)
             bar.set_label(f"{label} [{unit}]" if unit else label)
             ax.set_xlabel(_label(res, xf))
             ax.set_ylabel(_label(res, yf))
-        varied = {a.field for a in axes}
+        varied = {a.field for a in res.spec.axes}
         fixed = "" if "physics.restitution" in varied else f", k = {scene.k:g}"
         fixed += "" if varied & {"physics.mu", "physics.alpha0"} else f", $\\mu$ = {scene.mu:.4g}"
         ax.set_title(f"{scene.name}: {label}{note}\n({res.count} scenes{fixed})", fontsize=10)
