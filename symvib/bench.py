@@ -238,6 +238,7 @@ def _random_truth(scene):
     from .reference import phase_reference
     from .stability import labels
 
+    _share_derivations()
     try:
         ref = phase_reference(scene, dps=RANDOM_DPS, max_events=RANDOM_MAX_EVENTS)
     except Exception as exc:  # noqa: BLE001 - a scene the reference cannot do is left out, and counted
@@ -303,10 +304,44 @@ def _sequence_task(args):
     return out
 
 
-def _pool(workers):
+def _map(fn, items, workers):
+    """``[fn(x) for x in items]``, over ``workers`` processes when more than one.
+
+    The workers are not daemonic (:class:`concurrent.futures.ProcessPoolExecutor`),
+    so the symbolic derivation may start its budgeted child processes there.
+    """
     if workers <= 1:
-        return None
-    return multiprocessing.get_context("fork").Pool(workers)
+        return [fn(x) for x in items]
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as ex:
+        return list(ex.map(fn, items, chunksize=1))
+
+
+_DERIVATIONS: dict = {}
+
+
+def _share_derivations():
+    """Derive each catalogue curve once per process for the phase reference.
+
+    :func:`symvib.reference.phase_reference` derives the scene's curve on every
+    call (a second or so, in budgeted child processes); the random scenes use
+    two curves, so the derivation is memoized by the curve's expressions.
+    """
+    from . import reference
+
+    if getattr(reference.derive, "memoized_by_bench", False):
+        return
+    original = reference.derive
+
+    def derive(curve, **kwargs):
+        key = (curve.name, str(curve.x), str(curve.z), str(curve.q), tuple(sorted(kwargs.items())))
+        if key not in _DERIVATIONS:
+            _DERIVATIONS[key] = original(curve, **kwargs)
+        return _DERIVATIONS[key]
+
+    derive.memoized_by_bench = True
+    reference.derive = derive
 
 
 def _backend():
@@ -339,12 +374,14 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
     log(f"symvib backend: {backend}; first call per curve (compile or load, excluded): "
         + ", ".join(f"{k} {v:.2f} s" for k, v in warm.items()))
     refs = {label: reference_events(s, label=label) for label, s in scenes}
+    for method in IVP_METHODS:  # imports SciPy and warms its caches outside the timings
+        run_setting(Setting(method, 1e-3), scenes[0][1], budget=budget)
     runs, summary = [], []
     for st in work_settings(quick):
         errs, cpus, wrong, failed = [], [], 0, 0
         for label, scene in scenes:
             cpu, (status, events, message) = cpu_per_run(lambda: run_setting(st, scene, budget=budget, backend=backend),
-                                                         min_total=MIN_TIMING if st.method == "symvib" else 0.0)
+                                                         min_total=MIN_TIMING)
             same, dt, dq = _errors(events, refs[label])
             if status == "failed":
                 failed += 1
@@ -394,13 +431,7 @@ def _sequence_counts(n, settings, workers, budget, backend, log) -> dict:
     todo = [s for s in scenes if scene_key(s) not in cache]
     if todo:
         log(f"phase reference of {len(todo)} random scenes ({RANDOM_DPS} digits; cached in {RANDOM_TRUTH_FILE.name})")
-        pool = _pool(workers)
-        try:
-            truths = pool.map(_random_truth, todo, chunksize=1) if pool else [_random_truth(s) for s in todo]
-        finally:
-            if pool:
-                pool.close()
-                pool.join()
+        truths = _map(_random_truth, todo, workers)
         for s, tr in zip(todo, truths):
             cache[scene_key(s)] = tr
         if RANDOM_TRUTH_FILE.parent.is_dir():
@@ -411,13 +442,7 @@ def _sequence_counts(n, settings, workers, budget, backend, log) -> dict:
         f"reference failed)")
     tasks = [(s, tr, settings, budget, backend) for s, tr in usable]
     start = time.perf_counter()
-    pool = _pool(workers)
-    try:
-        results = pool.map(_sequence_task, tasks, chunksize=1) if pool else [_sequence_task(t) for t in tasks]
-    finally:
-        if pool:
-            pool.close()
-            pool.join()
+    results = _map(_sequence_task, tasks, workers)
     rows = []
     for j, st in enumerate(settings):
         col = [r[j] for r in results]
@@ -455,7 +480,6 @@ def _plot(path: Path, summary, backend) -> None:
                if r["method"] == method and math.isfinite(r["error"])]
         if not pts:
             continue
-        pts.sort()
         name = f"symvib ({backend})" if method == "symvib" else method if method == "RK4" else f"solve_ivp {method}"
         ax.plot(*zip(*pts), marker=marker, color=color, label=name, ms=4, lw=1.2)
     ax.set_xscale("log")
@@ -533,13 +557,7 @@ def stability(out: Path, *, quick: bool = False, workers: int = 1, budget: float
     log(f"budget per run {budget:g} s CPU; computing the right outcomes")
     exps = {n: expected(n) for n in names}
     tasks = [(n, exps[n], settings, budget, backend) for n in names]
-    pool = _pool(workers)
-    try:
-        results = pool.map(_stability_task, tasks, chunksize=1) if pool else [_stability_task(t) for t in tasks]
-    finally:
-        if pool:
-            pool.close()
-            pool.join()
+    results = _map(_stability_task, tasks, workers)
     rows = [r for group in results for r in group]
     _write_csv(out / "stability.csv", rows)
     md = stability_markdown(rows, names, [Setting(m, v).label for m, v in settings])
