@@ -583,8 +583,16 @@ def stability_markdown(rows, names, methods) -> str:
 
 
 # --- command line ------------------------------------------------------------------------------------
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (exit status 2)."""
+
+    def error(self, message):
+        print(f"symvib bench: error: {message}", file=sys.stderr)
+        raise SystemExit(2)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="symvib bench", description="work-precision charts and the stability suite")
+    parser = _Parser(prog="symvib bench", description="work-precision charts and the stability suite")
     sub = parser.add_subparsers(dest="job", required=True)
     p = sub.add_parser("work-precision", help="error against CPU time on the paper scenes; wrong-sequence counts")
     p.add_argument("--out", default="symvib-bench", help="output folder (default: symvib-bench)")

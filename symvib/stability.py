@@ -198,7 +198,7 @@ def _from_reference(scene, status, tol=EVENT_TOL, max_events=None):
                     positions=tuple(r[2] for r in rows), tol=tol)
 
 
-def frictionless_events(scene, max_events: int, dps: int = 20) -> list:
+def frictionless_events(scene, max_events: int, dps: int = TRUTH_DPS) -> list:
     """Events of ``scene`` with ``mu = 0`` from energy conservation (mpmath, ``dps`` digits).
 
     Between events the specific energy ``e = w/2 + g z`` is constant, so the
