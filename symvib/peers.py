@@ -115,6 +115,10 @@ def _segments(scene, step_segment, method_name, budget=None):
     side = 1 if right is not None and q == right else -1 if left is not None and q == left else 0
     sigma = 0 if qdot == 0 else (1 if qdot > 0 else -1)
     status = None
+    # After an N = 0 event the next segment takes the other sign of N: at the
+    # restart point N is zero to rounding, and its computed sign may still be
+    # the old one, which would find the same event again at zero distance.
+    flipped = None
     if sigma == 0:
         what, sigma = P.rest(q, side)
         if what != "slide":
@@ -132,8 +136,11 @@ def _segments(scene, step_segment, method_name, budget=None):
         if len(events) >= scene.max_events:
             status = "max_events"
             break
-        n0 = P.N(q, qdot)
-        nsign = 1 if n0 > 0 else -1 if n0 < 0 else 1
+        if flipped is not None:
+            nsign, flipped = flipped, None
+        else:
+            n0 = P.N(q, qdot)
+            nsign = 1 if n0 > 0 else -1 if n0 < 0 else 1
         s = sigma * nsign
         try:
             kind, tb, qb, qdb, nsteps = step_segment(P, (q, qdot), t, s, sigma, nsign)
@@ -159,7 +166,7 @@ def _segments(scene, step_segment, method_name, budget=None):
             continue
         if kind == "normal_sign_change":
             events.append(("normal_sign_change", t, qb, qdb, qdb))
-            q, qdot = qb, qdb
+            q, qdot, flipped = qb, qdb, -nsign
             continue
         what, direction = P.rest(qb, 0)
         if what != "slide":

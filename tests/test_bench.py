@@ -59,3 +59,12 @@ def test_quick_stability_run(tmp_path):
     ours = [r for r in rows if r["method"].startswith("symvib")]
     assert ours and all(r["outcome"] == "correct" for r in ours)
     assert "| case |" in (tmp_path / "stability.md").read_text(encoding="utf-8")
+
+
+def test_peers_cross_a_normal_force_zero_once():
+    """A restarted peer takes the other sign of N after an N = 0 event (not the same event again)."""
+    from symvib import stability as st
+
+    c = st.case("normal-sign")
+    run = solve_ivp_events(c.scene, "RK45", 1e-8)
+    assert st.labels(run.events) == st.expected("normal-sign").labels
