@@ -427,7 +427,7 @@ def cases() -> list:
              lambda s: _from_frictionless(s, "max_events", 1000)),
         Case("large-friction", "large friction (mu = 5): arrest at the first turning point",
              _paper_parabola(mu=5.0),
-             "turning point from the closed form F_+(q*) = F_+(0) + w0/(2g), |tan q*| <= mu; time by tanh-sinh",
+             "turning point from the closed form F_+(q*) = F_+(0) + w0/(2g), abs(tan q*) <= mu; time by tanh-sinh",
              _large_friction_truth),
         Case("thousands", "2000 impacts, mu = 0, k = 0.9999 (energy budget)",
              _paper_parabola(mu=0.0, restitution=0.9999, run={"max_events": 2000}),
@@ -438,7 +438,7 @@ def cases() -> list:
                               "physics": {"g": _G, "m": _M, "alpha0": _ALPHA0, "restitution": 0.9},
                               "limiters": {"left": "-pi/6", "right": "pi - 0.01"},
                               "initial": {"q": 0.0, "qdot": 30.0}, "run": {"max_events": 12}}),
-             "h -> 0 at the cusp: |phidot| > 1000 at the limiter; mpmath phase reference",
+             "h -> 0 at the cusp: phidot > 1000 at the limiter; mpmath phase reference",
              lambda s: _from_reference(s, "max_events")),
         Case("normal-sign", "normal force changing sign (circle above its horizontal diameter)",
              _circle(_ALPHA0, 8.5, max_events=8),
@@ -446,7 +446,7 @@ def cases() -> list:
              lambda s: _from_reference(s, "max_events")),
         Case("looping", "looping a full circle, no limiter",
              _circle(0.02, 11.0, max_events=8),
-             "phidot0 = 11 on R = 0.5 passes the top (v^2 > g R there) twice; mpmath phase reference",
+             "phidot0 = 11 on R = 0.5 goes over the top three times (N < 0 near it from the second pass) before it swings back; mpmath phase reference",
              lambda s: _from_reference(s, "max_events")),
     ]
     return out
