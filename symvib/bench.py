@@ -56,6 +56,7 @@ import os
 import random
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -239,9 +240,9 @@ def _random_truth(scene):
     from .reference import phase_reference
     from .stability import labels
 
-    _share_derivations()
     try:
-        ref = phase_reference(scene, dps=RANDOM_DPS, max_events=RANDOM_MAX_EVENTS)
+        with _shared_derivations():
+            ref = phase_reference(scene, dps=RANDOM_DPS, max_events=RANDOM_MAX_EVENTS)
     except Exception as exc:  # noqa: BLE001 - a scene the reference cannot do is left out, and counted
         return {"labels": None, "why": f"{type(exc).__name__}"}
     if not ref or ref[-1].kind not in ("arrest", "rest_on_limiter"):
@@ -336,17 +337,17 @@ def _map(fn, items, workers):
 _DERIVATIONS: dict = {}
 
 
-def _share_derivations():
-    """Derive each catalogue curve once per process for the phase reference.
+@contextmanager
+def _shared_derivations():
+    """Within the block, derive each catalogue curve once per process for the phase reference.
 
     :func:`symvib.reference.phase_reference` derives the scene's curve on every
     call (a second or so, in budgeted child processes); the random scenes use
-    two curves, so the derivation is memoized by the curve's expressions.
+    two curves, so the derivation is memoized by the curve's expressions
+    (``_DERIVATIONS``, kept between blocks).  The module is restored on exit.
     """
     from . import reference
 
-    if getattr(reference.derive, "memoized_by_bench", False):
-        return
     original = reference.derive
 
     def derive(curve, **kwargs):
@@ -355,8 +356,11 @@ def _share_derivations():
             _DERIVATIONS[key] = original(curve, **kwargs)
         return _DERIVATIONS[key]
 
-    derive.memoized_by_bench = True
     reference.derive = derive
+    try:
+        yield
+    finally:
+        reference.derive = original
 
 
 def _backend():

@@ -97,7 +97,6 @@ class _Model:
 
 def _gbs_step(f, y0, H, tol):
     """One Gragg-Bulirsch-Stoer step of length ``H``: ``(y1, converged)``."""
-    rows = []
     prev = None
     for j in range(1, LEVELS + 1):
         n = 2 * j
@@ -119,7 +118,6 @@ def _gbs_step(f, y0, H, tol):
             if err <= tol * scale:
                 return T[-1], j
         prev = T
-        rows.append(T)
     return prev[-1], None
 
 
