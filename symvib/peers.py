@@ -27,12 +27,18 @@ import numpy as np
 
 from .kernels import load
 
-__all__ = ["PeerRun", "solve_ivp_events", "rk4_events"]
+__all__ = ["PeerRun", "PeerBudget", "solve_ivp_events", "rk4_events"]
 
 #: Relative tolerance of the arrest test (same as the driver's).
 CONE_RTOL = 1e-9
 #: Bisection steps of the RK4 event location.
 BISECT = 60
+#: Right-hand-side calls between two checks of a run's CPU-time budget.
+BUDGET_CHECK_CALLS = 256
+
+
+class PeerBudget(RuntimeError):
+    """A peer run spent its CPU-time budget (``budget=`` seconds): it did not finish."""
 
 
 @dataclass(frozen=True)
@@ -49,8 +55,10 @@ class PeerRun:
 
 
 class _Physics:
-    def __init__(self, scene):
+    def __init__(self, scene, budget=None):
         self.scene = scene
+        self.deadline = None if budget is None else time.process_time() + budget
+        self.budget = budget
         self.mod = load(scene.shape)
         self.cp = scene.param_values
         self.g, self.mu, self.k = scene.g, scene.mu, scene.k
@@ -69,6 +77,9 @@ class _Physics:
 
         def rhs(t, y):
             self.calls += 1
+            if self.deadline is not None and self.calls % BUDGET_CHECK_CALLS == 0 \
+                    and time.process_time() > self.deadline:
+                raise PeerBudget(f"CPU-time budget of {self.budget:g} s spent")
             return [y[1], f(y[0], y[1], g, mu, *cp)]
 
         return rhs
@@ -88,9 +99,13 @@ class _Physics:
         return True
 
 
-def _segments(scene, step_segment, method_name):
-    """The event loop shared by the peers: ``step_segment(y0, t0, s, sigma)`` integrates one segment."""
-    P = _Physics(scene)
+def _segments(scene, step_segment, method_name, budget=None):
+    """The event loop shared by the peers: ``step_segment(y0, t0, s, sigma)`` integrates one segment.
+
+    With ``budget`` (CPU seconds) a run that spends it stops with status
+    ``"failed"`` and a :class:`PeerBudget` message.
+    """
+    P = _Physics(scene, budget)
     start = time.perf_counter()
     q, qdot = scene.q0, scene.qdot0
     t = 0.0
@@ -100,6 +115,10 @@ def _segments(scene, step_segment, method_name):
     side = 1 if right is not None and q == right else -1 if left is not None and q == left else 0
     sigma = 0 if qdot == 0 else (1 if qdot > 0 else -1)
     status = None
+    # After an N = 0 event the next segment takes the other sign of N: at the
+    # restart point N is zero to rounding, and its computed sign may still be
+    # the old one, which would find the same event again at zero distance.
+    flipped = None
     if sigma == 0:
         what, sigma = P.rest(q, side)
         if what != "slide":
@@ -117,8 +136,11 @@ def _segments(scene, step_segment, method_name):
         if len(events) >= scene.max_events:
             status = "max_events"
             break
-        n0 = P.N(q, qdot)
-        nsign = 1 if n0 > 0 else -1 if n0 < 0 else 1
+        if flipped is not None:
+            nsign, flipped = flipped, None
+        else:
+            n0 = P.N(q, qdot)
+            nsign = 1 if n0 > 0 else -1 if n0 < 0 else 1
         s = sigma * nsign
         try:
             kind, tb, qb, qdb, nsteps = step_segment(P, (q, qdot), t, s, sigma, nsign)
@@ -144,7 +166,7 @@ def _segments(scene, step_segment, method_name):
             continue
         if kind == "normal_sign_change":
             events.append(("normal_sign_change", t, qb, qdb, qdb))
-            q, qdot = qb, qdb
+            q, qdot, flipped = qb, qdb, -nsign
             continue
         what, direction = P.rest(qb, 0)
         if what != "slide":
@@ -157,8 +179,11 @@ def _segments(scene, step_segment, method_name):
 
 
 def solve_ivp_events(scene, method: str = "DOP853", rtol: float = 1e-10, atol: float | None = None,
-                     max_step: float = math.inf) -> PeerRun:
-    """Integrate ``scene`` with :func:`scipy.integrate.solve_ivp`, restarted at every event."""
+                     max_step: float = math.inf, budget: float | None = None) -> PeerRun:
+    """Integrate ``scene`` with :func:`scipy.integrate.solve_ivp`, restarted at every event.
+
+    ``budget`` (CPU seconds, optional) bounds the run (status ``"failed"``, :class:`PeerBudget`).
+    """
     from scipy.integrate import solve_ivp
 
     atol = rtol * 1e-2 if atol is None else atol
@@ -200,11 +225,14 @@ def solve_ivp_events(scene, method: str = "DOP853", rtol: float = 1e-10, atol: f
                 return kind, float(ev_t[0]), float(q), float(qd), nsteps
         return "t_max", scene.t_max, float(sol.y[0, -1]), float(sol.y[1, -1]), nsteps
 
-    return _segments(scene, segment, f"solve_ivp {method} rtol={rtol:g}")
+    return _segments(scene, segment, f"solve_ivp {method} rtol={rtol:g}", budget)
 
 
-def rk4_events(scene, dt: float) -> PeerRun:
-    """Classical RK4 with a fixed step ``dt``; events by bisection on the Hermite interpolant."""
+def rk4_events(scene, dt: float, budget: float | None = None) -> PeerRun:
+    """Classical RK4 with a fixed step ``dt``; events by bisection on the Hermite interpolant.
+
+    ``budget`` (CPU seconds, optional) bounds the run (status ``"failed"``, :class:`PeerBudget`).
+    """
 
     def segment(P, y0, t0, s, sigma, nsign):
         f = P.rhs(s)
@@ -267,7 +295,7 @@ def rk4_events(scene, dt: float) -> PeerRun:
                 return "t_max", t, q, v, nsteps
         return "t_max", scene.t_max, q, v, nsteps
 
-    return _segments(scene, segment, f"RK4 dt={dt:g}")
+    return _segments(scene, segment, f"RK4 dt={dt:g}", budget)
 
 
 def event_errors(events, reference) -> tuple:

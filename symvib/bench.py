@@ -1,0 +1,661 @@
+"""``symvib bench``: work-precision charts and the stability suite.
+
+Subcommands (``symvib bench SUBCOMMAND --help``)::
+
+    symvib bench work-precision --out DIR [--quick] [--random N] [--workers 2]
+    symvib bench stability --out DIR [--quick] [--budget S] [--workers 2]
+    symvib bench reference [--write]
+
+``work-precision``
+    For the paper scenes (``k = 1`` and ``0.8``) every method and setting
+    runs every scene; its error is the largest event-time or event-position
+    error against the 30-digit time reference (:mod:`symvib.reference_time`,
+    cached in ``docs/benchmarks/time_reference.json``), its cost the CPU time
+    per trajectory (:func:`time.process_time`, one thread, the cheapest of
+    ``TIMING_BLOCKS`` blocks of repeated calls, ``MIN_TIMING`` s in all).  A
+    setting whose event sequence differs from the reference's on some scene
+    counts as "wrong sequence" there and gets no error point.  Methods: symvib's driver at ``SYMVIB_NODES`` Gauss nodes
+    (numba backend when installed, after a warm-up whose compile time is
+    reported apart), :func:`scipy.integrate.solve_ivp` (RK45, DOP853, Radau,
+    LSODA; ``rtol`` 1e-3 .. 1e-12, ``atol = rtol / 100``), and RK4 at fixed
+    steps.  Writes ``work_precision.png`` (log-log, one line per method),
+    ``work_precision.csv`` (one row per setting), ``work_precision_runs.csv``
+    (one row per setting and scene), ``wrong_sequences.csv`` and
+    ``summary.md`` with the ratio at equal accuracy, which is::
+
+        ratio(eps) = min CPU of a peer setting with error <= eps
+                     / min CPU of a symvib setting with error <= eps
+
+    (settings with a wrong sequence on any paper scene excluded).  It also
+    counts wrong event sequences over random parabola/circle scenes (random
+    ``qdot0``, ``mu``, ``k``, limiters; truth :func:`symvib.reference.phase_reference`
+    at 20 digits, cached; scenes needing more than ``RANDOM_MAX_EVENTS`` events
+    are left out).
+
+``stability``
+    Every method runs every case of :mod:`symvib.stability` under a CPU-time
+    budget; the outcomes go to ``stability.csv`` and ``stability.md``.
+
+``reference``
+    Recomputes the cached time references of the paper scenes (``--write``
+    stores them).
+
+Examples
+--------
+>>> main(["work-precision", "--help"])  # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import json
+import math
+import multiprocessing
+import os
+import random
+import sys
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["main", "Setting", "paper_scenes", "reference_events", "random_scenes", "run_setting",
+           "ratio_at_equal_accuracy", "scene_key"]
+
+#: The paper scenes of the work-precision diagram, each with k = 1 and k = 0.8.
+PAPER_SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
+RESTITUTIONS = (1.0, 0.8)
+#: Gauss nodes per panel of symvib's driver (its accuracy knob).
+SYMVIB_NODES = (1, 2, 3, 4, 6, 8, 12, 16, 24)
+IVP_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
+#: solve_ivp relative tolerances (atol = rtol / 100, as in symvib.peers).
+RTOLS = tuple(10.0 ** -e for e in range(3, 13))
+#: RK4 fixed steps, seconds.
+RK4_STEPS = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
+#: Settings of the random-scene sequence counts (fewer: a few hundred scenes each).
+SEQ_NODES = (2, 4, 16)
+SEQ_RTOLS = (1e-3, 1e-6, 1e-9, 1e-12)
+SEQ_RK4 = (1e-2, 1e-3)
+#: Random scenes (default run, --quick run) and their event cap.
+RANDOM_SCENES = 200
+QUICK_RANDOM = 20
+RANDOM_MAX_EVENTS = 30
+RANDOM_SEED = 2026
+#: Digits of the random scenes' phase reference.
+RANDOM_DPS = 20
+#: CPU seconds a timing is repeated for (at least one run), in TIMING_BLOCKS blocks.
+MIN_TIMING = 0.25
+TIMING_BLOCKS = 5
+#: CPU-time budget of one peer run, seconds.
+PEER_BUDGET = 20.0
+#: Accuracy targets of the ratio at equal accuracy (plus the best a peer reaches).
+RATIO_TARGETS = (1e-6, 1e-10)
+#: Smallest error drawn (errors below are plotted here).
+ERROR_FLOOR = 1e-16
+#: Settings of the stability table: (method, setting).
+STABILITY_SETTINGS = (("symvib", 16), ("RK45", 1e-6), ("DOP853", 1e-10), ("Radau", 1e-8), ("LSODA", 1e-8),
+                      ("RK4", 1e-3))
+
+_DATA = Path(__file__).resolve().parents[1] / "docs" / "benchmarks"
+#: Cached 30-digit time references of the paper scenes (regenerate: ``symvib bench reference --write``).
+REFERENCE_FILE = _DATA / "time_reference.json"
+#: Cached phase-reference event sequences of the random scenes.
+RANDOM_TRUTH_FILE = _DATA / "random_truth.json"
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One method at one accuracy setting (``nodes`` for symvib, ``rtol`` for solve_ivp, ``dt`` for RK4)."""
+
+    method: str
+    value: float
+
+    @property
+    def family(self) -> str:
+        return "symvib" if self.method == "symvib" else "RK4" if self.method == "RK4" else "solve_ivp"
+
+    @property
+    def label(self) -> str:
+        if self.method == "symvib":
+            return f"symvib nodes={int(self.value)}"
+        if self.method == "RK4":
+            return f"RK4 dt={self.value:g}"
+        return f"{self.method} rtol={self.value:g}"
+
+
+def run_setting(setting: Setting, scene, *, budget: float = PEER_BUDGET, backend: str = "auto"):
+    """Run one method on one scene: ``(status, events, message)``, events as ``(kind, t, q, qdot_before)``."""
+    if setting.method == "symvib":
+        from .driver import simulate
+
+        r = simulate(scene, nodes=int(setting.value), samples=False, backend=backend)
+        return r.status.value, [(e.kind.value, e.t, e.q, e.qdot_before) for e in r.events], ""
+    from .peers import rk4_events, solve_ivp_events
+
+    if setting.method == "RK4":
+        p = rk4_events(scene, setting.value, budget=budget)
+    else:
+        p = solve_ivp_events(scene, setting.method, setting.value, budget=budget)
+    return p.status, [tuple(e[:4]) for e in p.events], p.message
+
+
+def work_settings(quick: bool = False) -> list:
+    """The settings of the work-precision diagram."""
+    if quick:
+        return ([Setting("symvib", n) for n in (2, 4, 8, 16)]
+                + [Setting(m, r) for m in ("RK45", "DOP853") for r in (1e-4, 1e-7, 1e-10)]
+                + [Setting("RK4", 3e-3)])
+    return ([Setting("symvib", n) for n in SYMVIB_NODES] + [Setting(m, r) for m in IVP_METHODS for r in RTOLS]
+            + [Setting("RK4", dt) for dt in RK4_STEPS])
+
+
+def sequence_settings(quick: bool = False) -> list:
+    """The settings of the random-scene sequence counts."""
+    if quick:
+        return [Setting("symvib", 16), Setting("RK45", 1e-6), Setting("DOP853", 1e-9)]
+    return ([Setting("symvib", n) for n in SEQ_NODES] + [Setting(m, r) for m in IVP_METHODS for r in SEQ_RTOLS]
+            + [Setting("RK4", dt) for dt in SEQ_RK4])
+
+
+# --- scenes and references -----------------------------------------------------------------------
+def paper_scenes(quick: bool = False) -> list:
+    """``(label, scene)`` of the paper scenes with k = 1 and 0.8 (quick: two of them)."""
+    from importlib.resources import files
+
+    from .scene import load_scene
+
+    out = []
+    for name in PAPER_SCENES:
+        for k in RESTITUTIONS:
+            scene = load_scene(files("symvib") / "scenes" / f"{name}.toml").replace(k=k)
+            out.append((f"{name} k={k:g}", scene))
+    if quick:
+        out = [out[1], out[4]]  # parabola k=0.8, circle-3.8 k=1
+    return out
+
+
+def scene_key(scene) -> str:
+    """A fingerprint of everything that determines a scene's events."""
+    data = [scene.shape.name, scene.shape.source() if hasattr(scene.shape, "source") else None,
+            [repr(v) for v in scene.param_values], repr(scene.g), repr(scene.mu), repr(scene.k), repr(scene.left),
+            repr(scene.right), repr(scene.q0), repr(scene.qdot0), repr(scene.t_max), scene.max_events]
+    return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def _load_json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+
+
+def reference_events(scene, *, label: str = "", cache: Path | None = REFERENCE_FILE, write: bool = False) -> list:
+    """The time reference's events of ``scene`` as ``(kind, t, q, qdot_before)`` floats (cached by fingerprint)."""
+    key = scene_key(scene)
+    data = _load_json(cache) if cache is not None else {}
+    if key in data and not write:
+        return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in data[key]["events"]]
+    import mpmath
+
+    from .reference_time import time_reference
+
+    ref = time_reference(scene, dps=30)
+    rows = [(e.kind, mpmath.nstr(e.t, 25), mpmath.nstr(e.q, 25), mpmath.nstr(e.qdot_before, 25)) for e in ref]
+    if write and cache is not None:
+        data = _load_json(cache)
+        data[key] = {"scene": label or scene.name, "dps": 30, "method": "symvib.reference_time.time_reference",
+                     "events": rows}
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        cache.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in rows]
+
+
+def random_scenes(n: int, seed: int = RANDOM_SEED) -> list:
+    """``n`` random paper-parabola / circle scenes (random ``qdot0``, ``mu``, ``k``, limiters), capped events."""
+    from .scene import scene_from_dict
+
+    rng = random.Random(seed)
+    out = []
+    for i in range(n):
+        circle = rng.random() < 0.5
+        left = -rng.uniform(0.15, 1.0) if rng.random() < 0.85 else None
+        right = rng.uniform(0.15, 1.0) if rng.random() < 0.85 else None
+        lo = -0.9 * (1.0 if left is None else -left)
+        hi = 0.9 * (1.0 if right is None else right)
+        data = {"name": f"random-{seed}-{i}",
+                "curve": {"shape": "circle" if circle else "parabola"},
+                "parameters": {"R": 0.5} if circle else {"p": 1.0},
+                "physics": {"g": 9.81, "m": 0.2, "mu": round(rng.uniform(0.01, 0.4), 6),
+                            "restitution": 1.0 if rng.random() < 0.15 else round(rng.uniform(0.0, 1.0), 6)},
+                "limiters": {k: v for k, v in (("left", left), ("right", right)) if v is not None},
+                "initial": {"q": round(rng.uniform(lo, hi), 6), "qdot": round(rng.uniform(-9.0, 9.0), 6)},
+                "run": {"t_max": 60.0, "max_events": RANDOM_MAX_EVENTS}}
+        out.append(scene_from_dict(data))
+    return out
+
+
+def _random_truth(scene):
+    """Sequence labels of a random scene by the phase reference, or None (too many events, or it failed)."""
+    from .reference import phase_reference
+    from .stability import labels
+
+    try:
+        with _shared_derivations():
+            ref = phase_reference(scene, dps=RANDOM_DPS, max_events=RANDOM_MAX_EVENTS)
+    except Exception as exc:  # noqa: BLE001 - a scene the reference cannot do is left out, and counted
+        return {"labels": None, "why": f"{type(exc).__name__}"}
+    if not ref or ref[-1].kind not in ("arrest", "rest_on_limiter"):
+        return {"labels": None, "why": "needs more than the event cap"}
+    rows = [(e.kind, float(e.t), float(e.q), float(e.qdot_before)) for e in ref]
+    return {"labels": list(labels(rows)), "t": [r[1] for r in rows]}
+
+
+# --- measuring ------------------------------------------------------------------------------------
+def cpu_per_run(fn, min_total: float = MIN_TIMING, blocks: int = TIMING_BLOCKS) -> tuple:
+    """``(CPU seconds per call, last result)``.
+
+    ``fn`` runs in ``blocks`` blocks of at least ``min_total / blocks`` CPU
+    seconds each (one call at least); the cheapest block's mean is returned, so
+    that load from other processes on a shared machine inflates it less.  A call
+    longer than ``min_total`` runs once.
+    """
+    start = time.process_time()
+    out = fn()
+    first = time.process_time() - start
+    if first >= min_total:
+        return first, out
+    best = first
+    for _ in range(blocks):
+        runs, total = 0, 0.0
+        while runs == 0 or total < min_total / blocks:
+            start = time.process_time()
+            out = fn()
+            total += time.process_time() - start
+            runs += 1
+        best = min(best, total / runs)
+    return best, out
+
+
+def _errors(events, ref) -> tuple:
+    from .stability import labels
+
+    same = labels(events) == labels(ref)
+    n = min(len(events), len(ref))
+    dt = max((abs(e[1] - r[1]) for e, r in zip(events[:n], ref[:n])), default=math.inf)
+    dq = max((abs(e[2] - r[2]) for e, r in zip(events[:n], ref[:n])), default=math.inf)
+    return same, dt, dq
+
+
+def ratio_at_equal_accuracy(rows, target: float):
+    """``(peer label, peer CPU, symvib label, symvib CPU, ratio)`` at error ``<= target``, or None.
+
+    ``rows`` are summary rows (dicts with ``method``, ``label``, ``wrong``, ``error``, ``cpu``).
+    """
+    ok = [r for r in rows if r["wrong"] == 0 and r["error"] <= target]
+    peers = [r for r in ok if r["method"] != "symvib"]
+    ours = [r for r in ok if r["method"] == "symvib"]
+    if not peers or not ours:
+        return None
+    p = min(peers, key=lambda r: r["cpu"])
+    s = min(ours, key=lambda r: r["cpu"])
+    return p["label"], p["cpu"], s["label"], s["cpu"], p["cpu"] / s["cpu"]
+
+
+def _sequence_task(args):
+    """One random scene through every sequence setting (runs in a worker)."""
+    scene, truth, settings, budget, backend = args
+    from .stability import labels
+
+    out = []
+    for st in settings:
+        try:
+            status, events, message = run_setting(st, scene, budget=budget, backend=backend)
+        except Exception as exc:  # noqa: BLE001 - a crash is a failure to count
+            status, events, message = "failed", [], f"{type(exc).__name__}: {exc}"
+        if status == "failed":
+            out.append("failed")
+        else:
+            out.append("ok" if list(labels(events)) == truth else "wrong")
+    return out
+
+
+def _map(fn, items, workers):
+    """``[fn(x) for x in items]``, over ``workers`` processes when more than one.
+
+    The workers are not daemonic (:class:`concurrent.futures.ProcessPoolExecutor`),
+    so the symbolic derivation may start its budgeted child processes there.
+    """
+    if workers <= 1:
+        return [fn(x) for x in items]
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as ex:
+        return list(ex.map(fn, items, chunksize=1))
+
+
+_DERIVATIONS: dict = {}
+
+
+@contextmanager
+def _shared_derivations():
+    """Within the block, derive each catalogue curve once per process for the phase reference.
+
+    :func:`symvib.reference.phase_reference` derives the scene's curve on every
+    call (a second or so, in budgeted child processes); the random scenes use
+    two curves, so the derivation is memoized by the curve's expressions
+    (``_DERIVATIONS``, kept between blocks).  The module is restored on exit.
+    """
+    from . import reference
+
+    original = reference.derive
+
+    def derive(curve, **kwargs):
+        key = (curve.name, str(curve.x), str(curve.z), str(curve.q), tuple(sorted(kwargs.items())))
+        if key not in _DERIVATIONS:
+            _DERIVATIONS[key] = original(curve, **kwargs)
+        return _DERIVATIONS[key]
+
+    reference.derive = derive
+    try:
+        yield
+    finally:
+        reference.derive = original
+
+
+def _backend():
+    from .driver import _resolve
+
+    return _resolve("auto")
+
+
+def _warm_up(scenes, backend) -> dict:
+    """Compile (or load) the driver for each curve once: CPU seconds of each first call."""
+    from .driver import simulate
+
+    out = {}
+    for _, scene in scenes:
+        name = scene.shape.name
+        if name not in out:
+            start = time.perf_counter()
+            simulate(scene, samples=False, backend=backend)
+            out[name] = time.perf_counter() - start
+    return out
+
+
+def work_precision(out: Path, *, quick: bool = False, n_random: int | None = None, workers: int = 1,
+                   budget: float = PEER_BUDGET, log=print) -> dict:
+    """Measure and draw the work-precision diagram; returns the summary (see the module docstring)."""
+    out.mkdir(parents=True, exist_ok=True)
+    backend = _backend()
+    scenes = paper_scenes(quick)
+    warm = _warm_up(scenes, backend)
+    log(f"symvib backend: {backend}; first call per curve (compile or load, excluded): "
+        + ", ".join(f"{k} {v:.2f} s" for k, v in warm.items()))
+    refs = {label: reference_events(s, label=label) for label, s in scenes}
+    for method in IVP_METHODS:  # imports SciPy and warms its caches outside the timings
+        run_setting(Setting(method, 1e-3), scenes[0][1], budget=budget)
+    runs, summary = [], []
+    for st in work_settings(quick):
+        errs, cpus, wrong, failed = [], [], 0, 0
+        for label, scene in scenes:
+            cpu, (status, events, message) = cpu_per_run(lambda: run_setting(st, scene, budget=budget, backend=backend),
+                                                         min_total=MIN_TIMING)
+            same, dt, dq = _errors(events, refs[label])
+            if status == "failed":
+                failed += 1
+                same = False
+            wrong += not same
+            err = max(dt, dq)
+            if same:
+                errs.append(err)
+            cpus.append(cpu)
+            runs.append({"method": st.method, "setting": st.value, "label": st.label, "scene": label,
+                         "events_ref": len(refs[label]), "events": len(events), "same_sequence": same,
+                         "status": status, "err_t": dt, "err_q": dq, "cpu_s": cpu, "message": message})
+        row = {"method": st.method, "setting": st.value, "label": st.label, "scenes": len(scenes), "wrong": wrong,
+               "failed": failed, "error": max(errs) if errs and not wrong else math.inf,
+               "error_correct_scenes": max(errs) if errs else math.inf, "cpu": sum(cpus) / len(cpus)}
+        summary.append(row)
+        log(f"  {st.label:22s} error {row['error_correct_scenes']:9.2e}  CPU/trajectory {row['cpu'] * 1e3:9.3f} ms"
+            f"  wrong sequence on {wrong}/{len(scenes)} scenes")
+    _write_csv(out / "work_precision_runs.csv", runs)
+    _write_csv(out / "work_precision.csv", summary)
+    ratios = []
+    peer_ok = [r["error"] for r in summary if r["method"] != "symvib" and r["wrong"] == 0]
+    targets = list(RATIO_TARGETS) + ([max(min(peer_ok), ERROR_FLOOR)] if peer_ok else [])
+    for target in targets:
+        got = ratio_at_equal_accuracy(summary, target)
+        ratios.append((target, got))
+        if got:
+            log(f"ratio at error <= {target:.1e}: {got[0]} {got[1] * 1e3:.3f} ms / {got[2]} {got[3] * 1e3:.4f} ms"
+                f" = {got[4]:.0f}")
+        else:
+            log(f"ratio at error <= {target:.1e}: no peer setting reaches it")
+    # Random scenes: wrong event sequences.
+    n_random = (QUICK_RANDOM if quick else RANDOM_SCENES) if n_random is None else n_random
+    seq = _sequence_counts(n_random, sequence_settings(quick), workers, budget, backend, log)
+    _write_csv(out / "wrong_sequences.csv", seq["rows"])
+    _plot(out / "work_precision.png", summary, backend)
+    md = _summary_markdown(summary, ratios, seq, backend, warm, scenes)
+    (out / "summary.md").write_text(md, encoding="utf-8")
+    log(f"wrote {out / 'work_precision.png'}, work_precision.csv, work_precision_runs.csv, wrong_sequences.csv, "
+        f"summary.md")
+    return {"summary": summary, "ratios": ratios, "sequences": seq, "backend": backend}
+
+
+def _sequence_counts(n, settings, workers, budget, backend, log) -> dict:
+    scenes = random_scenes(n)
+    cache = _load_json(RANDOM_TRUTH_FILE)
+    todo = [s for s in scenes if scene_key(s) not in cache]
+    if todo:
+        log(f"phase reference of {len(todo)} random scenes ({RANDOM_DPS} digits; cached in {RANDOM_TRUTH_FILE.name})")
+        truths = _map(_random_truth, todo, workers)
+        for s, tr in zip(todo, truths):
+            cache[scene_key(s)] = tr
+        if RANDOM_TRUTH_FILE.parent.is_dir():
+            RANDOM_TRUTH_FILE.write_text(json.dumps(cache, sort_keys=True) + "\n", encoding="utf-8")
+    usable = [(s, cache[scene_key(s)]["labels"]) for s in scenes if cache[scene_key(s)]["labels"] is not None]
+    left_out = len(scenes) - len(usable)
+    log(f"random scenes: {len(usable)} usable, {left_out} left out (more than {RANDOM_MAX_EVENTS} events, or the "
+        f"reference failed)")
+    tasks = [(s, tr, settings, budget, backend) for s, tr in usable]
+    start = time.perf_counter()
+    results = _map(_sequence_task, tasks, workers)
+    rows = []
+    for j, st in enumerate(settings):
+        col = [r[j] for r in results]
+        rows.append({"method": st.method, "setting": st.value, "label": st.label, "scenes": len(col),
+                     "wrong": col.count("wrong"), "failed": col.count("failed")})
+        log(f"  {st.label:22s} wrong sequence {col.count('wrong'):4d}/{len(col)}, failed/out of budget "
+            f"{col.count('failed')}")
+    log(f"  ({time.perf_counter() - start:.0f} s)")
+    return {"rows": rows, "usable": len(usable), "left_out": left_out}
+
+
+def _write_csv(path: Path, rows) -> None:
+    if not rows:
+        return
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+
+
+_STYLE = {"symvib": ("k", "o"), "RK45": ("tab:blue", "s"), "DOP853": ("tab:orange", "^"),
+          "Radau": ("tab:green", "v"), "LSODA": ("tab:red", "D"), "RK4": ("tab:purple", "x")}
+
+
+def _plot(path: Path, summary, backend) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
+    for method, (color, marker) in _STYLE.items():
+        pts = [(max(r["error"], ERROR_FLOOR), r["cpu"] * 1e3) for r in summary
+               if r["method"] == method and math.isfinite(r["error"])]
+        if not pts:
+            continue
+        name = f"symvib ({backend})" if method == "symvib" else method if method == "RK4" else f"solve_ivp {method}"
+        ax.plot(*zip(*pts), marker=marker, color=color, label=name, ms=4, lw=1.2)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.invert_xaxis()
+    ax.set_xlabel("max event-time / position error (vs 30-digit time reference)")
+    ax.set_ylabel("CPU time per trajectory [ms]")
+    ax.set_title("Work-precision, paper scenes (k = 1, 0.8)", fontsize=10)
+    ax.grid(True, which="major", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _summary_markdown(summary, ratios, seq, backend, warm, scenes) -> str:
+    lines = [f"symvib backend: **{backend}** (first call per curve, excluded from the timings: "
+             + ", ".join(f"{k} {v:.2f} s" for k, v in warm.items()) + ").",
+             f"Scenes: {', '.join(label for label, _ in scenes)}.", "",
+             "| ratio at error <= | cheapest peer setting | its CPU / trajectory | cheapest symvib setting "
+             "| its CPU / trajectory | ratio |", "| --- | --- | --- | --- | --- | --- |"]
+    for target, got in ratios:
+        if got:
+            lines.append(f"| {target:.1e} | {got[0]} | {got[1] * 1e3:.3f} ms | {got[2]} | {got[3] * 1e3:.4f} ms "
+                         f"| {got[4]:.0f} |")
+        else:
+            lines.append(f"| {target:.1e} | none reaches it | | | | |")
+    lines += ["", "| setting | max error (all sequences right) | CPU / trajectory | wrong sequence (paper scenes) |",
+              "| --- | --- | --- | --- |"]
+    for r in summary:
+        err = f"{r['error']:.1e}" if math.isfinite(r["error"]) else "-"
+        lines.append(f"| {r['label']} | {err} | {r['cpu'] * 1e3:.3f} ms | {r['wrong']}/{r['scenes']} |")
+    lines += ["", f"Wrong event sequences over {seq['usable']} random parabola/circle scenes "
+              f"({seq['left_out']} more were left out: over {RANDOM_MAX_EVENTS} events, or the reference failed):", "",
+              "| setting | wrong sequence | failed or out of budget |", "| --- | --- | --- |"]
+    for r in seq["rows"]:
+        lines.append(f"| {r['label']} | {r['wrong']}/{r['scenes']} | {r['failed']} |")
+    return "\n".join(lines) + "\n"
+
+
+# --- stability --------------------------------------------------------------------------------------
+def _stability_task(args):
+    name, exp, settings, budget, backend = args
+    from .stability import case, classify
+
+    scene = case(name).scene
+    out = []
+    for method, value in settings:
+        st = Setting(method, value)
+        start = time.process_time()
+        try:
+            status, events, message = run_setting(st, scene, budget=budget, backend=backend)
+        except Exception as exc:  # noqa: BLE001 - a crash is an outcome
+            status, events, message = "failed", [], f"{type(exc).__name__}: {exc}"
+        cpu = time.process_time() - start
+        outcome = classify(exp, status, events, message)
+        out.append({"case": name, "method": st.label, "outcome": outcome, "status": status, "events": len(events),
+                    "cpu_s": cpu, "message": message[:80]})
+    return out
+
+
+def stability(out: Path, *, quick: bool = False, workers: int = 1, budget: float = PEER_BUDGET, log=print) -> list:
+    """Run every method on every stability case; write ``stability.csv`` and ``stability.md``."""
+    from .stability import case, cases, expected
+
+    out.mkdir(parents=True, exist_ok=True)
+    backend = _backend()
+    names = [c.name for c in cases()]
+    if quick:
+        names = [n for n in names if n in ("grazing", "cone-edge", "zeno", "plastic-stay", "large-friction")]
+    settings = STABILITY_SETTINGS
+    warm = _warm_up([(n, case(n).scene) for n in names], backend)
+    log(f"symvib backend: {backend}; first call per curve (compile or load): "
+        + ", ".join(f"{k} {v:.2f} s" for k, v in warm.items()))
+    log(f"budget per run {budget:g} s CPU; computing the right outcomes")
+    exps = {n: expected(n) for n in names}
+    tasks = [(n, exps[n], settings, budget, backend) for n in names]
+    results = _map(_stability_task, tasks, workers)
+    rows = [r for group in results for r in group]
+    _write_csv(out / "stability.csv", rows)
+    md = stability_markdown(rows, names, [Setting(m, v).label for m, v in settings])
+    (out / "stability.md").write_text(md, encoding="utf-8")
+    log(md)
+    log(f"wrote {out / 'stability.csv'}, {out / 'stability.md'}")
+    return rows
+
+
+def stability_markdown(rows, names, methods) -> str:
+    """The stability table: one row per case, one column per method."""
+    from .stability import case
+
+    cell = {(r["case"], r["method"]): r["outcome"] for r in rows}
+    lines = ["| case | " + " | ".join(methods) + " |", "| --- |" + " --- |" * len(methods)]
+    for n in names:
+        marks = []
+        for m in methods:
+            o = cell.get((n, m), "")
+            marks.append("**correct**" if o == "correct" else o)
+        lines.append(f"| {case(n).title} | " + " | ".join(marks) + " |")
+    return "\n".join(lines) + "\n"
+
+
+# --- command line ------------------------------------------------------------------------------------
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (exit status 2)."""
+
+    def error(self, message):
+        print(f"symvib bench: error: {message}", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="symvib bench", description="work-precision charts and the stability suite")
+    sub = parser.add_subparsers(dest="job", required=True)
+    p = sub.add_parser("work-precision", help="error against CPU time on the paper scenes; wrong-sequence counts")
+    p.add_argument("--out", default="symvib-bench", help="output folder (default: symvib-bench)")
+    p.add_argument("--quick", action="store_true", help="a small run (2 scenes, few settings, 20 random scenes)")
+    p.add_argument("--random", type=int, default=None, help=f"random scenes (default {RANDOM_SCENES})")
+    p.add_argument("--workers", type=int, default=1, help="processes for the random scenes (default 1)")
+    p.add_argument("--budget", type=float, default=PEER_BUDGET, help="CPU seconds per peer run")
+    p = sub.add_parser("stability", help="every method on every stability case, outcomes classified")
+    p.add_argument("--out", default="symvib-bench", help="output folder (default: symvib-bench)")
+    p.add_argument("--quick", action="store_true", help="five of the cases")
+    p.add_argument("--workers", type=int, default=1, help="processes (default 1)")
+    p.add_argument("--budget", type=float, default=PEER_BUDGET, help="CPU seconds per peer run")
+    p = sub.add_parser("reference", help="recompute the cached 30-digit time references of the paper scenes")
+    p.add_argument("--write", action="store_true", help=f"store them in {REFERENCE_FILE}")
+    return parser
+
+
+def main(argv=None) -> int:
+    """``symvib bench``: returns an exit status (2 for bad options)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    if getattr(args, "workers", 1) < 1 or getattr(args, "workers", 1) > os.cpu_count():
+        print(f"symvib bench: error: --workers: must be between 1 and {os.cpu_count()}", file=sys.stderr)
+        return 2
+    if getattr(args, "budget", 1.0) <= 0 or (getattr(args, "random", None) or 0) < 0:
+        print("symvib bench: error: --budget and --random must be positive", file=sys.stderr)
+        return 2
+    if args.job == "work-precision":
+        work_precision(Path(args.out), quick=args.quick, n_random=args.random, workers=args.workers,
+                       budget=args.budget)
+    elif args.job == "stability":
+        stability(Path(args.out), quick=args.quick, workers=args.workers, budget=args.budget)
+    else:
+        for label, scene in paper_scenes():
+            start = time.process_time()
+            ev = reference_events(scene, label=label, write=args.write)
+            print(f"{label:24s} {len(ev):3d} events, {time.process_time() - start:.1f} s")
+        if args.write:
+            print(f"wrote {REFERENCE_FILE}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

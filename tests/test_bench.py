@@ -1,0 +1,70 @@
+"""symvib bench: options, ratio, random scenes, peer budgets, and (slow) the quick runs end to end."""
+import csv
+
+import pytest
+
+from symvib import bench
+from symvib.peers import solve_ivp_events
+
+
+def test_bad_options_exit_2_with_one_line(capsys):
+    assert bench.main(["work-precision", "--workers", "0"]) == 2
+    assert bench.main(["no-such-job"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and all(line.startswith("symvib bench: error:") for line in err)
+
+
+def test_ratio_at_equal_accuracy():
+    rows = [{"method": "symvib", "label": "s4", "wrong": 0, "error": 1e-5, "cpu": 1e-5},
+            {"method": "symvib", "label": "s16", "wrong": 0, "error": 1e-13, "cpu": 2e-5},
+            {"method": "DOP853", "label": "d7", "wrong": 0, "error": 1e-7, "cpu": 4e-3},
+            {"method": "RK45", "label": "r10", "wrong": 1, "error": 1e-11, "cpu": 1e-3}]
+    assert bench.ratio_at_equal_accuracy(rows, 1e-6) == ("d7", 4e-3, "s16", 2e-5, pytest.approx(200))
+    assert bench.ratio_at_equal_accuracy(rows, 1e-10) is None  # r10 has a wrong sequence
+
+
+def test_random_scenes_are_reproducible_and_capped():
+    a, b = bench.random_scenes(12), bench.random_scenes(12)
+    assert [bench.scene_key(s) for s in a] == [bench.scene_key(s) for s in b]
+    assert {s.shape.name for s in a} == {"parabola", "circle"}
+    for s in a:
+        assert s.max_events == bench.RANDOM_MAX_EVENTS
+        assert (s.left is None or s.left < s.q0) and (s.right is None or s.q0 < s.right)
+
+
+def test_peer_budget_stops_a_run():
+    _, scene = bench.paper_scenes()[0]
+    run = solve_ivp_events(scene, "Radau", 1e-12, budget=0.0)
+    assert run.status == "failed" and "budget" in run.message
+
+
+@pytest.mark.slow
+def test_quick_work_precision_run(tmp_path):
+    assert bench.main(["work-precision", "--quick", "--out", str(tmp_path), "--random", "6"]) == 0
+    for name in ("work_precision.png", "work_precision.csv", "work_precision_runs.csv", "wrong_sequences.csv",
+                 "summary.md"):
+        assert (tmp_path / name).stat().st_size > 0
+    rows = list(csv.DictReader(open(tmp_path / "work_precision.csv", encoding="utf-8")))
+    best = [r for r in rows if r["label"] == "symvib nodes=16"][0]
+    assert int(best["wrong"]) == 0 and float(best["error"]) < 1e-12
+    seq = list(csv.DictReader(open(tmp_path / "wrong_sequences.csv", encoding="utf-8")))
+    ours = [r for r in seq if r["method"] == "symvib"][0]
+    assert int(ours["wrong"]) == 0 and int(ours["failed"]) == 0
+
+
+@pytest.mark.slow
+def test_quick_stability_run(tmp_path):
+    assert bench.main(["stability", "--quick", "--out", str(tmp_path), "--budget", "5"]) == 0
+    rows = list(csv.DictReader(open(tmp_path / "stability.csv", encoding="utf-8")))
+    ours = [r for r in rows if r["method"].startswith("symvib")]
+    assert ours and all(r["outcome"] == "correct" for r in ours)
+    assert "| case |" in (tmp_path / "stability.md").read_text(encoding="utf-8")
+
+
+def test_peers_cross_a_normal_force_zero_once():
+    """A restarted peer takes the other sign of N after an N = 0 event (not the same event again)."""
+    from symvib import stability as st
+
+    c = st.case("normal-sign")
+    run = solve_ivp_events(c.scene, "RK45", 1e-8)
+    assert st.labels(run.events) == st.expected("normal-sign").labels
