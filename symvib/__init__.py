@@ -16,6 +16,8 @@ Eq(mu*phidot**2 + phiddot + g*(mu*cos(phi) + sin(phi))/R, 0)
 from __future__ import annotations
 
 import importlib
+import sys
+import types
 
 __version__ = "0.1.0"
 
@@ -42,3 +44,23 @@ def __getattr__(name: str):
 
 def __dir__():
     return sorted(set(globals()) | set(_LAZY))
+
+
+class _Package(types.ModuleType):
+    """The package module, keeping ``derive`` and ``audit`` the functions.
+
+    Importing a submodule binds it on its package (``symvib.derive = <module>``);
+    where the submodule exports a function of its own name, the package binds
+    that function instead, so ``from symvib import derive`` gives the function
+    whichever modules were imported before. The modules stay importable as
+    ``from symvib.derive import Derivation``.
+    """
+
+    def __setattr__(self, name, value):
+        if (isinstance(value, types.ModuleType) and _LAZY.get(name) == value.__name__
+                and hasattr(value, name)):
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

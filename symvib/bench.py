@@ -488,12 +488,10 @@ _STYLE = {"symvib": ("k", "o"), "RK45": ("tab:blue", "s"), "DOP853": ("tab:orang
 
 
 def _plot(path: Path, summary, backend) -> None:
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
+    fig = Figure(figsize=(6.4, 4.4), dpi=100)
+    ax = fig.subplots()
     for method, (color, marker) in _STYLE.items():
         pts = [(max(r["error"], ERROR_FLOOR), r["cpu"] * 1e3) for r in summary
                if r["method"] == method and math.isfinite(r["error"])]
@@ -511,7 +509,6 @@ def _plot(path: Path, summary, backend) -> None:
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
 
 
 def _summary_markdown(summary, ratios, seq, backend, warm, scenes) -> str:

@@ -14,6 +14,7 @@ bad scene) is reported in one line naming the field, with exit status 2.
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 
 __all__ = ["main"]
@@ -187,12 +188,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seconds per integration route for a user curve (default 10)")
     p.set_defaults(func=_cmd_generate)
 
-    # Jobs whose options live in their own module (main(argv) -> exit status).
-    for name, module, text in (("bench", "symvib.bench", "work-precision charts and the stability suite"),
-                               ("sweep", "symvib.sweep", "parameter sweeps over many scenes")):
-        p = sub.add_parser(name, help=text, add_help=False)
-        p.add_argument("rest", nargs=argparse.REMAINDER)
-        p.set_defaults(func=(lambda m: lambda a: __import__(m, fromlist=["main"]).main(a.rest))(module))
+    # Jobs whose options live in their own module: listed here for the help,
+    # dispatched by main() before parsing (argparse.REMAINDER drops a leading option).
+    for name, (_, text) in FORWARDED.items():
+        sub.add_parser(name, help=text, add_help=False)
 
     p = sub.add_parser("audit", help="compare the paper's printed equations with the derivation")
     p.add_argument("--write", metavar="PATH", help="write the errata table (Markdown) to PATH")
@@ -200,8 +199,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+FORWARDED = {
+    "bench": ("symvib.bench", "work-precision charts and the stability suite"),
+    "sweep": ("symvib.sweep", "parameter sweeps over many scenes"),
+}
+
+
 def main(argv=None) -> int:
     """Entry point of the ``symvib`` command."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in FORWARDED:
+        return importlib.import_module(FORWARDED[argv[0]][0]).main(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

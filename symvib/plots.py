@@ -9,19 +9,19 @@
   stacked on it, which must add up to ``E0`` (not in the paper);
 * :func:`save_run_figures` -- all of them as PNG files.
 
-Matplotlib runs on its ``Agg`` backend (no screen needed).
+Files are drawn on backend-free :class:`matplotlib.figure.Figure` objects
+(no screen needed, the caller's backend untouched); the single figures use
+``pyplot`` only when no axes are given, on whatever backend the caller chose.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .events import EventKind  # noqa: E402
+from .events import EventKind
 
 __all__ = ["phase_portrait", "energy_vs_q", "energy_vs_t", "save_run_figures", "QUANTITIES"]
 
@@ -168,11 +168,11 @@ def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None) -
     for name, draw in figures:
         if only is not None and name not in only:
             continue
-        fig, ax = plt.subplots(figsize=FIGSIZE, dpi=DPI)
+        fig = Figure(figsize=FIGSIZE, dpi=DPI)
+        ax = fig.subplots()
         draw(result, ax)
         fig.tight_layout()
         path = out / f"{prefix}-{name}.png"
         fig.savefig(path)
-        plt.close(fig)
         paths.append(path)
     return paths

@@ -8,7 +8,8 @@ image on a grid sweep (with more axes, at the first value of the others, said
 in the title),
 as coloured points on a random sweep, as a line over a one-field sweep.
 
-Matplotlib runs on its ``Agg`` backend (no screen needed).
+Maps are drawn on backend-free :class:`matplotlib.figure.Figure` objects (no
+screen needed, the caller's backend untouched).
 
 Examples
 --------
@@ -27,10 +28,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
+from matplotlib.figure import Figure
 
 __all__ = ["sweep_maps", "MAPS"]
 
@@ -83,12 +82,13 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
         if unit is None:
             unit = scene.shape.unit
         values = _values(res, name)
-        fig, ax = plt.subplots(figsize=FIGSIZE, dpi=DPI)
+        fig = Figure(figsize=FIGSIZE, dpi=DPI)
+        ax = fig.subplots()
         colour = {"cmap": "viridis"}
         if name in INTEGER_MAPS and np.all(np.isfinite(values)):
             top = int(values.max()) if values.size else 0
             # one colour per count, ticks on the integers
-            colour = {"cmap": plt.get_cmap("viridis", top + 1), "vmin": -0.5, "vmax": top + 0.5}
+            colour = {"cmap": matplotlib.colormaps["viridis"].resampled(top + 1), "vmin": -0.5, "vmax": top + 0.5}
         if len(shown) == 1:
             x = res[shown[0].field]
             sel = _at_first(res, others)
@@ -117,6 +117,5 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
         fig.tight_layout()
         path = out / f"{name}.png"
         fig.savefig(path)
-        plt.close(fig)
         paths.append(path)
     return paths

@@ -63,3 +63,13 @@ def test_generate_for_a_scene_and_an_expression(tmp_path):
     assert out.returncode == 0 and (tmp_path / "k" / "quartic_user.py").exists()
     out = cli("generate", "--scene", scene)
     assert out.returncode == 2 and "--out" in out.stderr
+
+
+def test_forwarded_subcommands_take_a_leading_option():
+    # bench and sweep parse their own options; a leading one (--help) reaches them.
+    for name in ("bench", "sweep"):
+        out = cli(name, "--help")
+        assert out.returncode == 0, out.stderr
+        assert out.stdout.startswith(f"usage: symvib {name}")
+    listing = cli("--help")
+    assert listing.returncode == 0 and "bench" in listing.stdout and "sweep" in listing.stdout
