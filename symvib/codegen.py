@@ -48,7 +48,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-from . import provenance
+from . import gauss, provenance
 from .curve import CurveError
 from .derive import Derivation, derive
 from .symbols import C, g, m, mu
@@ -401,7 +401,11 @@ def _generate_one(args):
 
 
 def generate_catalogue(out_dir, *, names=None, processes: int | None = None) -> list:
-    """Write the kernel module of every catalogue shape (in parallel processes)."""
+    """Write the kernel module of every catalogue shape (in parallel processes).
+
+    With the whole catalogue, the driver's Gauss-Legendre table
+    (:mod:`symvib.gauss`) is rewritten too.
+    """
     import multiprocessing as mproc
     from concurrent.futures import ProcessPoolExecutor
 
@@ -409,13 +413,14 @@ def generate_catalogue(out_dir, *, names=None, processes: int | None = None) -> 
 
     names = sorted(CATALOGUE) if names is None else list(names)
     jobs = [(n, str(out_dir)) for n in names]
+    table = [] if len(names) < len(CATALOGUE) else [str(gauss.write_table(out_dir))]
     if processes == 1 or len(jobs) == 1:
-        return [_generate_one(j) for j in jobs]
+        return table + [_generate_one(j) for j in jobs]
     # Not multiprocessing.Pool: its daemonic workers may not start the budgeted
     # children that run SymPy's integrations.
     ctx = mproc.get_context("fork" if "fork" in mproc.get_all_start_methods() else "spawn")
     with ProcessPoolExecutor(processes or min(len(jobs), mproc.cpu_count()), mp_context=ctx) as pool:
-        return list(pool.map(_generate_one, jobs))
+        return table + list(pool.map(_generate_one, jobs))
 
 
 def stale(out_dir, *, names=None) -> list:
@@ -423,7 +428,8 @@ def stale(out_dir, *, names=None) -> list:
 
     A module is stale when it is missing, its input hash differs from the
     current one (the shape's data or the generator changed), or its body does
-    not match its recorded digest (edited by hand).  No derivation is run.
+    not match its recorded digest (edited by hand).  No derivation is run.  With
+    the whole catalogue, the Gauss-Legendre table is recomputed and compared.
     """
     from .shapes import CATALOGUE
 
@@ -437,8 +443,10 @@ def stale(out_dir, *, names=None) -> list:
             problems.append(f"{path}: missing")
             continue
         problems += _file_problems(path, provenance.input_hash(shape_.source()))
-    expected = {f"{module_name(CATALOGUE[n].module)}.py" for n in names} | {"__init__.py"}
+    expected = {f"{module_name(CATALOGUE[n].module)}.py" for n in names} | {"__init__.py",
+                                                                             f"{gauss.TABLE_MODULE}.py"}
     if names == sorted(CATALOGUE):
+        problems += gauss.table_problems(out)
         for extra in sorted(p.name for p in out.glob("*.py")):
             if extra not in expected:
                 problems.append(f"{out / extra}: not a catalogue shape (remove it)")

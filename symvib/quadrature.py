@@ -29,7 +29,10 @@ from functools import lru_cache
 import numpy as np
 from numpy.polynomial import legendre as _leg
 
-__all__ = ["ChebRule", "rule"]
+__all__ = ["ChebRule", "rule", "MAX_NODES"]
+
+#: Largest node count of a rule (as :data:`symvib.gauss.MAX_NODES`).
+MAX_NODES = 64
 
 
 @dataclass(frozen=True)
@@ -46,17 +49,26 @@ class ChebRule:
 
 @lru_cache(maxsize=None)
 def rule(n: int) -> ChebRule:
-    """The :class:`ChebRule` with ``n`` nodes (cached; arrays read-only)."""
-    x, weights = _leg.leggauss(n)
+    """The :class:`ChebRule` with ``n`` nodes (cached; arrays read-only).
+
+    Nodes, weights and both integration matrices are correctly rounded (see
+    :mod:`symvib.gauss` for why the last ulp matters): read from the generated
+    table ``symvib.generated.gauss_rules`` for the tabulated ``n``, computed
+    with mpmath on first use otherwise.
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_NODES:
+        raise ValueError(f"nodes: must be an integer in [1, {MAX_NODES}], got {n!r}")
+    n = int(n)
+    from symvib.generated import gauss_rules
+
+    data = gauss_rules.RULES.get(n)
+    if data is None:
+        from .gauss import rule_mp
+
+        data = rule_mp(n)
+    x, weights, cumulative, weighted = (np.array(a, dtype=float) for a in data)
     vander = _leg.legvander(x, n - 1)
     to_coeffs = np.linalg.solve(vander, np.eye(n))
-    cumulative = np.empty((n, n))
-    weighted = np.empty((n, n))
-    for i in range(n):
-        c = _leg.legint(to_coeffs[:, i], lbnd=-1)
-        cumulative[:, i] = _leg.legval(x, c)
-        cw = _leg.legint(_leg.legadd(_leg.legmulx(to_coeffs[:, i]), to_coeffs[:, i]), lbnd=-1)
-        weighted[:, i] = _leg.legval(x, cw)
     for a in (x, weights, cumulative, to_coeffs, weighted):
         a.setflags(write=False)
     return ChebRule(n, x, weights, cumulative, to_coeffs, weighted)

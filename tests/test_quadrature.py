@@ -1,0 +1,68 @@
+"""Gauss-Legendre rules of the driver (symvib/quadrature.py, symvib/gauss.py, generated/gauss_rules.py)."""
+from pathlib import Path
+
+import mpmath
+import numpy as np
+import pytest
+
+from symvib import gauss
+from symvib.driver import simulate
+from symvib.quadrature import MAX_NODES, rule
+from symvib.reference import phase_reference
+from symvib.scene import load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_generated_table_is_a_fresh_computation():
+    assert gauss.table_problems(ROOT / "generated") == []
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 16, 32, 9])  # 9 is not tabulated: computed with mpmath
+def test_rule_integrates_polynomials_exactly(n):
+    r = rule(n)
+    x = [mpmath.mpf(v) for v in r.x]
+    for m in range(2 * n):       # Gauss weights: degree 2n - 1
+        exact = mpmath.mpf(1 - (-1) ** (m + 1)) / (m + 1)
+        got = mpmath.fsum(mpmath.mpf(w) * xi ** m for w, xi in zip(r.weights, x))
+        assert abs(got - exact) < 1e-15 * max(1, abs(exact)), m
+    for m in range(n):           # cumulative matrices: degree n - 1 (and n with the weight x + 1)
+        f = [xi ** m for xi in x]
+        for j in range(n):
+            s = mpmath.fsum(mpmath.mpf(a) * b for a, b in zip(r.cumulative[j], f))
+            exact = (x[j] ** (m + 1) - (-1) ** (m + 1)) / (m + 1)
+            assert abs(s - exact) < 1e-14 * max(1, sum(abs(a) for a in r.cumulative[j])), (m, j)
+            sw = mpmath.fsum(mpmath.mpf(a) * b for a, b in zip(r.cumulative_weighted[j], f))
+            exact_w = (x[j] ** (m + 2) - (-1) ** (m + 2)) / (m + 2) + exact
+            assert abs(sw - exact_w) < 1e-14 * max(1, sum(abs(a) for a in r.cumulative_weighted[j])), (m, j)
+
+
+@pytest.mark.parametrize("n", [16, 24, 32])
+def test_weighted_rows_near_the_end_keep_relative_accuracy(n):
+    # G next to a turning point is rebuilt from these rows; their sums are tiny
+    # ((x_j + 1)^2 / 2), so only correctly rounded entries keep G's relative
+    # accuracy (a double-precision matrix was off by 6e-13 at n = 16).
+    r = rule(n)
+    for j in range(3):
+        exact = (mpmath.mpf(r.x[j]) + 1) ** 2 / 2
+        got = mpmath.fsum(mpmath.mpf(v) for v in r.cumulative_weighted[j])
+        assert abs(got / exact - 1) < 5e-14  # sum of n rounded entries
+
+
+def test_bad_node_counts_name_the_field():
+    for bad in (0, MAX_NODES + 1, 2.5, True):
+        with pytest.raises(ValueError, match="nodes"):
+            rule(bad)
+
+
+def test_long_run_of_turning_points_meets_the_reference_to_a_few_ulp():
+    # 29 events over 25 s: each interval used to lose 3e-15 s to the rounding of
+    # the integration matrices (1e-13 at the end); now the error stays at the
+    # rounding floor of the times themselves.
+    scene = load_scene(ROOT / "symvib" / "scenes" / "paper-parabola.toml").replace(k=0.8, mu=0.0152, qdot0=7.946)
+    ref = phase_reference(scene)
+    for nodes in (16, 32):
+        run = simulate(scene, samples=False, nodes=nodes, backend="python")
+        assert [e.kind.value for e in run.events] == [r.kind for r in ref]
+        err = max(abs(e.t - float(r.t)) for e, r in zip(run.events, ref))
+        assert err < 2e-14, (nodes, err)
