@@ -27,7 +27,7 @@ from pathlib import Path
 from . import provenance
 from .shapes import CATALOGUE, Shape
 
-__all__ = ["load", "generated_dir", "cache_dir", "KernelError"]
+__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "KernelError"]
 
 #: Environment variable naming the cache folder for user curves.
 CACHE_ENV = "SYMVIB_CACHE"
@@ -69,6 +69,20 @@ def _import(path: Path, name: str):
     spec.loader.exec_module(module)
     sys.modules[key] = module
     return module
+
+
+def load_generated(name: str):
+    """The module ``name`` of the generated folder (installed or in the checkout).
+
+    Examples
+    --------
+    >>> sorted(load_generated("gauss_rules").RULES)[:3]
+    [1, 2, 3]
+    """
+    path = generated_dir() / f"{name}.py"
+    if not path.exists():
+        raise KernelError(f"{path} is missing; run `symvib generate`")
+    return _import(path, name)
 
 
 def load(curve, *, check: bool = True):
@@ -113,10 +127,8 @@ def _load(curve: Shape, check: bool):
     source = curve.source()
     want = provenance.input_hash(source)
     if CATALOGUE.get(curve.name) == curve:
-        path = generated_dir() / f"{_module_name(curve.module)}.py"
-        if not path.exists():
-            raise KernelError(f"{path} is missing; run `symvib generate`")
-        module = _import(path, _module_name(curve.module))
+        module = load_generated(_module_name(curve.module))
+        path = module.__file__
         if check and module.INPUT_HASH != want:
             warnings.warn(f"{path} is stale (the shape or the generator changed); run `symvib generate`",
                           stacklevel=2)

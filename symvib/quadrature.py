@@ -31,6 +31,8 @@ from numpy.polynomial import legendre as _leg
 
 __all__ = ["ChebRule", "rule", "MAX_NODES"]
 
+#: Name of the table module in the generated folder (as :data:`symvib.gauss.TABLE_MODULE`).
+TABLE_MODULE = "gauss_rules"
 #: Largest node count of a rule (as :data:`symvib.gauss.MAX_NODES`).
 MAX_NODES = 64
 
@@ -59,9 +61,9 @@ def rule(n: int) -> ChebRule:
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_NODES:
         raise ValueError(f"nodes: must be an integer in [1, {MAX_NODES}], got {n!r}")
     n = int(n)
-    from symvib.generated import gauss_rules
+    from .kernels import load_generated
 
-    data = gauss_rules.RULES.get(n)
+    data = load_generated(TABLE_MODULE).RULES.get(n)
     if data is None:
         from .gauss import rule_mp
 
