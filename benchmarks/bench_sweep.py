@@ -104,6 +104,8 @@ def main(argv=None):
         print(f"symvib sweep, one thread:      {n / t_one:12,.0f} scenes/s {events / t_one:14,.0f} events/s "
               f"({t_one:.3f} s)")
 
+    if args.sample <= 0:
+        return
     rng = np.random.default_rng(args.seed)
     rows = np.sort(rng.choice(n, size=min(args.sample, n), replace=False))
     t_ivp = 0.0

@@ -67,6 +67,8 @@ TINY = np.finfo(float).tiny
 CHUNK = 16
 #: Order of the scene scalars passed to the compiled ``simulate``.
 SCALARS = ("g", "m", "mu", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max", "max_events")
+#: Rows of the quadrature's scratch array (node values and the cumulative sums).
+WORK_ROWS = 10
 #: Columns of the interval log: qa, qb, Ga, Gb, s, sigma, t0, T, Wf (per unit mass).
 INTERVAL_COLUMNS = 9
 
@@ -411,7 +413,7 @@ def locate(q, sigma, s, Ga, P, region, roots, count, X):
 @jit
 def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
     """Time and friction work (per unit mass) of one interval; node samples into out[o:]."""
-    X, Wt, S, SW = R
+    X, Wt, St, SWt = R
     n = X.shape[0]
     g2 = 2.0 * g
     L = abs(qb - qa)
@@ -420,7 +422,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
     half = 0.5 * L
     maxq = PANEL_Q * scale
     gam, dGdr, qn, dqdr, ft = work[0], work[1], work[2], work[3], work[4]
-    hn, exn, kn, cn = work[5], work[6], work[7], work[8]
+    hn, exn, kn, cn, acc = work[5], work[6], work[7], work[8], work[9]
     T = 0.0
     Wf = 0.0
     half_b = o
@@ -476,18 +478,24 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
                 total *= hw
                 Tp = 0.0
                 Wp = 0.0
-                weighted = root and r1 == 0.0
+                # acc = S @ dGdr (or SW @ gam next to a root), summed over i in order for every
+                # node j at once: the inner loop runs along a row of the transposed matrix.
                 for j in range(n):
-                    cum = 0.0
-                    if weighted:
-                        for i in range(n):
-                            cum += SW[j, i] * gam[i]
-                        cum *= 2.0 * hw * hw
-                    else:
-                        for i in range(n):
-                            cum += S[j, i] * dGdr[i]
-                        cum *= hw
-                    G = max(Gstart + cum, TINY)
+                    acc[j] = 0.0
+                if root and r1 == 0.0:
+                    scale_acc = 2.0 * hw * hw
+                    for i in range(n):
+                        gi = gam[i]
+                        for j in range(n):
+                            acc[j] += SWt[i, j] * gi
+                else:
+                    scale_acc = hw
+                    for i in range(n):
+                        di = dGdr[i]
+                        for j in range(n):
+                            acc[j] += St[i, j] * di
+                for j in range(n):
+                    G = max(Gstart + acc[j] * scale_acc, TINY)
                     hh = hn[j]
                     ex = exn[j]
                     f = hh * dqdr[j] * ex / math.sqrt(G)
@@ -502,10 +510,13 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
                         out[o + j, 3] = N
                 if keep:
                     for j in range(n):
-                        c = 0.0
-                        for i in range(n):
-                            c += S[j, i] * ft[i]
-                        out[o + j, 0] = tau0 + hw * c
+                        acc[j] = 0.0
+                    for i in range(n):
+                        fi = ft[i]
+                        for j in range(n):
+                            acc[j] += St[i, j] * fi
+                    for j in range(n):
+                        out[o + j, 0] = tau0 + hw * acc[j]
                     o += n
                 Tp *= hw
                 Wp *= hw
@@ -551,7 +562,7 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
     region, roots, count = map_new(q0, lo, hi, mu, cp, CRIT_STEP * scale)
     X = R[0]
     n = X.shape[0]
-    work = np.empty((9, n))
+    work = np.empty((WORK_ROWS, n))
     dummy = np.empty((1, 4))
     events = np.zeros((min(max_events + 4, 64), 6))
     ne = 0
@@ -707,7 +718,7 @@ def samples(ivs, ni, g, mu, scale, cp, R):
     """Node samples (t, q, w, N) of the logged intervals, interval by interval."""
     X = R[0]
     n = X.shape[0]
-    work = np.empty((9, n))
+    work = np.empty((WORK_ROWS, n))
     # Upper bound of the nodes per interval: panels are few; grow when needed.
     cap = max(ni * 8 * n, 16)
     out = np.zeros((cap, 4))

@@ -64,6 +64,8 @@ __all__ = ["simulate", "NODES", "backend_available", "engine"]
 
 #: Gauss-Legendre nodes per quadrature panel (the accuracy knob of the times).
 NODES = 16
+#: Scenes a thread of a parallel sweep takes at a time (numba backend).
+SWEEP_GRAIN = 16
 #: Environment variable that forces a backend ("numba" or "python").
 BACKEND_ENV = "SYMVIB_BACKEND"
 #: Kernel-module functions compiled besides the ``*_scalar`` kernels.
@@ -140,10 +142,29 @@ def engine(module_file: str, backend: str):
         # numba's on-disk cache re-imports the module by name when it loads.
         sys.modules[name] = module
         spec.loader.exec_module(module)
-        return module.simulate, module.samples, module.sweep
+        return module.simulate, module.samples, _balanced(module.sweep)
     namespace = {"__name__": f"symvib._engines.{stem}"}
     exec(compile(text, f"<engine {stem}>", "exec"), namespace)  # noqa: S102 - generated code and our core
     return namespace["simulate"], namespace["samples"], namespace["sweep"]
+
+
+def _balanced(sweep_fn):
+    """``sweep_fn`` with its threads taking :data:`SWEEP_GRAIN` scenes at a time.
+
+    By default numba gives each thread one fixed share of a ``prange`` loop; the
+    scenes of a grid differ in cost (a row of fast scenes makes many events), so
+    one thread would finish early and wait.
+    """
+    import numba
+
+    def balanced(*args):
+        old = numba.set_parallel_chunksize(SWEEP_GRAIN)
+        try:
+            return sweep_fn(*args)
+        finally:
+            numba.set_parallel_chunksize(old)
+
+    return balanced
 
 
 def _strip_future(text: str) -> str:
@@ -213,9 +234,10 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
 
 @lru_cache(maxsize=8)
 def _rule(nodes):
+    """The rule as the core takes it: nodes, weights and both integration matrices transposed."""
     r = rule(nodes)
-    return (np.ascontiguousarray(r.x), np.ascontiguousarray(r.weights), np.ascontiguousarray(r.cumulative),
-            np.ascontiguousarray(r.cumulative_weighted))
+    return (np.ascontiguousarray(r.x), np.ascontiguousarray(r.weights), np.ascontiguousarray(r.cumulative.T),
+            np.ascontiguousarray(r.cumulative_weighted.T))
 
 
 def _samples(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
