@@ -412,9 +412,12 @@ def locate(q, sigma, s, Ga, P, region, roots, count, X):
 # --- time quadrature -------------------------------------------------------------
 @jit
 def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
-    """Time and friction work (per unit mass) of one interval; node samples into out[o:]."""
-    X, Wt, St, SWt = R
-    n = X.shape[0]
+    """Time and friction work (per unit mass) of one interval; node samples into out[o:].
+
+    R = (x, w, S^T, SW^T) of the rule for panels that start on a root (weighted),
+    then (x, w, S^T) of the rule for every other panel (see :func:`symvib.driver.plain_nodes`).
+    """
+    Xw, Ww, Sw, SWw, Xp, Wp_, Sp = R
     g2 = 2.0 * g
     L = abs(qb - qa)
     if L == 0.0:
@@ -457,6 +460,12 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
                 r1 = seg_a + jp * step
                 r2 = seg_a + (jp + 1) * step if jp + 1 < parts else seg_b
                 hw = 0.5 * (r2 - r1)
+                weighted = root and r1 == 0.0
+                if weighted:
+                    X, Wt, St = Xw, Ww, Sw
+                else:
+                    X, Wt, St = Xp, Wp_, Sp
+                n = X.shape[0]
                 for j in range(n):
                     r = r1 + hw * (X[j] + 1.0)
                     if root:
@@ -482,12 +491,12 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
                 # node j at once: the inner loop runs along a row of the transposed matrix.
                 for j in range(n):
                     acc[j] = 0.0
-                if root and r1 == 0.0:
+                if weighted:
                     scale_acc = 2.0 * hw * hw
                     for i in range(n):
                         gi = gam[i]
                         for j in range(n):
-                            acc[j] += SWt[i, j] * gi
+                            acc[j] += SWw[i, j] * gi
                 else:
                     scale_acc = hw
                     for i in range(n):
@@ -561,7 +570,7 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
     (g, m, mu, k, has_left, left, has_right, right, lo, hi, scale, cp) = P
     region, roots, count = map_new(q0, lo, hi, mu, cp, CRIT_STEP * scale)
     X = R[0]
-    n = X.shape[0]
+    n = max(X.shape[0], R[4].shape[0])
     work = np.empty((WORK_ROWS, n))
     dummy = np.empty((1, 4))
     events = np.zeros((min(max_events + 4, 64), 6))
@@ -716,8 +725,7 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
 @jit
 def samples(ivs, ni, g, mu, scale, cp, R):
     """Node samples (t, q, w, N) of the logged intervals, interval by interval."""
-    X = R[0]
-    n = X.shape[0]
+    n = max(R[0].shape[0], R[4].shape[0])
     work = np.empty((WORK_ROWS, n))
     # Upper bound of the nodes per interval: panels are few; grow when needed.
     cap = max(ni * 8 * n, 16)

@@ -45,8 +45,9 @@ import mpmath
 __all__ = ["rule_mp", "table_text", "write_table", "table_problems", "TABULATED", "MAX_NODES"]
 
 #: Node counts written to ``generated/gauss_rules.py`` (the driver's default
-#: 16, the benchmark's settings, and a few more).
-TABULATED = (1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 16, 20, 24, 32)
+#: 16, the benchmark's settings, the 3/4 of them that panels off a root take
+#: (:func:`symvib.driver.plain_nodes`), and a few more).
+TABULATED = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 15, 16, 18, 20, 24, 32)
 #: Largest node count a rule may have (64 takes about 5 s to compute).
 MAX_NODES = 64
 #: Working digits: every entry is exact to far below half an ulp before rounding.
