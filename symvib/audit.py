@@ -28,6 +28,7 @@ Examples
 from __future__ import annotations
 
 import random
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -446,13 +447,13 @@ def _general_entries():
     return verdicts
 
 
-def audit(shapes=("parabola", "cycloid", "circle")) -> tuple:
+def audit(shapes=("parabola", "cycloid", "circle"), *, general: bool = True) -> tuple:
     """Compare every printed equation with the derivation; one :class:`Verdict` each.
 
-    Eqs. (1)-(2) come first (general curve), then each shape's entries in the
-    paper's order.
+    Eqs. (1)-(2) come first (general curve; left out with ``general=False``),
+    then each shape's entries in the paper's order.
     """
-    verdicts = list(_general_entries())
+    verdicts = list(_general_entries()) if general else []
     judges = {"eom": _judge_eom, "phase": _judge_phase, "energy": _judge_energy}
     for entry in PRINTED:
         if entry.shape in shapes:
@@ -485,6 +486,11 @@ EXPLANATIONS = {
 }
 
 
+def _first_sentence(text: str) -> str:
+    """Up to the first full stop that ends a sentence (not the one of "eq. (6)" or "i.e.")."""
+    return re.split(r"\.\s+(?=[A-Z])", text, maxsplit=1)[0].rstrip(".")
+
+
 def errata_markdown(verdicts=None) -> str:
     """The errata table (Markdown): printed form, corrected form, evidence."""
     verdicts = audit() if verdicts is None else verdicts
@@ -500,7 +506,7 @@ def errata_markdown(verdicts=None) -> str:
         "| --- | --- | --- | --- |",
     ]
     for v in verdicts:
-        note = v.how if v.matches else EXPLANATIONS.get(v.key, v.evidence).split(". ")[0].rstrip(".")
+        note = v.how if v.matches else _first_sentence(EXPLANATIONS.get(v.key, v.evidence))
         lines.append(f"| {v.label} | {v.shape} | {'matches' if v.matches else '**differs**'} | {note} |")
     lines += ["", "## The equations that differ", ""]
     for v in verdicts:

@@ -230,26 +230,60 @@ def _alpha0_section(out_lines):
     ]
 
 
+#: The report's symbolic part, one job each: eqs. (1)-(2) for a general curve
+#: (``None``), then each curve's derivation and audit, in the report's order.
+SYMBOLIC_JOBS = (None, "parabola", "cycloid", "circle")
+
+
+def _symbolic(shape_name):
+    """One symbolic job: ``(verdicts, equation lines)`` of a curve, or the general verdicts."""
+    from .audit import audit
+
+    if shape_name is None:
+        return audit(shapes=()), []
+    verdicts = audit(shapes=(shape_name,), general=False)
+    return verdicts, _equations(shape_name, verdicts)
+
+
+def _start_symbolic():
+    """Start the symbolic jobs on up to two worker processes, while the caller simulates.
+
+    Not :class:`multiprocessing.Pool`: its daemonic workers may not start the
+    budgeted integration processes of a derivation.
+    """
+    import multiprocessing
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+
+    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    pool = ProcessPoolExecutor(min(2, os.cpu_count() or 1), mp_context=ctx)
+    return pool, {name: pool.submit(_symbolic, name) for name in SYMBOLIC_JOBS}
+
+
 def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = True, progress=None) -> dict:
     """Write the report, figures and results into ``out_dir``; returns what was written."""
-    from .audit import audit, errata_markdown
+    from .audit import errata_markdown
     from .driver import simulate
 
     say = progress or (lambda msg: None)
     out = Path(out_dir)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    say("auditing the paper's printed equations")
-    verdicts = audit()
-    runs = []
-    for name, figs in SCENES:
-        base = _scene(name)
-        for k in (HIGH_K, low_k):
-            key = f"{name}-k{k:g}"
-            scene = base.replace(k=k, name=key)
-            say(f"simulating {key}")
-            result = simulate(scene, backend=BACKEND)
-            runs.append(Run(key, scene, result, _figures(result, out, key, every=k == HIGH_K)))
+    say("deriving and auditing the paper's equations (in worker processes)")
+    pool, jobs = _start_symbolic()
+    with pool:
+        runs = []
+        for name, figs in SCENES:
+            base = _scene(name)
+            for k in (HIGH_K, low_k):
+                key = f"{name}-k{k:g}"
+                scene = base.replace(k=k, name=key)
+                say(f"simulating {key}")
+                result = simulate(scene, backend=BACKEND)
+                runs.append(Run(key, scene, result, _figures(result, out, key, every=k == HIGH_K)))
+        say("waiting for the derivations and the audit")
+        parts = {name: job.result() for name, job in jobs.items()}
+    verdicts = sum((parts[name][0] for name in SYMBOLIC_JOBS), ())
     lines = [
         "# The paper reproduced by symvib",
         "",
@@ -271,7 +305,7 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
     ]
     for shape_name, title in (("parabola", "Parabola"), ("cycloid", "Cycloid"), ("circle", "Circle")):
         lines += [f"## {title}", ""]
-        lines += _equations(shape_name, verdicts) + [""]
+        lines += parts[shape_name][1] + [""]
         if shape_name == "circle":
             _alpha0_section(lines)
         for name, figs in SCENES:
