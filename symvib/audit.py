@@ -507,6 +507,7 @@ def errata_markdown(verdicts=None) -> str:
     ]
     for v in verdicts:
         note = v.how if v.matches else _first_sentence(EXPLANATIONS.get(v.key, v.evidence))
+        note = note.replace("|", "\\|")  # |F_N| in a table cell
         lines.append(f"| {v.label} | {v.shape} | {'matches' if v.matches else '**differs**'} | {note} |")
     lines += ["", "## The equations that differ", ""]
     for v in verdicts:

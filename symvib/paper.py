@@ -354,7 +354,8 @@ def markdown_to_html(text: str, *, title: str) -> str:
     def flush():
         if table:
             rows = [r for r in table if not re.match(r"^\|\s*:?-", r)]
-            cells = [[c.strip() for c in r.strip().strip("|").split("|")] for r in rows]
+            cells = [[c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", r.strip()[1:-1])]
+                     for r in rows]
             out = ["<table>"] + ["<tr>" + "".join(f"<{'th' if i == 0 else 'td'}>{inline(c)}</{'th' if i == 0 else 'td'}>"
                                                   for c in row) + "</tr>" for i, row in enumerate(cells)] + ["</table>"]
             body.append("\n".join(out))

@@ -41,3 +41,24 @@ def test_errata_document_is_current(verdicts):
     path = Path(__file__).resolve().parents[1] / "docs" / "errata.md"
     assert path.read_text(encoding="utf-8").strip() == errata_markdown(verdicts).strip(), \
         "docs/errata.md is stale: run `python -m symvib.audit docs/errata.md`"
+
+
+def test_errata_table_rows_keep_their_four_cells(verdicts):
+    # A note may hold "|F_N|" or "eq. (6)": neither may split a cell or cut the note short.
+    import re
+
+    rows = [line for line in errata_markdown(verdicts).splitlines()
+            if line.startswith("| ") and not line.startswith("| ---")]
+    assert len(rows) == 1 + len(verdicts)
+    for row in rows:
+        assert len(re.split(r"(?<!\\)\|", row.strip()[1:-1])) == 4, row
+    notes = {v.key: re.split(r"(?<!\\)\|", row.strip()[1:-1])[3].strip() for v, row in zip(verdicts, rows[1:])}
+    assert notes["eq6"].startswith("Eq. (6) solves the printed eq. (5), not the equation of motion")
+    assert notes["circle.P_mu"].startswith(r"The power of friction is -mu \|F_N\| R \|phidot\| <= 0")
+
+
+def test_report_html_keeps_escaped_pipes_in_cells():
+    from symvib.paper import markdown_to_html
+
+    html = markdown_to_html("| a | b |\n| --- | --- |\n| x \\|y\\| | z |\n", title="t")
+    assert "<td>x |y|</td><td>z</td>" in html

@@ -178,9 +178,14 @@ def test_chunks_on_disk_load_and_resume(tmp_path):
         load_sweep(out)
 
 
+def _complete_chunks(folder):
+    """Chunk files written in full (a chunk is written as chunk-N.<pid>.tmp.npz, then renamed)."""
+    return sorted(p for p in Path(folder).glob("chunk-*.npz") if not p.name.endswith(".tmp.npz"))
+
+
 def _files(folder):
     out = {}
-    for p in sorted(Path(folder).glob("chunk-*.npz")):
+    for p in _complete_chunks(folder):
         st = p.stat()
         out[p.name] = (st.st_ino, st.st_mtime_ns, hashlib.sha256(p.read_bytes()).hexdigest())
     return out
@@ -194,7 +199,7 @@ def test_killed_sweep_resumes_without_loss_or_duplicates(tmp_path, capsys):
     proc = subprocess.Popen([sys.executable, "-m", "symvib.cli", "sweep", *args], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and len(list((out / "chunks").glob("chunk-*.npz"))) < 3:
+    while time.monotonic() < deadline and len(_complete_chunks(out / "chunks")) < 3:
         if proc.poll() is not None:
             break
         time.sleep(0.01)
