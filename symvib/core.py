@@ -417,7 +417,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
     R = (x, w, S^T, SW^T) of the rule for panels that start on a root (weighted),
     then (x, w, S^T) of the rule for every other panel (see :func:`symvib.driver.plain_nodes`).
     """
-    Xw, Ww, Sw, SWw, Xp, Wp_, Sp = R
+    Xw, Ww, Sw, SWw, Xp, Wtp, Sp = R
     g2 = 2.0 * g
     L = abs(qb - qa)
     if L == 0.0:
@@ -464,7 +464,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
                 if weighted:
                     X, Wt, St = Xw, Ww, Sw
                 else:
-                    X, Wt, St = Xp, Wp_, Sp
+                    X, Wt, St = Xp, Wtp, Sp
                 n = X.shape[0]
                 for j in range(n):
                     r = r1 + hw * (X[j] + 1.0)

@@ -22,7 +22,7 @@ Examples
 >>> parse("__import__('os').system('true')", field="curve.z")
 Traceback (most recent call last):
 ...
-symvib.expr.ExpressionError: curve.z: name '__import__' is not allowed (known symbols: none; functions: ...
+symvib.expr.ExpressionError: curve.z: attribute access ('.system') is not allowed (known symbols: none; functions: ...
 """
 from __future__ import annotations
 
@@ -231,6 +231,8 @@ def _convert(node, allowed, field, counter, used, depth, text):
         operand = rec(node.operand)
         return operand if kind == "pos" else ("neg", operand)
     if isinstance(node, ast.Call):
+        if isinstance(node.func, ast.Attribute):
+            raise ExpressionError(field, f"attribute access ('.{node.func.attr}') is not allowed {_describe(allowed)}")
         if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
             what = node.func.id if isinstance(node.func, ast.Name) else type(node.func).__name__
             raise ExpressionError(field, f"call of '{what}' is not allowed {_describe(allowed)}")
@@ -336,7 +338,7 @@ def number(text, *, field: str, symbols=None) -> float:
     (for example the curve parameters in a limiter position).
 
     >>> number("tan(0.05)", field="physics.mu")
-    0.05004170837554477
+    0.05004170837553879
     """
     symbols = dict(symbols or {})
     parsed = parse(text, symbols=tuple(symbols), field=field)

@@ -91,6 +91,12 @@ def rule_mp(n: int) -> tuple:
                     break
             xs.append(x)
         xs.sort()
+        # The rule is symmetric: mirror the upper half (the middle node of an odd
+        # rule is 0 exactly, where Newton's method stops at about 1e-100).
+        for i in range(n // 2):
+            xs[i] = -xs[n - 1 - i]
+        if n % 2:
+            xs[n // 2] = mpmath.mpf(0)
         ws = []
         for x in xs:
             p = _legendre(n, x)

@@ -226,8 +226,9 @@ def regularize(F: sp.Expr, q: sp.Symbol) -> tuple:
     the result has a finite value at ``mu = 0`` that needs no cancellation.
 
     >>> t = sp.Symbol("t", real=True)
-    >>> regularize(sp.exp(mu * t) / mu, t)[0]
-    -1/mu + exp(mu*t)/mu
+    >>> F, regular = regularize(sp.exp(mu * t) / mu, t)   # the pole 1/mu is dropped
+    >>> sp.simplify(F - (sp.exp(mu * t) - 1) / mu), sp.limit(F, mu, 0), regular
+    (0, t, False)
     """
     try:
         pole = sp.series(F, mu, 0, 0).removeO()

@@ -109,3 +109,8 @@ def test_module_imports_no_sympy_or_numpy():
     code = ("import sys, symvib.expr; "
             "assert 'sympy' not in sys.modules and 'numpy' not in sys.modules, sorted(sys.modules)")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_attribute_calls_say_so():
+    with pytest.raises(ExpressionError, match=r"curve.z: attribute access \('.system'\) is not allowed"):
+        parse("__import__('os').system('true')", symbols=("x",), field="curve.z")
