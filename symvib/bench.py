@@ -51,7 +51,6 @@ import csv
 import hashlib
 import json
 import math
-import multiprocessing
 import os
 import random
 import sys
@@ -323,14 +322,14 @@ def _sequence_task(args):
 def _map(fn, items, workers):
     """``[fn(x) for x in items]``, over ``workers`` processes when more than one.
 
-    The workers are not daemonic (:class:`concurrent.futures.ProcessPoolExecutor`),
-    so the symbolic derivation may start its budgeted child processes there.
+    The workers are not daemonic (:func:`symvib.budget.worker_pool`), so the
+    symbolic derivation may start its budgeted child processes there.
     """
     if workers <= 1:
         return [fn(x) for x in items]
-    from concurrent.futures import ProcessPoolExecutor
+    from .budget import worker_pool
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as ex:
+    with worker_pool(workers) as ex:
         return list(ex.map(fn, items, chunksize=1))
 
 

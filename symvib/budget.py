@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-__all__ = ["Outcome", "run"]
+__all__ = ["Outcome", "run", "worker_pool"]
 
 #: Seconds to wait for a killed child to exit.
 _JOIN_SECONDS = 5.0
@@ -43,6 +43,17 @@ class Outcome:
 def _context():
     methods = mp.get_all_start_methods()
     return mp.get_context("fork" if "fork" in methods else "spawn")
+
+
+def worker_pool(workers: int):
+    """A :class:`~concurrent.futures.ProcessPoolExecutor` whose workers may run derivations.
+
+    Not :class:`multiprocessing.Pool`: its daemonic workers may not start the
+    budgeted child processes of :func:`run`.
+    """
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(workers, mp_context=_context())
 
 
 def _child(conn, job, args):

@@ -407,8 +407,8 @@ def generate_catalogue(out_dir, *, names=None, processes: int | None = None) -> 
     (:mod:`symvib.gauss`) is rewritten too.
     """
     import multiprocessing as mproc
-    from concurrent.futures import ProcessPoolExecutor
 
+    from .budget import worker_pool
     from .shapes import CATALOGUE
 
     names = sorted(CATALOGUE) if names is None else list(names)
@@ -416,10 +416,7 @@ def generate_catalogue(out_dir, *, names=None, processes: int | None = None) -> 
     table = [] if len(names) < len(CATALOGUE) else [str(gauss.write_table(out_dir))]
     if processes == 1 or len(jobs) == 1:
         return table + [_generate_one(j) for j in jobs]
-    # Not multiprocessing.Pool: its daemonic workers may not start the budgeted
-    # children that run SymPy's integrations.
-    ctx = mproc.get_context("fork" if "fork" in mproc.get_all_start_methods() else "spawn")
-    with ProcessPoolExecutor(processes or min(len(jobs), mproc.cpu_count()), mp_context=ctx) as pool:
+    with worker_pool(processes or min(len(jobs), mproc.cpu_count())) as pool:
         return table + list(pool.map(_generate_one, jobs))
 
 

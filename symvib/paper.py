@@ -246,17 +246,12 @@ def _symbolic(shape_name):
 
 
 def _start_symbolic():
-    """Start the symbolic jobs on up to two worker processes, while the caller simulates.
-
-    Not :class:`multiprocessing.Pool`: its daemonic workers may not start the
-    budgeted integration processes of a derivation.
-    """
-    import multiprocessing
+    """Start the symbolic jobs on up to two worker processes, while the caller simulates."""
     import os
-    from concurrent.futures import ProcessPoolExecutor
 
-    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    pool = ProcessPoolExecutor(min(2, os.cpu_count() or 1), mp_context=ctx)
+    from .budget import worker_pool
+
+    pool = worker_pool(min(2, os.cpu_count() or 1))
     return pool, {name: pool.submit(_symbolic, name) for name in SYMBOLIC_JOBS}
 
 
