@@ -39,8 +39,12 @@ True
 """
 from __future__ import annotations
 
+import builtins
 import hashlib
+import keyword
+import math
 import re
+import unicodedata
 from pathlib import Path
 
 import numpy as np
@@ -53,7 +57,8 @@ from .curve import CurveError
 from .derive import Derivation, derive
 from .symbols import C, g, m, mu
 
-__all__ = ["module_text", "generate", "generate_catalogue", "stale", "KERNEL_NAMES", "DIGEST_PREFIX"]
+__all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
+           "DIGEST_PREFIX"]
 
 #: Gauss-Legendre nodes per panel of a numeric-route antiderivative.
 QUAD_NODES = 16
@@ -61,8 +66,20 @@ QUAD_NODES = 16
 PANEL = 0.25
 #: First line of every generated module (what follows is hashed into it).
 DIGEST_PREFIX = "# symvib generated kernel module; body sha256: "
-#: Names a curve parameter may not have in a kernel module.
-KERNEL_RESERVED = frozenset({"q", "qdot", "numpy", "math"})
+#: Functions every kernel module defines (each also as ``<name>_scalar``).
+KERNEL_FUNCTIONS = frozenset({
+    "x", "z", "h", "alpha", "kappa", "dx", "dz", "dh", "dalpha", "N_w", "F_N", "P_mu", "Ek", "Ep", "E",
+    "q_scale", "domain", *(f"{k}_{b}" for k in ("F", "dF", "ddF", "w", "qdot2", "qddot", "node")
+                              for b in ("p", "m"))})
+#: Constants every kernel module defines.
+KERNEL_CONSTANTS = frozenset({"NAME", "COORDINATE", "PARAMS", "F_ROUTES", "Q_REF", "PANEL", "INPUT_HASH",
+                              "SYMPY_VERSION", "GENERATOR_VERSION", "SOURCE", "SIGNATURES"})
+#: Names a curve parameter may not have in a kernel module: its arguments, modules and
+#: module-level names (a parameter is a Python argument of every kernel, so it would shadow them).
+KERNEL_RESERVED = frozenset({"q", "qdot", "w", "numpy", "math"} | KERNEL_FUNCTIONS
+                            | {f"{k}_scalar" for k in KERNEL_FUNCTIONS} | KERNEL_CONSTANTS)
+#: Unicode categories a user text may not bring into a docstring (controls, separators, surrogates).
+_UNSAFE_CATEGORIES = frozenset({"Cc", "Cs", "Zl", "Zp"})
 
 _Q = sp.Symbol("q", real=True)
 _QDOT = sp.Symbol("qdot", real=True)
@@ -245,10 +262,7 @@ def module_text(d: Derivation, source: dict) -> str:
     ``source`` is the curve's defining data (hashed into the header).
     """
     c = d.curve
-    cp = tuple(p.name for p in c.params)
-    clash = sorted(set(cp) & KERNEL_RESERVED)
-    if clash:
-        raise CurveError(f"parameter name(s) {', '.join(clash)} are reserved in kernel modules; rename them")
+    cp = check_param_names(p.name for p in c.params)
     kernels = _kernel_exprs(d)
     numeric = {s: not br.F.closed for s, br in d.branches.items()}
     F_sub = {}
@@ -319,20 +333,76 @@ def module_text(d: Derivation, source: dict) -> str:
     return f"{DIGEST_PREFIX}{digest}\n" + body
 
 
-def _py_literal(obj) -> str:
-    """A Python literal of plain data with dict keys sorted (deterministic)."""
+def check_param_names(names) -> tuple:
+    """The parameter names as a tuple, if each can be a Python argument of a kernel.
+
+    A name must be an ASCII identifier (Python folds other identifiers by NFKC,
+    so two parameters could become one argument), not a keyword, not start with
+    ``_`` (the kernels' temporaries) and not be a builtin or one of
+    :data:`KERNEL_RESERVED`.
+
+    Raises
+    ------
+    CurveError
+        Naming ``curve.params`` and the offending name.
+    """
+    names = tuple(names)
+    for name in names:
+        why = ("is not an ASCII identifier" if not (isinstance(name, str) and name.isascii() and name.isidentifier())
+               else "is a Python keyword" if keyword.iskeyword(name)
+               else "starts with '_' (kept for the kernels' temporaries)" if name.startswith("_")
+               else "is reserved in kernel modules" if name in KERNEL_RESERVED or hasattr(builtins, name)
+               else "")
+        if why:
+            raise CurveError(f"curve.params: parameter name {name!r} {why}; rename it")
+    return names
+
+
+def _doc_text(text: str, instead: str) -> str:
+    """``text`` if it may stand in a docstring as it is, else ``instead``.
+
+    User text is never interpolated into a docstring when it holds a quote, a
+    backslash, a control or line/paragraph separator: those could close the
+    docstring (``\"\"\"``), start an escape or a new line of code.
+    """
+    text = str(text)
+    if any(ch in "\"\\" or unicodedata.category(ch) in _UNSAFE_CATEGORIES for ch in text):
+        return instead
+    return text
+
+
+def _py_literal(obj, field: str = "source") -> str:
+    """A Python literal of plain data with dict keys sorted (deterministic).
+
+    Only strings, numbers, booleans, ``None``, lists, tuples and dicts with
+    string keys are accepted (each printed by :func:`repr`); a non-finite
+    float is printed as ``float('inf')``.
+
+    Raises
+    ------
+    CurveError
+        For any other value, naming its field.
+    """
     if isinstance(obj, dict):
-        return "{" + ", ".join(f"{k!r}: {_py_literal(obj[k])}" for k in sorted(obj)) + "}"
+        for k in obj:
+            if not isinstance(k, str):
+                raise CurveError(f"{field}: key {k!r} is not a string")
+        return "{" + ", ".join(f"{k!r}: {_py_literal(obj[k], f'{field}.{k}')}" for k in sorted(obj)) + "}"
     if isinstance(obj, (list, tuple)):
-        inner = ", ".join(_py_literal(v) for v in obj)
+        inner = ", ".join(_py_literal(v, f"{field}[{i}]") for i, v in enumerate(obj))
         return f"[{inner}]" if isinstance(obj, list) else f"({inner}{',' if len(obj) == 1 else ''})"
-    return repr(obj)
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return f"float({repr(obj)!r})"
+    if obj is None or isinstance(obj, (str, bool, int, float)):
+        return repr(obj)
+    raise CurveError(f"{field}: {type(obj).__name__} value {obj!r} is not plain data (a string or a number)")
 
 
 def _header(d: Derivation, source: dict, routes: dict) -> str:
     c = d.curve
     lines = [
-        f'"""Kernels of the curve {source.get("name", c.name)!r}: generated by `symvib generate`; do not edit.',
+        f'"""Kernels of the curve {_doc_text(repr(source.get("name", c.name)), "named in NAME")}: '
+        'generated by `symvib generate`; do not edit.',
         "",
         f"Curve ({c.kind}): x = {c.x}, z = {c.z}, coordinate {c.q} (passed as q),",
         f"parameters {', '.join(p.name for p in c.params) or 'none'}, domain ({c.domain[0]}, {c.domain[1]}).",
@@ -352,7 +422,10 @@ def _header(d: Derivation, source: dict, routes: dict) -> str:
         "Each function's docstring gives its argument order; SIGNATURES lists them all.",
         '"""',
     ]
-    return "\n".join(_wrap(line) for line in lines) + "\n"
+    # Only the first line opens and only the last closes the docstring; user text in the
+    # lines between is shown only when it cannot end it (_doc_text).
+    body = [lines[0]] + [_doc_text(line, "(not shown: see SOURCE)") for line in lines[1:-1]]
+    return "\n".join(_wrap(line) for line in body) + '\n"""\n'
 
 
 def _wrap(line: str, width: int = 100) -> str:
@@ -385,6 +458,8 @@ def generate(curve, out_dir, *, name: str | None = None, source: dict | None = N
         curve = curve.curve()
     if source is None:
         raise ValueError("generate() needs the curve's defining data (source) to hash")
+    check_param_names(p.name for p in curve.params)  # before the derivation: fail in milliseconds
+    _py_literal(source)
     d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds)
     text = module_text(d, source)
     out = Path(out_dir)

@@ -4,11 +4,12 @@ A curve's name, expressions, parameter names and domain reach the text of a
 generated kernel module; none of it may close a string or docstring and run.
 """
 import importlib.util
-import os
 
 import pytest
 
-from symvib import kernels
+from symvib import codegen, kernels
+from symvib.curve import CurveError
+from symvib.expr import ExpressionError
 
 #: What a hostile name's payload writes when it runs (the tests assert it never appears).
 MARKER_NAME = "PAYLOAD_RAN"
@@ -37,11 +38,89 @@ def cache(tmp_path, monkeypatch):
     return folder
 
 
-@pytest.mark.xfail(strict=True, reason="issue 13 step 1: reproduction; fixed in step 2")
-@pytest.mark.parametrize("label", ["closes_docstring"])
-def test_hostile_name_payload_never_runs_repro(label, cache, tmp_path):
+@pytest.fixture(scope="module")
+def bowl():
+    """The derivation of BOWL (done once: SymPy takes about a second) and its source."""
+    from symvib.derive import derive
+    from symvib.shapes import Shape
+
+    shape = Shape(name="bowl", **BOWL)
+    return derive(shape.curve()), shape.source()
+
+
+def _import_text(text, folder, stem="hostile"):
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{stem}.py"
+    path.write_text(text, encoding="utf-8")
+    spec = importlib.util.spec_from_file_location(f"trust_{stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _public(module):
+    return {n for n in vars(module) if not (n.startswith("__") and n.endswith("__"))}
+
+
+@pytest.mark.parametrize("label", sorted(HOSTILE_NAMES))
+def test_hostile_name_module_imports_and_defines_nothing_else(label, bowl, tmp_path):
+    d, source = bowl
     marker = tmp_path / MARKER_NAME
     name = HOSTILE_NAMES[label].format(marker=str(marker))
+    expected = _public(_import_text(codegen.module_text(d, source), tmp_path / "plain", "plain"))
+    module = _import_text(codegen.module_text(d, {**source, "name": name}), tmp_path / "hostile")
+    assert module.NAME == name and module.SOURCE["name"] == name
+    assert _public(module) == expected
+    assert not marker.exists()
+
+
+def test_hostile_name_through_the_cache_never_runs(cache, tmp_path):
+    marker = tmp_path / MARKER_NAME
+    name = HOSTILE_NAMES["closes_docstring"].format(marker=str(marker))
     module = kernels.load({**BOWL, "name": name})
     assert module.NAME == name
+    assert float(module.z_scalar(2.0, 1.0)) == 2.0
     assert not marker.exists()
+
+
+#: Parameter names that would shadow a name the kernels use.
+SHADOWING_PARAMS = ["float", "F_p", "SOURCE", "z_scalar", "numpy", "domain", "print"]
+
+
+@pytest.mark.parametrize("param", SHADOWING_PARAMS)
+def test_parameter_names_that_would_shadow_kernel_names_are_refused(param, cache):
+    with pytest.raises(CurveError, match=rf"^curve\.params: parameter name '{param}' is reserved"):
+        kernels.load({**BOWL, "name": "shadow", "params": {"p": "positive", param: "positive"}})
+    assert not list(cache.glob("*.py"))
+
+
+@pytest.mark.parametrize("param, why", [("lambda", "keyword"), ("None", "keyword"), ("ﬁ", "ASCII"),
+                                        ("_t0", "'_'"), ("p q", "ASCII"), ("", "ASCII"), (3, "ASCII")])
+def test_check_param_names_refuses_non_identifiers(param, why):
+    with pytest.raises(CurveError, match=rf"^curve\.params: parameter name .* {why}"):
+        codegen.check_param_names(["p", param])
+
+
+@pytest.mark.parametrize("field, value", [
+    ("z", 'x"""; open("m", "w")'), ("z", "x**2\nimport os"), ("z", "x\\**2"), ("z", "x**2\x00"),
+    ("z", "x**2 # comment"), ("domain", ["0", "'''"]), ("domain", ["0.3", "oo\n#"]),
+    ("q_scale", "1; import os"),
+])
+def test_hostile_expressions_are_refused_or_harmless(field, value, cache):
+    try:
+        module = kernels.load({**BOWL, "name": "expr", field: value})
+    except (ExpressionError, CurveError) as err:
+        assert "\n" not in str(err) and field in str(err)
+        assert not list(cache.glob("*.py"))
+    else:
+        assert module.SOURCE[field] == value
+
+
+@pytest.mark.parametrize("value", [object(), b"bytes", {1: "a"}, complex(1, 2)])
+def test_source_literal_takes_plain_data_only(value):
+    with pytest.raises(CurveError, match=r"^source\.extra"):
+        codegen._py_literal({"extra": value})
+
+
+def test_source_literal_prints_non_finite_floats_as_calls():
+    assert eval(codegen._py_literal([float("inf"), float("-inf")])) == [float("inf"), float("-inf")]  # noqa: S307
