@@ -18,6 +18,7 @@ Examples
 """
 from __future__ import annotations
 
+import builtins
 import importlib.util
 import os
 import sys
@@ -27,7 +28,7 @@ from pathlib import Path
 from . import provenance
 from .shapes import CATALOGUE, Shape
 
-__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "KernelError"]
+__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "verify_text", "KernelError"]
 
 #: Environment variable naming the cache folder for user curves.
 CACHE_ENV = "SYMVIB_CACHE"
@@ -35,6 +36,117 @@ CACHE_ENV = "SYMVIB_CACHE"
 
 class KernelError(RuntimeError):
     """A kernel module is missing or does not match its inputs."""
+
+
+#: Statement and expression nodes a generated module may contain (:func:`verify_text`).
+ALLOWED_NODES = frozenset({
+    "Module", "FunctionDef", "arguments", "arg", "Return", "Assign", "AugAssign", "For", "Expr", "Import",
+    "alias", "BinOp", "UnaryOp", "Add", "Sub", "Mult", "Div", "Pow", "USub", "UAdd", "Call", "keyword",
+    "Name", "Constant", "Tuple", "List", "Dict", "Subscript", "Slice", "Starred", "IfExp", "ListComp",
+    "comprehension", "Attribute", "Load", "Store",
+})
+#: Statements allowed at module level (the others only run when a kernel is called).
+MODULE_STATEMENTS = frozenset({"FunctionDef", "Assign", "Import", "Expr"})
+#: Modules a generated module may import (``import math``, ``import numpy``, nothing else).
+ALLOWED_IMPORTS = frozenset({"math", "numpy"})
+#: Builtins a generated module may name; every other builtin (open, eval, __import__, ...) is refused.
+SAFE_BUILTINS = frozenset({"float", "int", "abs", "max", "min", "range", "zip", "len", "round"})
+#: NumPy attributes besides its ufuncs (which do arithmetic only) a generated module may use.
+NUMPY_ATTRIBUTES = frozenset({
+    "pi", "e", "inf", "nan", "arange", "array", "asarray", "broadcast", "broadcast_to", "max", "min", "ones",
+    "zeros", "sum", "select", "where", "amax", "amin", "float64",
+})
+#: Attributes of values (arrays) a generated module may read.
+VALUE_ATTRIBUTES = frozenset({"shape", "size"})
+
+
+def verify_text(text: str, origin) -> None:
+    """Check the text of a generated module before it is imported or executed.
+
+    The text must parse, and every node of its syntax tree must be one a
+    generator writes: definitions, assignments, arithmetic, calls of the
+    module's own functions, of :data:`SAFE_BUILTINS`, of :mod:`math` and of
+    NumPy's ufuncs and :data:`NUMPY_ATTRIBUTES`; docstrings as the only bare
+    expressions; ``import math`` / ``import numpy`` as the only imports; no
+    name or attribute starting with ``__``.  This whitelist keeps a module that
+    was edited or generated wrong from running code; the digest
+    (:func:`check_digest`) tells that it changed.
+
+    Parameters
+    ----------
+    text : str
+        The module's source.
+    origin : str or Path
+        The file (named in the error).
+
+    Raises
+    ------
+    KernelError
+        Naming ``origin``, the line and the first node not allowed.
+    """
+    import ast
+
+    import numpy
+
+    try:
+        tree = ast.parse(text, filename=str(origin))
+    except (SyntaxError, ValueError) as err:
+        raise KernelError(f"{origin}: not valid Python ({err.msg if isinstance(err, SyntaxError) else err}, "
+                          f"line {getattr(err, 'lineno', '?')}); regenerate it") from None
+
+    def refuse(node, why):
+        raise KernelError(f"{origin}: line {getattr(node, 'lineno', '?')}: {why} "
+                          f"({ast.unparse(node)[:80]!r}) is not allowed in a generated module; regenerate it")
+
+    for node in tree.body:
+        kind = type(node).__name__
+        if kind not in MODULE_STATEMENTS:
+            refuse(node, f"a module-level {kind}")
+    docstrings = {id(n.body[0]) for n in [tree, *ast.walk(tree)] if isinstance(n, (ast.Module, ast.FunctionDef))
+                  and n.body and isinstance(n.body[0], ast.Expr)}
+    for node in ast.walk(tree):
+        kind = type(node).__name__
+        if kind not in ALLOWED_NODES:
+            refuse(node, f"a {kind} node")
+        if isinstance(node, ast.Expr) and not (id(node) in docstrings and isinstance(node.value, ast.Constant)
+                                               and isinstance(node.value.value, str)):
+            refuse(node, "an expression statement other than a docstring")
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name not in ALLOWED_IMPORTS or alias.asname:
+                    refuse(node, f"import of {alias.name!r}")
+        elif isinstance(node, ast.FunctionDef):
+            if node.decorator_list or node.returns or node.name.startswith("__"):
+                refuse(node, f"function {node.name!r} with decorators, annotations or a dunder name")
+        elif isinstance(node, ast.arg):
+            if node.annotation is not None or node.arg.startswith("__") or node.arg in _FIXED_NAMES:
+                refuse(node, f"argument {node.arg!r}")
+        elif isinstance(node, ast.Name):
+            if node.id.startswith("__") or hasattr(builtins, node.id) and node.id not in SAFE_BUILTINS:
+                refuse(node, f"the name {node.id!r}")
+            if not isinstance(node.ctx, ast.Load) and node.id in _FIXED_NAMES:
+                refuse(node, f"assigning to {node.id!r}")
+        elif isinstance(node, ast.Attribute) and not _attribute_allowed(node, numpy):
+            refuse(node, f"the attribute {node.attr!r}")
+
+
+#: Names a generated module may use but never rebind.
+_FIXED_NAMES = ALLOWED_IMPORTS | SAFE_BUILTINS
+
+
+def _attribute_allowed(node, numpy) -> bool:
+    """``math.<public name>``, ``numpy.<ufunc or NUMPY_ATTRIBUTES>``, or reading ``.shape``/``.size``."""
+    import ast
+    import math
+
+    if node.attr.startswith("_"):
+        return False
+    base = node.value.id if isinstance(node.value, ast.Name) else None
+    if base == "math":
+        return hasattr(math, node.attr)
+    if base == "numpy":
+        return isinstance(getattr(numpy, node.attr, None), numpy.ufunc) or node.attr in NUMPY_ATTRIBUTES
+    return node.attr in VALUE_ATTRIBUTES and isinstance(node.ctx, ast.Load)
 
 
 def generated_dir() -> Path:
@@ -59,14 +171,19 @@ def _module_name(name: str) -> str:
     return out if out[:1].isalpha() else "c_" + out
 
 
-def _import(path: Path, name: str):
+def _import(path: Path, name: str, text: str | None = None):
+    """Import the module ``name`` from ``path``, executing the verified ``text`` (read once)."""
     key = f"symvib.generated.{name}"
     cached = sys.modules.get(key)
     if cached is not None and getattr(cached, "__file__", None) == str(path):
         return cached
-    spec = importlib.util.spec_from_file_location(key, path)
+    text = path.read_text(encoding="utf-8") if text is None else text
+    verify_text(text, path)
+    spec = importlib.util.spec_from_loader(key, loader=None, origin=str(path))
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module.__file__ = str(path)
+    # What runs is the string just verified, not a second read of the file.
+    exec(compile(text, str(path), "exec"), module.__dict__)  # noqa: S102 - verified above
     sys.modules[key] = module
     return module
 

@@ -4,6 +4,8 @@ A curve's name, expressions, parameter names and domain reach the text of a
 generated kernel module; none of it may close a string or docstring and run.
 """
 import importlib.util
+import re
+from pathlib import Path
 
 import pytest
 
@@ -124,3 +126,58 @@ def test_source_literal_takes_plain_data_only(value):
 
 def test_source_literal_prints_non_finite_floats_as_calls():
     assert eval(codegen._py_literal([float("inf"), float("-inf")])) == [float("inf"), float("-inf")]  # noqa: S307
+
+
+GENERATED = Path(__file__).resolve().parents[1] / "generated"
+
+
+@pytest.mark.parametrize("path", sorted(GENERATED.glob("*.py")), ids=lambda p: p.name)
+def test_every_committed_generated_module_passes_the_whitelist(path):
+    kernels.verify_text(path.read_text(encoding="utf-8"), path)
+
+
+def test_a_fresh_user_module_passes_the_whitelist(bowl):
+    d, source = bowl
+    kernels.verify_text(codegen.module_text(d, source), "bowl.py")
+
+
+#: Hand-made modules the whitelist refuses, and the word of the error that says why.
+HOSTILE_MODULES = {
+    "import_os": ("import os", "import of 'os'"),
+    "import_as": ("import numpy as np", "import of 'numpy'"),
+    "from_import": ("from os import system", "ImportFrom"),
+    "open_call": ("X = open('m', 'w')", "name 'open'"),
+    "eval": ("X = eval('1')", "name 'eval'"),
+    "dunder_import": ("X = __import__('os')", "name '__import__'"),
+    "bare_call": ("print(1)", "expression statement"),
+    "class_escape": ("def f():\n    return ().__class__.__base__", "attribute '__base__'"),
+    "numpy_load": ("X = numpy.load('f.npy')", "attribute 'load'"),
+    "numpy_ctypes": ("X = numpy.ctypeslib", "attribute 'ctypeslib'"),
+    "attr_of_value": ("def f(a):\n    return a.real", "attribute 'real'"),
+    "lambda": ("F = lambda: 0", "Lambda"),
+    "class": ("class K:\n    pass", "ClassDef"),
+    "decorator": ("def f():\n    return 1\n\n\n@f\ndef g():\n    return 2", "decorators"),
+    "rebind_math": ("math = 1", "assigning to 'math'"),
+    "rebind_float": ("def f():\n    float = 2\n    return float", "assigning to 'float'"),
+    "with": ("def f():\n    with f():\n        pass", "With"),
+    "global_for": ("for i in range(3):\n    pass", "module-level For"),
+    "try": ("def f():\n    try:\n        return 1\n    except Exception:\n        return 2", "Try"),
+    "second_string": ('"""doc"""\n"""another"""', "expression statement"),
+    "syntax": ("def f(:\n", "not valid Python"),
+    "nul": ("X = 1\x00", "not valid Python"),
+}
+
+
+@pytest.mark.parametrize("label", sorted(HOSTILE_MODULES))
+def test_whitelist_refuses_hand_made_hostile_modules(label, tmp_path):
+    text, why = HOSTILE_MODULES[label]
+    path = tmp_path / f"{label}.py"
+    with pytest.raises(kernels.KernelError, match=re.escape(why)) as err:
+        kernels.verify_text(text, path)
+    assert str(err.value).startswith(f"{path}:") and "\n" not in str(err.value)
+
+
+def test_whitelist_refuses_a_payload_appended_to_a_real_module():
+    text = (GENERATED / "circle.py").read_text(encoding="utf-8") + "\nimport os\nos.system('true')\n"
+    with pytest.raises(kernels.KernelError, match=r"circle\.py: line \d+: import of 'os'"):
+        kernels.verify_text(text, GENERATED / "circle.py")
