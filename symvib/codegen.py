@@ -55,6 +55,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from . import gauss, provenance
 from .curve import CurveError
 from .derive import Derivation, derive
+from .kernels import DIGEST_PREFIX
 from .symbols import C, g, m, mu
 
 __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
@@ -64,8 +65,6 @@ __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_para
 QUAD_NODES = 16
 #: Widest panel of a numeric-route antiderivative, in units of ``q_scale``.
 PANEL = 0.25
-#: First line of every generated module (what follows is hashed into it).
-DIGEST_PREFIX = "# symvib generated kernel module; body sha256: "
 #: Functions every kernel module defines (each also as ``<name>_scalar``).
 KERNEL_FUNCTIONS = frozenset({
     "x", "z", "h", "alpha", "kappa", "dx", "dz", "dh", "dalpha", "N_w", "F_N", "P_mu", "Ek", "Ep", "E",

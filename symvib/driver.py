@@ -57,7 +57,7 @@ import numpy as np
 
 from . import core
 from .events import EnergyBudget, Event, EventKind, Result, Samples, Status, ZenoInfo
-from .kernels import cache_dir, load
+from .kernels import cache_dir, check_text, load
 from .quadrature import rule
 
 __all__ = ["simulate", "NODES", "backend_available", "engine"]
@@ -110,11 +110,18 @@ def engine(module_file: str, backend: str):
     source; on the numba backend every ``*_scalar`` kernel and every core
     function is compiled with ``numba.njit(cache=True)`` from a file in the
     kernel cache folder, so later processes load the compiled code.
+
+    The kernel module's text is read once and checked (:func:`symvib.kernels.check_text`:
+    digest and whitelist) before it is compiled; an engine file already in the cache
+    is used only when it holds exactly the text built here, and what is executed is
+    that text, not a second read of a file.
     """
     import hashlib
     import importlib.util
 
-    kernel_src = _strip_future(Path(module_file).read_text(encoding="utf-8"))
+    kernel_text = Path(module_file).read_text(encoding="utf-8")
+    check_text(kernel_text, module_file)
+    kernel_src = _strip_future(kernel_text)
     core_src = _strip_future(Path(core.__file__).read_text(encoding="utf-8"))
     ncp = len(_params_of(kernel_src))
     cp_tuple = ("def cp_tuple(row):\n    return (" + "".join(f"row[{i}], " for i in range(ncp)) + ")\n\n")
@@ -132,16 +139,19 @@ def engine(module_file: str, backend: str):
         folder = cache_dir() / "engines"
         folder.mkdir(parents=True, exist_ok=True)
         path = folder / f"{stem}.py"
-        if not path.exists():
+        if not path.exists() or path.read_text(encoding="utf-8", errors="replace") != text:
+            # Missing, or not the text built here (edited, truncated): written again.
             tmp = path.with_suffix(f".{os.getpid()}.tmp")
             tmp.write_text(text, encoding="utf-8")
             tmp.replace(path)
         name = f"symvib_engine_{stem}"
-        spec = importlib.util.spec_from_file_location(name, path)
+        spec = importlib.util.spec_from_loader(name, loader=None, origin=str(path))
         module = importlib.util.module_from_spec(spec)
-        # numba's on-disk cache re-imports the module by name when it loads.
+        module.__file__ = str(path)
+        # numba's on-disk cache re-imports the module by name when it loads, and
+        # locates its index by the file name the code was compiled from.
         sys.modules[name] = module
-        spec.loader.exec_module(module)
+        exec(compile(text, str(path), "exec"), module.__dict__)  # noqa: S102 - checked kernel text and our core
         return module.simulate, module.samples, _balanced(module.sweep)
     namespace = {"__name__": f"symvib._engines.{stem}"}
     exec(compile(text, f"<engine {stem}>", "exec"), namespace)  # noqa: S102 - generated code and our core

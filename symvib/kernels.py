@@ -19,8 +19,10 @@ Examples
 from __future__ import annotations
 
 import builtins
+import hashlib
 import importlib.util
 import os
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -28,7 +30,8 @@ from pathlib import Path
 from . import provenance
 from .shapes import CATALOGUE, Shape
 
-__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "verify_text", "KernelError"]
+__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "check_text", "verify_text", "KernelError",
+           "DIGEST_PREFIX"]
 
 #: Environment variable naming the cache folder for user curves.
 CACHE_ENV = "SYMVIB_CACHE"
@@ -37,6 +40,12 @@ CACHE_ENV = "SYMVIB_CACHE"
 class KernelError(RuntimeError):
     """A kernel module is missing or does not match its inputs."""
 
+
+#: First line of every generated module up to its body's SHA-256 (kernel modules; the
+#: Gauss-Legendre table has its own prefix, :data:`symvib.gauss.TABLE_PREFIX`).
+DIGEST_PREFIX = "# symvib generated kernel module; body sha256: "
+_DIGEST_LINE = re.compile(r"# symvib generated [^\n]*; body sha256: ([0-9a-f]{64})")
+_INPUT_HASH_LINE = re.compile(r"^INPUT_HASH = '([0-9a-f]{64})'$", re.M)
 
 #: Statement and expression nodes a generated module may contain (:func:`verify_text`).
 ALLOWED_NODES = frozenset({
@@ -130,6 +139,37 @@ def verify_text(text: str, origin) -> None:
             refuse(node, f"the attribute {node.attr!r}")
 
 
+def check_text(text: str, origin, input_hash: str | None = None) -> None:
+    """Check a generated module's text: its body digest, its inputs' hash, then :func:`verify_text`.
+
+    Parameters
+    ----------
+    text : str
+        The whole module, first line ``# symvib generated ...; body sha256: <hex>``.
+    origin : str or Path
+        The file (named in the error).
+    input_hash : str, optional
+        The ``INPUT_HASH`` the module must record (the curve it is loaded for).
+
+    Raises
+    ------
+    KernelError
+        When the digest does not match the body (edited, truncated, damaged), the
+        input hash differs, or the whitelist refuses the text.
+    """
+    first, _, body = text.partition("\n")
+    match = _DIGEST_LINE.fullmatch(first)
+    if match is None:
+        raise KernelError(f"{origin}: no body digest on the first line (not a generated module, or damaged)")
+    if match.group(1) != hashlib.sha256(body.encode("utf-8", "surrogatepass")).hexdigest():
+        raise KernelError(f"{origin}: body digest mismatch (edited, truncated or damaged)")
+    if input_hash is not None:
+        found = _INPUT_HASH_LINE.search(body)
+        if found is None or found.group(1) != input_hash:
+            raise KernelError(f"{origin}: made from other inputs (INPUT_HASH differs from the curve's)")
+    verify_text(text, origin)
+
+
 #: Names a generated module may use but never rebind.
 _FIXED_NAMES = ALLOWED_IMPORTS | SAFE_BUILTINS
 
@@ -171,19 +211,34 @@ def _module_name(name: str) -> str:
     return out if out[:1].isalpha() else "c_" + out
 
 
-def _import(path: Path, name: str, text: str | None = None):
-    """Import the module ``name`` from ``path``, executing the verified ``text`` (read once)."""
+def _import(path: Path, name: str, *, generated: bool = True):
+    """Import the module ``name`` from ``path`` after :func:`check_text` of the text it executes.
+
+    A module of ``generated/`` that fails the check is refused (run ``symvib
+    generate``); for the others the error is left to the caller.
+    """
     key = f"symvib.generated.{name}"
     cached = sys.modules.get(key)
     if cached is not None and getattr(cached, "__file__", None) == str(path):
         return cached
-    text = path.read_text(encoding="utf-8") if text is None else text
-    verify_text(text, path)
+    text = path.read_text(encoding="utf-8")
+    try:
+        check_text(text, path)
+    except KernelError as err:
+        raise KernelError(f"{err}; run `symvib generate`" if generated else str(err)) from None
+    return _exec(text, path, name)
+
+
+def _exec(text: str, path: Path, name: str):
+    """The module ``name`` made by executing ``text`` (already checked) as the file ``path``.
+
+    What runs is the string that was checked, never a second read of the file.
+    """
+    key = f"symvib.generated.{name}"
     spec = importlib.util.spec_from_loader(key, loader=None, origin=str(path))
     module = importlib.util.module_from_spec(spec)
     module.__file__ = str(path)
-    # What runs is the string just verified, not a second read of the file.
-    exec(compile(text, str(path), "exec"), module.__dict__)  # noqa: S102 - verified above
+    exec(compile(text, str(path), "exec"), module.__dict__)  # noqa: S102 - checked by the caller
     sys.modules[key] = module
     return module
 
@@ -252,9 +307,41 @@ def _load(curve: Shape, check: bool):
         return module
     name = f"{_module_name(curve.module)}_{want[:16]}"
     path = cache_dir() / f"{name}.py"
-    if not path.exists():
-        from . import codegen  # the bridge: imports SymPy, only for a curve never generated before
+    key = f"symvib.generated.{name}"
+    if key in sys.modules and getattr(sys.modules[key], "__file__", None) == str(path):
+        return sys.modules[key]
+    if path.exists():
+        text = path.read_text(encoding="utf-8", errors="replace")
+        try:
+            check_text(text, path, want)
+            return _exec(text, path, name)
+        except KernelError as err:
+            # Tampered, truncated or from a broken generator: made again below.
+            warnings.warn(f"{err}; regenerating it", stacklevel=3)
+            path.unlink(missing_ok=True)
+    return _generate(curve, source, want, path, name)
 
-        tmp = codegen.generate(curve, cache_dir(), name=name + ".tmp", source=source)
+
+def _generate(curve: Shape, source: dict, want: str, path: Path, name: str):
+    """Generate a user curve's module atomically: into a temporary file, checked and
+    imported from the text written, and only then renamed into the cache; any
+    failure leaves nothing in the cache."""
+    from . import codegen  # the bridge: imports SymPy, only for a curve not generated yet
+
+    tmp = None
+    try:
+        tmp = codegen.generate(curve, cache_dir(), name=f"{name}.{os.getpid()}.tmp", source=source)
+        text = tmp.read_text(encoding="utf-8")
+        check_text(text, path, want)
+        try:
+            module = _exec(text, path, name)
+        except Exception as err:  # noqa: BLE001 - any failure of a fresh module is the generator's
+            sys.modules.pop(f"symvib.generated.{name}", None)
+            raise KernelError(f"{path}: the generated module does not import "
+                              f"({type(err).__name__}: {err}); nothing was cached") from None
         tmp.replace(path)
-    return _import(path, name)
+        tmp = None
+        return module
+    finally:
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)

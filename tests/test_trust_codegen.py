@@ -3,8 +3,11 @@
 A curve's name, expressions, parameter names and domain reach the text of a
 generated kernel module; none of it may close a string or docstring and run.
 """
+import hashlib
 import importlib.util
 import re
+import shutil
+import sys
 from pathlib import Path
 
 import pytest
@@ -181,3 +184,89 @@ def test_whitelist_refuses_a_payload_appended_to_a_real_module():
     text = (GENERATED / "circle.py").read_text(encoding="utf-8") + "\nimport os\nos.system('true')\n"
     with pytest.raises(kernels.KernelError, match=r"circle\.py: line \d+: import of 'os'"):
         kernels.verify_text(text, GENERATED / "circle.py")
+
+
+def _forget(module):
+    """As if in a new process: the module is read from its file again."""
+    sys.modules.pop(module.__name__, None)
+    kernels._LOADED.clear()
+
+
+def _redigest(text):
+    """``text`` with its first line's digest recomputed (a tamperer who knows the format)."""
+    body = text.partition("\n")[2]
+    return f"{kernels.DIGEST_PREFIX}{hashlib.sha256(body.encode()).hexdigest()}\n{body}"
+
+
+def _append_payload(text, marker):
+    return text + f"\nimport os\nopen({str(marker)!r}, 'w').write('x')\n"
+
+
+#: Ways to damage a cached module: each must be detected before it runs.
+TAMPERINGS = {
+    "payload_appended": _append_payload,
+    "payload_appended_digest_recomputed": lambda t, m: _redigest(_append_payload(t, m)),
+    "payload_in_docstring_digest_recomputed": lambda t, m: _redigest(
+        t.replace('"""\nimport math', f'"""\nopen({str(m)!r}, "w")\nimport math', 1)),
+    "digits_altered": lambda t, m: t.replace("PANEL = 0.25", "PANEL = 0.35", 1),
+    "truncated": lambda t, m: t[: len(t) // 2],
+    "input_hash_altered": lambda t, m: _redigest(re.sub(r"INPUT_HASH = '[0-9a-f]{64}'", f"INPUT_HASH = '{'0' * 64}'", t)),
+    "emptied": lambda t, m: "",
+}
+
+
+@pytest.mark.parametrize("label", sorted(TAMPERINGS))
+def test_tampered_cached_module_is_detected_and_regenerated(label, cache, tmp_path):
+    marker = tmp_path / MARKER_NAME
+    module = kernels.load({**BOWL, "name": "bowl"})
+    path = Path(module.__file__)
+    good = path.read_text(encoding="utf-8")
+    bad = TAMPERINGS[label](good, marker)
+    assert bad != good
+    path.write_text(bad, encoding="utf-8")
+    _forget(module)
+    with pytest.warns(UserWarning, match=r"regenerating it"):
+        again = kernels.load({**BOWL, "name": "bowl"})
+    assert not marker.exists()
+    assert path.read_text(encoding="utf-8") == good
+    assert again.PANEL == codegen.PANEL and float(again.z_scalar(2.0, 1.0)) == 2.0
+    assert sorted(p.name for p in cache.iterdir()) == [path.name]
+
+
+@pytest.mark.parametrize("label", ["payload_appended", "payload_appended_digest_recomputed", "truncated",
+                                   "digits_altered"])
+def test_tampered_committed_module_is_refused(label, tmp_path, monkeypatch):
+    marker = tmp_path / MARKER_NAME
+    copy = tmp_path / "generated"
+    shutil.copytree(GENERATED, copy)
+    path = copy / "circle.py"
+    path.write_text(TAMPERINGS[label](path.read_text(encoding="utf-8"), marker), encoding="utf-8")
+    monkeypatch.setattr(kernels, "generated_dir", lambda: copy)
+    monkeypatch.setattr(kernels, "_LOADED", {})
+    monkeypatch.delitem(sys.modules, "symvib.generated.circle", raising=False)
+    with pytest.raises(kernels.KernelError, match=rf"^{re.escape(str(path))}: .*run `symvib generate`$"):
+        kernels.load("circle")
+    assert not marker.exists()
+
+
+def test_engine_checks_the_text_it_compiles(tmp_path):
+    from symvib import driver
+
+    marker = tmp_path / MARKER_NAME
+    path = tmp_path / "kernel_for_engine.py"
+    path.write_text(_redigest(_append_payload((GENERATED / "circle.py").read_text(encoding="utf-8"), marker)),
+                    encoding="utf-8")
+    with pytest.raises(kernels.KernelError, match=r"import of 'os'"):
+        driver.engine(str(path), "python")
+    assert not marker.exists()
+
+
+@pytest.mark.parametrize("broken", ["X = float('not a number')\n", "X = F_p_scalar(1.0)\n", "import os\n"])
+def test_failed_generation_leaves_nothing_in_the_cache(broken, cache, monkeypatch):
+    real = codegen.module_text
+    monkeypatch.setattr(codegen, "module_text", lambda d, source: _redigest(real(d, source) + broken))
+    with pytest.raises(kernels.KernelError, match=r"bowl_[0-9a-f]{16}\.py: "):
+        kernels.load({**BOWL, "name": "bowl"})
+    assert list(cache.iterdir()) == []
+    monkeypatch.setattr(codegen, "module_text", real)
+    assert float(kernels.load({**BOWL, "name": "bowl"}).z_scalar(2.0, 1.0)) == 2.0
