@@ -44,6 +44,7 @@ import hashlib
 import keyword
 import math
 import re
+import sys
 import unicodedata
 from pathlib import Path
 
@@ -80,13 +81,48 @@ KERNEL_RESERVED = frozenset({"q", "qdot", "w", "numpy", "math"} | KERNEL_FUNCTIO
 #: Unicode categories a user text may not bring into a docstring (controls, separators, surrogates).
 _UNSAFE_CATEGORIES = frozenset({"Cc", "Cs", "Zl", "Zp"})
 
+#: Integers at least this large (in magnitude) are printed as float literals: a Python
+#: int beyond int64 makes NumPy fall back to objects and numba fail to type the kernel,
+#: and beyond 2**53 a float is what the kernel computes with anyway.
+BIG_INTEGER = 2**53
+
 _Q = sp.Symbol("q", real=True)
 _QDOT = sp.Symbol("qdot", real=True)
 _W = sp.Symbol("w", real=True)
 _BRANCH = {1: "p", -1: "m"}
 
 
-class _NumPy(NumPyPrinter):
+def _float_literal(value) -> str:
+    """``repr(float(value))`` for a number too large for an integer literal in a kernel.
+
+    Raises
+    ------
+    CurveError
+        When the number does not fit a float either.
+    """
+    try:
+        out = float(value)
+    except OverflowError:
+        out = math.inf
+    if not math.isfinite(out):
+        raise CurveError(f"curve: the number {sp.sstr(value)[:40]} is too large for a float kernel "
+                         f"(beyond {sys.float_info.max:.3g})")
+    return repr(out)
+
+
+class _BigNumbers:
+    """Printing of integers and rationals that a kernel cannot hold as machine integers."""
+
+    def _print_Integer(self, expr):
+        return super()._print_Integer(expr) if abs(expr.p) < BIG_INTEGER else _float_literal(expr)
+
+    def _print_Rational(self, expr):
+        if abs(expr.p) < BIG_INTEGER and expr.q < BIG_INTEGER:
+            return super()._print_Rational(expr)
+        return _float_literal(expr)
+
+
+class _NumPy(_BigNumbers, NumPyPrinter):
     suffix = ""
 
     def __init__(self):
@@ -97,7 +133,7 @@ class _NumPy(NumPyPrinter):
         return f"{expr.func.__name__}{self.suffix}(" + ", ".join(self.doprint(a) for a in expr.args) + ")"
 
 
-class _Math(PythonCodePrinter):
+class _Math(_BigNumbers, PythonCodePrinter):
     suffix = "_scalar"
 
     def __init__(self):

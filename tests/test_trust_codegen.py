@@ -10,6 +10,7 @@ import shutil
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from symvib import codegen, kernels
@@ -270,3 +271,63 @@ def test_failed_generation_leaves_nothing_in_the_cache(broken, cache, monkeypatc
     assert list(cache.iterdir()) == []
     monkeypatch.setattr(codegen, "module_text", real)
     assert float(kernels.load({**BOWL, "name": "bowl"}).z_scalar(2.0, 1.0)) == 2.0
+
+
+@pytest.mark.parametrize("expr, numpy_text", [
+    ("x*10**30", "1e+30*x"), ("x/10**30", "(1e-30)*x"), ("x*3/10**20", "(3e-20)*x"), ("-x*10**30", "-1e+30*x"),
+    ("x*2**53", "9007199254740992.0*x"), ("x*(2**53 - 1)", "9007199254740991*x"), ("5*x**2", "5*x**2"),
+    ("7*x/3", "(7/3)*x"), ("sqrt(10**60 + 1)*x", "numpy.sqrt(1e+60)*x"),
+])
+def test_big_integers_are_printed_as_floats(expr, numpy_text):
+    import sympy as sp
+
+    e = sp.sympify(expr)
+    assert codegen._NumPy().doprint(e) == numpy_text
+    assert codegen._Math().doprint(e) == numpy_text.replace("numpy.", "math.")
+
+
+def test_numbers_beyond_float_are_refused():
+    import sympy as sp
+
+    with pytest.raises(CurveError, match=r"^curve: the number 1000.* is too large for a float kernel"):
+        codegen._Math().doprint(sp.Integer(10) ** 400 * sp.Symbol("x"))
+
+
+def _scene(z, backend_curve_name):
+    from symvib.scene import scene_from_dict
+
+    return scene_from_dict({"curve": {"z": z, "name": backend_curve_name},
+                            "physics": {"g": 9.81, "m": 0.2, "alpha0": 0.05, "restitution": 0.8},
+                            "limiters": {"left": "-1", "right": "1"}, "initial": {"q": 0.5, "qdot": 0}})
+
+
+#: Curves whose kernels hold integers beyond int64, and the curve without them that they equal.
+BIG_INT_CURVES = {"x*10**30": None, "x**2*(10**30 + 1)/10**30": "x**2"}
+
+
+@pytest.mark.parametrize("z", sorted(BIG_INT_CURVES))
+def test_big_integer_curve_simulates_on_python(z, cache):
+    from symvib.driver import simulate
+
+    result = simulate(_scene(z, "big"), backend="python")
+    assert result.events or result.status.value == "t_max"
+    assert all(map(np.isfinite, [result.t_final, result.q_final, result.qdot_final]))
+    if BIG_INT_CURVES[z]:
+        plain = simulate(_scene(BIG_INT_CURVES[z], "plain"), backend="python")
+        assert [e.kind for e in result.events] == [e.kind for e in plain.events]
+        assert [e.t for e in result.events] == pytest.approx([e.t for e in plain.events], rel=1e-12)
+    else:  # a nearly vertical wall: x moves by g t^2 / 2e30 ~ 5e-24 until t_max (a few ulps of 0.5)
+        assert result.q_final == pytest.approx(0.5, abs=1e-14)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not __import__("symvib.driver").driver.backend_available("numba"), reason="no numba")
+@pytest.mark.parametrize("z", sorted(BIG_INT_CURVES))
+def test_big_integer_curve_simulates_on_numba(z, cache):
+    from symvib.driver import simulate
+
+    a = simulate(_scene(z, "big"), backend="python")
+    b = simulate(_scene(z, "big"), backend="numba")
+    assert a.status is b.status and [e.kind for e in a.events] == [e.kind for e in b.events]
+    assert [e.t for e in a.events] == pytest.approx([e.t for e in b.events], rel=1e-12)
+    assert a.q_final == pytest.approx(b.q_final, rel=1e-12, abs=1e-300)
