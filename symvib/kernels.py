@@ -6,7 +6,16 @@
   :class:`~symvib.shapes.Shape`) is looked up by its input hash in the cache
   folder (``$SYMVIB_CACHE``, default ``~/.cache/symvib/kernels``); only when it
   is missing is the code generator imported, which imports SymPy, and the
-  module is written there once.
+  module is written there once, atomically (checked and imported before it is
+  renamed into place).
+
+Before any module runs, its text is read once and checked (:func:`check_text`):
+the body digest on its first line, the ``INPUT_HASH`` of the curve it is
+loaded for, and a whitelist of syntax (:func:`verify_text`); then that same
+text is executed.  A cached module that fails is regenerated; a module of
+``generated/`` that fails is refused (run ``symvib generate``).  The digest
+tells damage and edits; only the whitelist keeps code from running, since a
+tamperer can recompute a digest.
 
 Examples
 --------

@@ -331,3 +331,29 @@ def test_big_integer_curve_simulates_on_numba(z, cache):
     assert a.status is b.status and [e.kind for e in a.events] == [e.kind for e in b.events]
     assert [e.t for e in a.events] == pytest.approx([e.t for e in b.events], rel=1e-12)
     assert a.q_final == pytest.approx(b.q_final, rel=1e-12, abs=1e-300)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not __import__("symvib.driver").driver.backend_available("numba"), reason="no numba")
+def test_tampered_numba_engine_file_is_rewritten_before_it_runs(cache, tmp_path, monkeypatch):
+    from symvib import driver
+    from symvib.scene import scene_from_dict
+
+    marker = tmp_path / MARKER_NAME
+    scene = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
+                             "physics": {"alpha0": 0.05, "restitution": 0.8}, "initial": {"q": -0.6, "qdot": 0.0},
+                             "limiters": {"right": 0.3}})
+    monkeypatch.setattr(driver, "_BOUND", {})
+    driver.engine.cache_clear()
+    first = driver.simulate(scene, backend="numba")
+    (engine_file,) = (cache / "engines").glob("engine_parabola_numba_*.py")
+    good = engine_file.read_text(encoding="utf-8")
+    engine_file.write_text(_append_payload(good, marker), encoding="utf-8")
+    for name in [n for n in sys.modules if n.startswith("symvib_engine_")]:
+        monkeypatch.delitem(sys.modules, name)
+    driver._BOUND.clear()
+    driver.engine.cache_clear()
+    again = driver.simulate(scene, backend="numba")
+    assert not marker.exists()
+    assert engine_file.read_text(encoding="utf-8") == good
+    assert [e.t for e in again.events] == [e.t for e in first.events]
