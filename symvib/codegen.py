@@ -43,6 +43,7 @@ import builtins
 import hashlib
 import keyword
 import math
+import os
 import re
 import sys
 import unicodedata
@@ -56,7 +57,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from . import gauss, provenance
 from .curve import CurveError
 from .derive import Derivation, derive
-from .kernels import DIGEST_PREFIX
+from .kernels import DIGEST_PREFIX, verify_text
 from .symbols import C, g, m, mu
 
 __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
@@ -501,7 +502,14 @@ def generate(curve, out_dir, *, name: str | None = None, source: dict | None = N
     out.mkdir(parents=True, exist_ok=True)
     stem = name if name and name.endswith(".tmp") else module_name(name or curve.name)
     path = out / f"{stem}.py"
-    path.write_text(text, encoding="utf-8")
+    verify_text(text, path)  # what a generator writes must pass what a loader checks
+    # Written whole or not at all: a reader never sees half a module.
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.part")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
     return path
 
 

@@ -338,8 +338,12 @@ def _generate(curve: Shape, source: dict, want: str, path: Path, name: str):
     from . import codegen  # the bridge: imports SymPy, only for a curve not generated yet
 
     tmp = None
+    stem = f"{name}.{os.getpid()}.tmp"
     try:
-        tmp = codegen.generate(curve, cache_dir(), name=f"{name}.{os.getpid()}.tmp", source=source)
+        try:
+            tmp = codegen.generate(curve, cache_dir(), name=stem, source=source)
+        except KernelError as err:  # name the module the user asked for, not the temporary file
+            raise KernelError(str(err).replace(str(cache_dir() / f"{stem}.py"), str(path))) from None
         text = tmp.read_text(encoding="utf-8")
         check_text(text, path, want)
         try:

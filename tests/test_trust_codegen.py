@@ -357,3 +357,14 @@ def test_tampered_numba_engine_file_is_rewritten_before_it_runs(cache, tmp_path,
     assert not marker.exists()
     assert engine_file.read_text(encoding="utf-8") == good
     assert [e.t for e in again.events] == [e.t for e in first.events]
+
+
+def test_generate_writes_only_modules_that_pass_the_whitelist(tmp_path, monkeypatch):
+    from symvib.shapes import Shape
+
+    real = codegen.module_text
+    monkeypatch.setattr(codegen, "module_text", lambda d, source: _redigest(real(d, source) + "import os\n"))
+    out = tmp_path / "out"
+    with pytest.raises(kernels.KernelError, match=r"bowl\.py: line \d+: import of 'os'"):
+        codegen.generate(Shape(name="bowl", **BOWL), out)
+    assert list(out.iterdir()) == []
