@@ -211,7 +211,8 @@ TAMPERINGS = {
         t.replace('"""\nimport math', f'"""\nopen({str(m)!r}, "w")\nimport math', 1)),
     "digits_altered": lambda t, m: t.replace("PANEL = 0.25", "PANEL = 0.35", 1),
     "truncated": lambda t, m: t[: len(t) // 2],
-    "input_hash_altered": lambda t, m: _redigest(re.sub(r"INPUT_HASH = '[0-9a-f]{64}'", f"INPUT_HASH = '{'0' * 64}'", t)),
+    "input_hash_altered": lambda t, m: _redigest(re.sub(r"INPUT_HASH = '[0-9a-f]{64}'",
+                                                        f"INPUT_HASH = '{'0' * 64}'", t)),
     "emptied": lambda t, m: "",
 }
 
