@@ -318,6 +318,10 @@ def module_text(d: Derivation, source: dict) -> str:
     # Numeric-route antiderivatives.
     needs_quad = any(numeric.values())
     for s in (1, -1):
+        if numeric[s] and not d.branches[s].F.q_ref.is_finite:
+            raise CurveError(f"curve.domain: the reference point {d.branches[s].F.q_ref} of the numeric "
+                             "antiderivative is not finite")
+    for s in (1, -1):
         if not numeric[s]:
             continue
         b = _BRANCH[s]

@@ -326,9 +326,15 @@ def _tidy(F: sp.Expr) -> sp.Expr:
 
 
 def _q_ref(curve: Curve) -> sp.Expr:
+    """A finite point inside the domain: 0 when it is inside, else the middle, or one
+    ``q_scale`` inside the finite end of a half-infinite domain (whose middle is infinite)."""
     lo, hi = curve.domain
     if (lo.is_infinite or (lo < 0) == sp.true) and (hi.is_infinite or (hi > 0) == sp.true):
         return sp.Integer(0)
+    if hi.is_infinite:
+        return lo + curve.q_scale
+    if lo.is_infinite:
+        return hi - curve.q_scale
     return (lo + hi) / 2
 
 

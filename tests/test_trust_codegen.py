@@ -369,3 +369,30 @@ def test_generate_writes_only_modules_that_pass_the_whitelist(tmp_path, monkeypa
     with pytest.raises(kernels.KernelError, match=r"bowl\.py: line \d+: import of 'os'"):
         codegen.generate(Shape(name="bowl", **BOWL), out)
     assert list(out.iterdir()) == []
+
+
+#: Curves on a half-infinite domain (the middle of the domain is infinite) whose F_s has no closed form.
+HALF_INFINITE = [("sqrt(x)", ["0.3", "oo"], 1.0, {"left": 0.5}), ("x**4", ["0.3", "oo"], 1.0, {"left": 0.5}),
+                 ("(-x)**4", ["-oo", "-0.3"], -1.0, {"right": -0.5})]
+
+
+@pytest.mark.slow  # a numeric route is reached after the symbolic ones time out (~40 s each)
+@pytest.mark.parametrize("z, domain, q0, limiters", HALF_INFINITE, ids=[c[0] for c in HALF_INFINITE])
+def test_half_infinite_domain_gives_a_working_module(z, domain, q0, limiters, cache):
+    import mpmath
+
+    from symvib.driver import simulate
+    from symvib.scene import scene_from_dict
+
+    module = kernels.load({"name": "half", "kind": "graph", "q": "x", "z": z, "domain": domain})
+    assert "numeric" in module.F_ROUTES.values()  # the route that integrates from Q_REF
+    assert np.isfinite(module.Q_REF) and module.domain()[0] < module.Q_REF < module.domain()[1]
+    mu, a, b = 0.05, q0, q0 + 0.7 * np.sign(q0)
+    for s, (F, dF) in {1: (module.F_p_scalar, module.dF_p_scalar), -1: (module.F_m_scalar, module.dF_m_scalar)}.items():
+        want = mpmath.quad(lambda u: dF(float(u), mu), [a, b])
+        assert F(b, mu) - F(a, mu) == pytest.approx(float(want), rel=1e-12), s
+    result = simulate(scene_from_dict({"curve": {"z": z, "domain": domain}, "limiters": limiters,
+                                       "physics": {"alpha0": 0.05, "restitution": 0.8},
+                                       "initial": {"q": q0, "qdot": 0}}), backend="python")
+    assert result.events and result.energy_budget.relative_residual < 1e-9
+    assert not list(cache.glob("*.tmp*"))
