@@ -38,11 +38,13 @@ Examples
 """
 from __future__ import annotations
 
+import dataclasses
 import random
 import time
 from dataclasses import dataclass
 
 import mpmath
+
 import sympy as sp
 
 from . import budget
@@ -268,7 +270,9 @@ def antiderivative(curve: Curve, s: int, *, seconds: float = ROUTE_SECONDS,
     f = integrand(curve, s)
     key = (sp.srepr(f), sp.srepr(curve.alpha), tuple(routes), seconds)
     if key in _CACHE:
-        return _CACHE[key]
+        # The reference point depends on the domain: one integrand on (0.3, oo) and on
+        # (-oo, -0.3) shares the symbolic work but not q_ref.
+        return _with_q_ref(_CACHE[key], _q_ref(curve), curve.q)
     q = curve.q
     attempts = []
     result = None
@@ -311,6 +315,16 @@ def antiderivative(curve: Curve, s: int, *, seconds: float = ROUTE_SECONDS,
                                 q_ref=q_ref)
     _CACHE[key] = result
     return result
+
+
+def _with_q_ref(result: "Antiderivative", q_ref: sp.Expr, q: sp.Symbol) -> "Antiderivative":
+    """``result`` measured from ``q_ref`` (a numeric route integrates from it)."""
+    if result.q_ref == q_ref:
+        return result
+    if result.route == "numeric":
+        u = result.expr.limits[0][0]
+        return dataclasses.replace(result, q_ref=q_ref, expr=sp.Integral(result.expr.function, (u, q_ref, q)))
+    return dataclasses.replace(result, q_ref=q_ref)
 
 
 def _tidy(F: sp.Expr) -> sp.Expr:

@@ -101,3 +101,19 @@ def test_bad_branch_and_route():
         antiderivative(c, 0)
     with pytest.raises(ValueError, match="unknown route"):
         antiderivative(c, 1, routes=("magic",))
+
+
+@pytest.mark.parametrize("routes", [integrals.ROUTES, ()], ids=["closed", "numeric"])
+def test_one_integrand_on_two_half_infinite_domains_keeps_each_reference_point(routes):
+    """The cache shares symbolic work between curves, never the domain's reference point
+    (CI once saw Q_REF = 1.3 for a domain (-oo, -0.3) after a run on (0.3, oo))."""
+    from symvib.curve import graph
+
+    right = graph("x**2", domain=("3/10", "oo"))
+    left = graph("x**2", domain=("-oo", "-3/10"))
+    F_right = antiderivative(right, 1, seconds=0.5, routes=routes)
+    F_left = antiderivative(left, 1, seconds=0.5, routes=routes)
+    assert F_right.q_ref == sp.Rational(13, 10) and F_left.q_ref == -sp.Rational(13, 10)
+    if not routes:  # the numeric form integrates from its own reference point
+        assert F_left.expr.limits[0][1] == -sp.Rational(13, 10)
+        assert sp.simplify(sp.diff(F_left.expr, left.q) - F_left.integrand) == 0
