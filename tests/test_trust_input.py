@@ -168,3 +168,124 @@ def test_unwritable_folders_are_refused(tmp_path):
 def test_check_output_dir_accepts_a_new_nested_folder_and_creates_nothing(tmp_path):
     assert check_output_dir(tmp_path / "a" / "b") == tmp_path / "a" / "b"
     assert listing(tmp_path) == set()
+
+
+# --------------------------------------------------------------------------- expressions
+
+from symvib import expr  # noqa: E402
+from symvib.expr import ExpressionError, free_names, parse  # noqa: E402
+
+#: Expressions hostile to the parser, or to what comes after it: text -> part of the message.
+HOSTILE_EXPRESSIONS = {
+    "x" + "+x" * 50_000: "characters long",  # 100 KB: RecursionError in a recursive parser
+    "-" * 100_000 + "x": "characters long",  # MemoryError in the parser
+    "-" * 60 + "x": "nested deeper",
+    "~" * 60 + "x": "nested deeper",
+    "- + " * 30 + "x": "nested deeper",
+    "(" * 60 + "x" + ")" * 60: "nested deeper",
+    "[" * 60 + "]" * 60: "nested deeper",
+    "x**2*((((9**64)**64)**64)**64)**64": r"the constant \(\(9\*\*64\)\*\*64\) is larger than 1e\+100",
+    "(((9**64)**64)**64)": "larger than 1e",
+    "(x**8)**9": "total exponent of 72; at most 64",
+    "((x**4)**4)**8": "total exponent of 128",
+    "sin((x**16)**16)": "total exponent of 256",
+    "x**65": "exponent 65 is larger",
+    "9**64**64": "larger than",
+    "10**10**10": "larger than 64",
+    "x**(2**100)": "larger than 64",
+    "9" * 400: "longer than 30 digits",
+    "x*" + "9" * 31: "longer than 30 digits",
+    "1e400": "not finite",
+    "1e101": "larger than 1e",
+    "1e308*10": "larger than 1e",
+    "exp(1000)": "larger than 1e",
+    "cosh(300)*x": "larger than 1e",
+    "1/0": "division by zero",
+    "x/(1-1)": "division by the constant",
+    "x/(pi-pi)": "division by the constant",
+    "sqrt(-1)*x": "not a real number",
+    "log(0)": "not a real number",
+    "acos(2)": "not a real number",
+    "__import__('os')": "call of '__import__' is not allowed",
+    "__import__('os').system('true')": "attribute access",
+    "().__class__.__bases__[0].__subclasses__()": "not allowed",
+    "x.real": "Attribute",
+    "lambda: 1": "Lambda",
+    "[x for x in (1,)]": "ListComp",
+    "{x: 1}": "Dict",
+    "x if x else 1": "IfExp",
+    "(x := 1)": "NamedExpr",
+    "x[0]": "Subscript",
+    "'a'": "only numbers",
+    "b'a'": "only numbers",
+    "f'{x}'": "JoinedStr",
+    "True": "only numbers",
+    "None": "only numbers",
+    "...": "only numbers",
+    "1j": "only numbers",
+    "x < 1": "Compare",
+    "x and 1": "BoolOp",
+    "not x": "operator Not",
+    "x ^ 2": r"use \*\* for powers",
+    "x @ x": "MatMult",
+    "x // 2": "FloorDiv",
+    "x % 2": "Mod",
+    "x << 2": "LShift",
+    "sin(x, 2)": "takes 1 argument",
+    "atan2(x)": "takes 2 arguments",
+    "sin(*x)": "takes 1 argument",
+    "sin(x=1)": "keyword",
+    "sin": "must be called",
+    "eval('1')": "call of 'eval'",
+    "open('/etc/passwd')": "call of 'open'",
+    "exec": "not allowed",
+    "_x": "may not start with _",
+    "__builtins__": "may not start with _",
+    "x;y": "not a valid expression",
+    "x\ny": "not a valid expression",
+    "x = 1": "not a valid expression",
+    "import os": "not a valid expression",
+    "": "empty expression",
+    "   ": "empty expression",
+    "\x00": "not a valid expression|too complex",
+    "x # comment": None,  # a comment is just ignored: accepted
+}
+
+
+@pytest.mark.parametrize("text", sorted(HOSTILE_EXPRESSIONS), ids=range(len(HOSTILE_EXPRESSIONS)))
+def test_hostile_expressions_are_one_line_errors(text):
+    message = HOSTILE_EXPRESSIONS[text]
+    if message is None:
+        assert free_names(text, field="curve.z") == {"x"}
+        return
+    with pytest.raises(ExpressionError, match=message) as info:
+        free_names(text, field="curve.z")
+    assert str(info.value).startswith("curve.z: ")
+    assert "\n" not in str(info.value)
+    assert info.value.field == "curve.z"
+
+
+@pytest.mark.parametrize("value, message", [(10 ** 400, "longer than 30 digits"), (True, "got bool"),
+                                            ([1], "got list"), (None, "got NoneType"),
+                                            (float("inf"), "not finite"), (float("nan"), "not finite"),
+                                            (1e200, "larger than 1e")])
+def test_non_text_values_are_refused(value, message):
+    with pytest.raises(ExpressionError, match=message):
+        expr.number(value, field="initial.qdot")
+
+
+@pytest.mark.parametrize("text, names", [
+    ("R*(1 - cos(phi)) + pi", {"R", "phi"}), ("x**2/(2*p)", {"x", "p"}), ("e*x", {"x"}),
+    ("(x**8)**8", {"x"}), ("9**64*x", {"x"}), ("x*10**30", {"x"}), ("κ*x", {"κ", "x"}),
+    ("-" * 40 + "x", {"x"}), ("(" * 40 + "x" + ")" * 40, {"x"}),
+])
+def test_free_names_and_limits_that_still_pass(text, names):
+    assert free_names(text, field="curve.z") == names
+
+
+def test_constants_are_folded_in_floats_not_integers():
+    # The parse of the issue's nested power takes microseconds: no integer of 10**(61*64**4) digits.
+    with pytest.raises(ExpressionError, match="larger than"):
+        parse("x**2*((((9**64)**64)**64)**64)**64", symbols=("x",), field="curve.z")
+    assert expr.number("9**64", field="f") == pytest.approx(9.0 ** 64)
+    assert expr.number("-1e100", field="f") == -1e100
