@@ -127,7 +127,7 @@ def read_user_file(path, what: str = "file", *, max_bytes: int = MAX_INPUT_BYTES
     try:
         fd = os.open(path, flags)
     except FileNotFoundError:
-        raise UserPathError(path, f"no such {what}") from None
+        raise UserPathError(path, f"no such file (the {what})") from None
     except PermissionError:
         raise UserPathError(path, f"{what} is not readable (permission denied)") from None
     except (OSError, ValueError) as exc:

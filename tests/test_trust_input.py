@@ -238,7 +238,7 @@ HOSTILE_EXPRESSIONS = {
     "sin": "must be called",
     "eval('1')": "call of 'eval'",
     "open('/etc/passwd')": "call of 'open'",
-    "exec": "not allowed",
+    "exec(x)": "call of .exec. is not allowed",
     "_x": "may not start with _",
     "__builtins__": "may not start with _",
     "x;y": "not a valid expression",
@@ -289,3 +289,160 @@ def test_constants_are_folded_in_floats_not_integers():
         parse("x**2*((((9**64)**64)**64)**64)**64", symbols=("x",), field="curve.z")
     assert expr.number("9**64", field="f") == pytest.approx(9.0 ** 64)
     assert expr.number("-1e100", field="f") == -1e100
+
+
+# --------------------------------------------------------------------------- scenes
+
+import copy  # noqa: E402
+
+from symvib.scene import MAX_NAME_LENGTH, SceneError, load_scene, scene_from_dict  # noqa: E402
+
+BIG = 10 ** 400  # a 401-digit TOML integer
+
+
+def bowl_scene(**over):
+    """A valid user-curve scene, with ``section__key=value`` changes (``None`` deletes)."""
+    data = {"name": "bowl", "curve": {"z": "x**2/(2*p)", "name": "bowl"}, "parameters": {"p": 1.0},
+            "physics": {"g": 9.81, "m": 0.2, "alpha0": 0.05, "restitution": 0.8},
+            "limiters": {"left": -1, "right": 1}, "initial": {"q": 0.5, "qdot": 0.0}}
+    for key, value in over.items():
+        parts = key.split("__")
+        table = data
+        for part in parts[:-1]:
+            table = table[part]
+        if value is None:
+            table.pop(parts[-1], None)
+        else:
+            table[parts[-1]] = copy.deepcopy(value)
+    return data
+
+
+#: Hostile or careless scenes: changes -> (field the error names, part of the message).
+BAD_SCENES = {
+    "shape_list": (dict(curve={"shape": ["parabola"]}), "curve.shape", "must be a string"),
+    "shape_int": (dict(curve={"shape": 5}), "curve.shape", "must be a string"),
+    "shape_table": (dict(curve={"shape": {"a": 1}}), "curve.shape", "must be a string"),
+    "shape_unknown": (dict(curve={"shape": "../../etc/passwd"}), "curve.shape", "unknown shape"),
+    "big_qdot": (dict(initial__qdot=BIG), "initial.qdot", "too large: an integer of 401 digits"),
+    "big_q": (dict(initial__q=BIG), "initial.q", "too large"),
+    "big_param": (dict(parameters__p=BIG), "parameters.p", "too large"),
+    "big_limiter": (dict(limiters__right=BIG), "limiters.right", "too large"),
+    "big_g": (dict(physics__g=BIG), "physics.g", "too large"),
+    "big_m": (dict(physics__m=-BIG), "physics.m", "too large"),
+    "big_restitution": (dict(physics__restitution=BIG), "physics.restitution", "too large"),
+    "big_t_max": (dict(run={"t_max": BIG}), "run.t_max", "too large"),
+    "big_text": (dict(initial__qdot="9" * 400), "initial.qdot", "longer than 30 digits"),
+    "nan_qdot": (dict(initial__qdot=float("nan")), "initial.qdot", "must be finite"),
+    "inf_param": (dict(parameters__p=float("inf")), "parameters.p", "must be finite"),
+    "domain_reversed": (dict(curve__domain=["1", "-1"]), "curve.domain", "low end"),
+    "domain_equal": (dict(curve__domain=[0, 0]), "curve.domain", "low end"),
+    "domain_name": (dict(curve__domain=["a", "1"]), "curve.domain[0]", "name 'a' is not allowed"),
+    "domain_coordinate": (dict(curve__domain=["-1", "x"]), "curve.domain[1]", "name 'x' is not allowed"),
+    "domain_div0": (dict(curve__domain=["1/0", "2"]), "curve.domain[0]", "division by zero"),
+    "domain_bool": (dict(curve__domain=[True, 2]), "curve.domain[0]", "got bool"),
+    "domain_nan": (dict(curve__domain=[float("nan"), 2]), "curve.domain[0]", "finite"),
+    "domain_list": (dict(curve__domain=[[0], 2]), "curve.domain[0]", "got list"),
+    "domain_three": (dict(curve__domain=[0, 1, 2]), "curve.domain", "list"),
+    "domain_string": (dict(curve__domain="-1:1"), "curve.domain", "list"),
+    "domain_attack": (dict(curve__domain=["__import__('os')", "1"]), "curve.domain[0]", "not allowed"),
+    "domain_huge": (dict(curve__domain=["-(9**64)**64", "1"]), "curve.domain[0]", "larger than"),
+    "domain_param_negative": (dict(curve__domain=["p", "-p"]), "curve.domain", "low end"),
+    "domain_sqrt": (dict(curve__domain=["sqrt(-p)", "1"]), "curve.domain[0]", "cannot evaluate"),
+    "name_int": (dict(name=5), "name", "must be a string"),
+    "name_long": (dict(name="x" * (MAX_NAME_LENGTH + 1)), "name", "characters long"),
+    "name_newline": (dict(name="a\nb"), "name", "printable"),
+    "name_nul": (dict(name="a\x00b"), "name", "printable"),
+    "name_empty": (dict(name=""), "name", "empty"),
+    "name_escape": (dict(name="\x1b[2J"), "name", "printable"),
+    "curve_name_list": (dict(curve__name=["a"]), "curve.name", "must be a string"),
+    "curve_name_long": (dict(curve__name="c" * 1000), "curve.name", "characters long"),
+    "curve_name_newline": (dict(curve__name='a"""\nimport os'), "curve.name", "printable"),
+    "q_digit": (dict(curve__q="1x"), "curve.q", "identifier"),
+    "q_dunder": (dict(curve__q="__class__"), "curve.q", "identifier"),
+    "q_function": (dict(curve__q="sin"), "curve.q", "function or constant"),
+    "q_constant": (dict(curve__q="pi"), "curve.q", "function or constant"),
+    "q_space": (dict(curve__q="x y"), "curve.q", "identifier"),
+    "q_int": (dict(curve__q=5), "curve.q", "must be a string"),
+    "param_dunder": (dict(curve__params=["_p"]), "curve.params[0]", "identifier"),
+    "param_int": (dict(curve__params=[1]), "curve.params[0]", "must be a string"),
+    "param_space": (dict(curve__params={"a b": "positive"}), "curve.params.a b", "identifier"),
+    "param_is_q": (dict(curve__params=["p", "x"]), "curve.params.x", "coordinate"),
+    "param_assumption": (dict(curve__params={"p": 1}), "curve.params.p", "assumption"),
+    "z_dunder_name": (dict(curve__z="__builtins__*x"), "curve.z", "may not start with _"),
+    "z_attack": (dict(curve__z="__import__('os').system('true')"), "curve.z", "attribute access"),
+    "z_100kb": (dict(curve__z="x" + "+x" * 50_000), "curve.z", "characters long"),
+    "z_unary": (dict(curve__z="-" * 100_000 + "x"), "curve.z", "characters long"),
+    "z_nested_power": (dict(curve__z="x**2*((((9**64)**64)**64)**64)**64"), "curve.z", "larger than"),
+    "z_power_product": (dict(curve__z="((x**4)**4)**8"), "curve.z", "total exponent"),
+    "z_not_string": (dict(curve__z=2), "curve.z", "must be a string"),
+    "z_lambda": (dict(curve__z="(lambda: x)()"), "curve.z", "not allowed"),
+    "limiter_attack": (dict(limiters__left="().__class__"), "limiters.left", "not allowed"),
+    "qdot_list": (dict(initial__qdot=[1]), "initial.qdot", "got list"),
+    "unknown_section": (dict(exec={"x": 1}), "exec", "unknown section"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_SCENES))
+def test_bad_scenes_are_one_line_scene_errors(case):
+    over, field, message = BAD_SCENES[case]
+    data = bowl_scene(**over)
+    if "shape" in data["curve"]:
+        data["curve"] = {"shape": data["curve"]["shape"]}
+    with pytest.raises(SceneError, match=message) as info:
+        scene_from_dict(data)
+    assert info.value.field == field
+    text = str(info.value)
+    assert text.startswith(f"{field}: ")
+    assert "\n" not in text and "np." not in text and len(text) < 2000
+
+
+@pytest.mark.parametrize("domain, q0", [(["0.3", "oo"], 0.5), (["-oo", "oo"], 0.0), ([-2, 2], 0.5),
+                                        (["-p", "p"], 0.5), (["-inf", "+inf"], 0.5)])
+def test_good_domains_are_accepted(domain, q0):
+    s = scene_from_dict(bowl_scene(curve__domain=domain, initial__q=q0, limiters__left=None,
+                                   limiters__right=None))
+    assert s.q0 == q0
+
+
+def test_domain_below_initial_q_blames_initial_q_only_when_the_domain_is_sound():
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(bowl_scene(curve__domain=["0.3", "oo"], initial__q=0.0, limiters__left=None))
+    assert info.value.field == "initial.q"
+
+
+def test_numpy_numbers_are_accepted_and_shown_plainly():
+    np = pytest.importorskip("numpy")
+    s = scene_from_dict(bowl_scene())
+    assert s.replace(g=np.float64(2.0), max_events=100).g == 2.0
+    with pytest.raises(SceneError, match=r"^physics\.g: must be positive, got -2\.0$"):
+        s.replace(g=np.float64(-2.0))
+    with pytest.raises(SceneError, match=r"^physics\.restitution: .* got 2\.0$"):
+        s.replace(k=np.float32(2.0))
+    with pytest.raises(SceneError, match=r"^initial\.q: 5\.0 is outside the limiters: right of the right "
+                                         r"limiter at 1\.0$"):
+        s.replace(q0=np.float64(5.0))
+    assert s.replace(m=np.int64(3)).m == 3.0
+
+
+#: Scene files that are not scene files: maker -> part of the message.
+BAD_SCENE_FILES = {
+    "directory": (lambda d: d, "is a directory"),
+    "dev_zero": (lambda d: Path("/dev/zero"), "not a regular file"),
+    "fifo": (_fifo, "not a regular file"),
+    "missing": (lambda d: d / "missing.toml", "no such file"),
+    "latin1": (lambda d: _write(d / "latin.toml", b'name = "caf\xe9"\n'), "not UTF-8 text"),
+    "huge": (lambda d: _write(d / "huge.toml", b"#" * (paths.MAX_INPUT_BYTES + 1)), "at most"),
+    "not_toml": (lambda d: _write(d / "bad.toml", b"[curve\nshape = 1"), "not valid TOML"),
+    "binary": (lambda d: _write(d / "bin.toml", bytes(range(256))), "not UTF-8"),
+    "nul_name": (lambda d: str(d / "a\x00.toml"), "NUL|null"),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(BAD_SCENE_FILES))
+def test_bad_scene_files_name_the_file(kind, tmp_path):
+    make, message = BAD_SCENE_FILES[kind]
+    path = make(tmp_path)
+    with pytest.raises(SceneError, match=message) as info:
+        load_scene(path)
+    assert os.path.basename(str(path)).replace("\x00", "\\x00") in str(info.value)
+    assert "\n" not in str(info.value)
