@@ -446,3 +446,121 @@ def test_bad_scene_files_name_the_file(kind, tmp_path):
         load_scene(path)
     assert os.path.basename(str(path)).replace("\x00", "\\x00") in str(info.value)
     assert "\n" not in str(info.value)
+
+
+# --------------------------------------------------------------------------- command line
+
+from symvib import cli  # noqa: E402
+
+
+def run_cli(capsys, *args):
+    """``symvib ARGS`` in this process: (exit status, stdout, stderr)."""
+    code = cli.main([str(a) for a in args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def _scene_file(folder: Path, name="paper-parabola") -> Path:
+    text = PARABOLA.read_text(encoding="utf-8").replace('name = "paper-parabola"', f"name = {name!r}")
+    path = folder / "scene.toml"
+    path.write_text(text + "\n[run]\nmax_events = 3\n", encoding="utf-8")
+    return path
+
+
+#: Command lines with a path that cannot be used: (arguments from the tmp folder, part of the message).
+BAD_PATH_COMMANDS = {
+    "scene_is_dir": (lambda d, s: ["run", d], "is a directory"),
+    "scene_dev_zero": (lambda d, s: ["run", "/dev/zero"], "/dev/zero: is not a regular file"),
+    "scene_fifo": (lambda d, s: ["run", _fifo(d)], "not a regular file"),
+    "scene_missing": (lambda d, s: ["run", d / "nope.toml"], "nope.toml: no such file"),
+    "scene_latin1": (lambda d, s: ["run", _write(d / "l.toml", b"name = '\xe9'")], "l.toml: scene file is not UTF-8"),
+    "scene_huge": (lambda d, s: ["run", _write(d / "h.toml", b" " * (paths.MAX_INPUT_BYTES + 1))], "h.toml"),
+    "scene_newline_name": (lambda d, s: ["run", d / "a\nb.toml"], r"a\\nb.toml"),
+    "json_is_dir": (lambda d, s: ["run", s, "--json", d], "is a directory; the --json file"),
+    "json_device": (lambda d, s: ["run", s, "--json", "/dev/full"], "--json file"),
+    "json_no_folder": (lambda d, s: ["run", s, "--json", d / "no" / "r.json"], "does not exist"),
+    "json_under_file": (lambda d, s: ["run", s, "--json", s / "r.json"], "not a folder"),
+    "plot_on_file": (lambda d, s: ["run", s, "--plot", s], r"is a file, not a folder \(the --plot folder\)"),
+    "plot_under_file": (lambda d, s: ["run", s, "--plot", s / "figs"], "which is a file"),
+    "plot_device": (lambda d, s: ["run", s, "--plot", "/dev/null"], "device"),
+    "plot_fifo": (lambda d, s: ["run", s, "--plot", _fifo(d)], "device, fifo"),
+    "audit_write_dir": (lambda d, s: ["audit", "--write", d], "--write file"),
+    "paper_out_file": (lambda d, s: ["paper", "--out", s], "--out folder"),
+    "generate_out_file": (lambda d, s: ["generate", "--z", "x**2", "--out", s], "--out folder"),
+    "generate_scene_dir": (lambda d, s: ["generate", "--scene", d, "--out", d / "gen"], "is a directory"),
+    "generate_scene_dev": (lambda d, s: ["generate", "--scene", "/dev/zero", "--out", d / "gen"], "/dev/zero"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_PATH_COMMANDS))
+def test_bad_paths_are_one_line_errors_before_any_work(case, tmp_path, capsys):
+    scene = _scene_file(tmp_path)
+    args, message = BAD_PATH_COMMANDS[case]
+    argv = args(tmp_path, scene)
+    before = listing(tmp_path)
+    code, out, err = run_cli(capsys, *argv)
+    assert code == cli.EXIT_BAD_INPUT
+    assert out == ""  # nothing ran: no event table, no "wrote"
+    assert err.startswith(f"symvib {argv[0]}: error: ") and err.count("\n") == 1, err
+    assert re.search(message, err), err
+    assert "Traceback" not in err
+    assert listing(tmp_path) == before
+
+
+#: Scene names that try to leave the figure folder or break the figure titles.
+HOSTILE_SCENE_NAMES = ["../../x", "/abs/path", "..", "$", "a$b$$c", "$\\frac{", "x" * 200, "κ-ü ∂", "a/b\\c",
+                       "~/x", "'\"", "C:\\x", "-rf"]
+
+
+@pytest.mark.parametrize("name", HOSTILE_SCENE_NAMES, ids=range(len(HOSTILE_SCENE_NAMES)))
+def test_figures_of_hostile_names_stay_in_their_folder(name, tmp_path):
+    from symvib.driver import simulate
+    from symvib.plots import save_run_figures
+
+    work = tmp_path / "work"
+    work.mkdir()
+    scene = load_scene(PARABOLA).replace(name=name, max_events=3)
+    written = save_run_figures(simulate(scene), work / "figs", only=["phase"])
+    assert listing(tmp_path) == {"work", "work/figs", f"work/figs/{written[0].name}"}
+    assert re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9._-]*-phase\.png", written[0].name)
+
+
+def test_run_with_a_traversal_name_writes_only_inside_the_plot_folder(tmp_path, capsys):
+    scene = _scene_file(tmp_path, name="../../escaped")
+    before = listing(tmp_path)
+    code, out, err = run_cli(capsys, "run", scene, "--plot", tmp_path / "figs", "--json", tmp_path / "r.json")
+    assert code == 0, err
+    new = listing(tmp_path) - before
+    assert new == {"figs", "r.json"} | {f"figs/{p.name}" for p in (tmp_path / "figs").iterdir()}
+    assert len(list((tmp_path / "figs").iterdir())) == 7
+    assert not (tmp_path.parent.parent / "escaped-phase.png").exists()
+
+
+@pytest.mark.slow  # a SymPy derivation per name (about 10 s)
+@pytest.mark.parametrize("name", ["../../evil", "/abs/evil", "a" * 300, "κ"])
+def test_generate_name_stays_inside_out(name, tmp_path, capsys):
+    out_dir = tmp_path / "gen"
+    code, out, err = run_cli(capsys, "generate", "--z", "x**2", "--name", name, "--out", out_dir)
+    assert code == 0, err
+    files = listing(tmp_path)
+    assert len(files) == 2 and "gen" in files, files
+    (module,) = out_dir.iterdir()
+    assert re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*\.py", module.name) and len(module.name) < 120
+
+
+@pytest.mark.parametrize("message, expected", [
+    ("a\nb", "a\\nb"), ("a\x00b", "a\\x00b"), ("plain", "plain"), ("x" * 1000, "x" * 497 + "..."),
+    (KeyError("k"), "'k'"), ("tab\there", "tab\\there"),
+])
+def test_one_line(message, expected):
+    assert cli.one_line(message) == expected
+
+
+def test_module_names_of_hostile_curve_names_are_short_identifiers():
+    from symvib.kernels import _module_name
+
+    assert _module_name("parabola_x") == "parabola_x"
+    for name in HOSTILE_STEMS:
+        module = _module_name(name)
+        assert module.isidentifier() and module.isascii() and len(module) < 110, module
+    assert _module_name("a/b") != _module_name("a_b")
