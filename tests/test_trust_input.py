@@ -564,3 +564,66 @@ def test_module_names_of_hostile_curve_names_are_short_identifiers():
         module = _module_name(name)
         assert module.isidentifier() and module.isascii() and len(module) < 110, module
     assert _module_name("a/b") != _module_name("a_b")
+
+
+#: Scene texts from the issue (and a few more), run through `symvib run`: (TOML, field named).
+USER_CURVE_TOML = """name = "t"
+[curve]
+{curve}
+[parameters]
+p = 1.0
+[physics]
+alpha0 = 0.05
+restitution = 0.8
+[initial]
+q = {q}
+qdot = {qdot}
+"""
+BAD_TOML_SCENES = {
+    "shape_list": ('shape = ["parabola"]', "0", "1", "curve.shape"),
+    "digits_400": ('z = "x**2/(2*p)"', "0", "9" * 400, "initial.qdot"),
+    "digits_400_q": ('z = "x**2/(2*p)"', "-" + "9" * 400, "1", "initial.q"),
+    "expression_100kb": ('z = "x' + "+x" * 50_000 + '"', "0", "1", "curve.z"),
+    "unary_100000": ('z = "' + "-" * 100_000 + 'x*p"', "0", "1", "curve.z"),
+    "nested_powers": ('z = "x**2*((((9**64)**64)**64)**64)**64*p"', "0", "1", "curve.z"),
+    "domain_reversed": ('z = "x**2/(2*p)"\ndomain = ["1", "-1"]', "0", "1", "curve.domain"),
+    "domain_oo_outside": ('z = "x**2/(2*p)"\ndomain = ["0.3", "oo"]', "0", "1", "initial.q"),
+    "domain_text": ('z = "x**2/(2*p)"\ndomain = ["zz", "oo"]', "0", "1", r"curve.domain\[0\]"),
+    "name_newline": ('z = "x**2/(2*p)"\nname = "a\\nb"', "0", "1", "curve.name"),
+    "q_dunder": ('z = "__x**2/(2*p)"\nq = "__x"', "0", "1", "curve.q"),
+    "attack_in_q": ('z = "x**2/(2*p)"', "\"__import__('os').system('echo hi')\"", "1", "initial.q"),
+    "string_qdot": ('z = "x**2/(2*p)"', "0", "'fast'", "initial.qdot"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_TOML_SCENES))
+def test_bad_scene_files_through_the_cli(case, tmp_path, capsys):
+    curve, q, qdot, field = BAD_TOML_SCENES[case]
+    path = tmp_path / "s.toml"
+    path.write_text(USER_CURVE_TOML.format(curve=curve, q=q, qdot=qdot), encoding="utf-8")
+    code, out, err = run_cli(capsys, "run", path)
+    assert code == cli.EXIT_BAD_INPUT and out == ""
+    assert re.match(rf"symvib run: error: {field}: ", err), err
+    assert err.count("\n") == 1 and len(err) <= cli.MAX_MESSAGE_LENGTH + 40
+
+
+@pytest.mark.parametrize("args, message", [
+    (["derive", "--z=" + "-" * 100_000 + "x"], "characters long"),
+    (["derive", "--z=x" + "+x" * 50_000], "characters long"),
+    (["derive", "--z=x**2*((((9**64)**64)**64)**64)**64"], "larger than"),
+    (["derive", "--z=__import__('os').system('true')"], "attribute access"),
+    (["derive", "--z=(lambda: x)()"], "not allowed"),
+    (["derive", "--z=x**2", "--q=1"], "identifier"),
+    (["derive", "../../etc/passwd"], "unknown shape"),
+    (["generate", "--z=x**2/0", "--out=OUT"], "division"),
+    (["run", "SCENE", "--t-max=nan"], "run.t_max: must be finite"),
+    (["run", "SCENE", "--restitution=inf"], "physics.restitution: must be finite"),
+])
+def test_hostile_command_lines_are_one_line_errors(args, message, tmp_path, capsys):
+    scene = _scene_file(tmp_path)
+    args = [a.replace("OUT", str(tmp_path / "out")).replace("SCENE", str(scene)) for a in args]
+    before = listing(tmp_path)
+    code, out, err = run_cli(capsys, *args)
+    assert code == cli.EXIT_BAD_INPUT and out == ""
+    assert err.startswith(f"symvib {args[0]}: error: ") and err.count("\n") == 1 and message in err, err
+    assert listing(tmp_path) == before
