@@ -147,13 +147,17 @@ def _inside(path, folder):
 
 def _cmd_run(args) -> int:
     from .driver import simulate
-    from .paths import check_output_dir, check_output_file
+    from pathlib import Path
+
+    from .paths import UserPathError, check_output_dir, check_output_file
     from .scene import load_scene
 
     # Every path first: no simulation is spent on a run whose output cannot be written.
     scene = load_scene(args.scene)
     if args.json:
         check_output_file(args.json, "--json file")
+        if Path(args.json).resolve() == Path(args.scene).resolve():
+            raise UserPathError(args.json, "--json would overwrite the scene file")
     if args.plot:
         check_output_dir(args.plot, "--plot folder")
     changes = {}
@@ -171,8 +175,6 @@ def _cmd_run(args) -> int:
           f"{scene.shape.q}dot0 = {scene.qdot0:.6g}")
     print(result.event_table(scene.shape.q))
     if args.json:
-        from pathlib import Path
-
         Path(args.json).write_text(result.to_json(samples=args.samples) + "\n", encoding="utf-8")
         print(f"wrote {args.json}")
     if args.plot:

@@ -56,7 +56,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import expr as _expr
-from .paths import UserPathError, read_user_file
+from .paths import UserPathError, read_user_file, safe_stem
 from .shapes import CATALOGUE, Shape
 
 __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS"]
@@ -212,6 +212,14 @@ def _check_name(value, field):
         raise SceneError(field, f"must be one line of printable text, got {_show(value)}")
 
 
+def _key(key) -> str:
+    """A TOML key as it may appear in a field name: one printable line, not too long."""
+    text = str(key)
+    if not text.isprintable():
+        text = repr(text)[1:-1]
+    return text if len(text) <= MAX_NAME_LENGTH else text[:MAX_NAME_LENGTH] + "..."
+
+
 def _check_identifier(value, field, what):
     """A coordinate or parameter name: a plain identifier that is not a function or constant."""
     if not isinstance(value, str):
@@ -350,7 +358,7 @@ def _shape(curve: dict) -> Shape:
     elif not isinstance(params, dict):
         raise SceneError("curve.params", "must be a list of names or a table name -> assumption")
     for n, assumption in params.items():
-        _check_identifier(n, f"curve.params.{n}", "a parameter name")
+        _check_identifier(n, f"curve.params.{_key(n)}", "a parameter name")
         if not isinstance(assumption, str):
             raise SceneError(f"curve.params.{n}", f"the assumption must be a string, got {type(assumption).__name__}")
     if q in params:
@@ -411,7 +419,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         raise SceneError("scene", "must be a table")
     for key in data:
         if key not in _SECTIONS and key not in _TOP:
-            raise SceneError(key, f"unknown section or key; known: {', '.join(sorted(_SECTIONS) + sorted(_TOP))}")
+            raise SceneError(_key(key), f"unknown section or key; known: {', '.join(sorted(_SECTIONS) + sorted(_TOP))}")
     for section in ("curve", "physics", "initial"):
         if section not in data:
             raise SceneError(section, f"missing section [{section}]")
@@ -423,7 +431,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         if keys is not None:
             for key in data[section]:
                 if key not in keys:
-                    raise SceneError(f"{section}.{key}", f"unknown key; known keys of [{section}]: "
+                    raise SceneError(f"{section}.{_key(key)}", f"unknown key; known keys of [{section}]: "
                                                          f"{', '.join(sorted(keys))}")
     shape = _shape(data["curve"])
     raw = data.get("parameters", {})
@@ -433,7 +441,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
     values = {}
     for key in raw:
         if key not in shape.params:
-            raise SceneError(f"parameters.{key}", f"unknown symbol: curve '{shape.name}' has parameters "
+            raise SceneError(f"parameters.{_key(key)}", f"unknown symbol: curve '{shape.name}' has parameters "
                                                   f"{', '.join(shape.params) or 'none'}")
         values[key] = _number(raw, key, "parameters")
     params = tuple((n, values[n]) if n in values else (n, None) for n in shape.params)
@@ -498,4 +506,5 @@ def load_scene(path) -> Scene:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(str(path), f"not valid TOML: {exc}") from None
-    return scene_from_dict(data, name=data.get("name", path.stem))
+    stem = path.stem if path.stem.isprintable() and len(path.stem) <= MAX_NAME_LENGTH else safe_stem(path.stem)
+    return scene_from_dict(data, name=data.get("name", stem))

@@ -379,6 +379,11 @@ BAD_SCENES = {
     "limiter_attack": (dict(limiters__left="().__class__"), "limiters.left", "not allowed"),
     "qdot_list": (dict(initial__qdot=[1]), "initial.qdot", "got list"),
     "unknown_section": (dict(exec={"x": 1}), "exec", "unknown section"),
+    "unknown_section_newline": ({"a\nb": 1}, "a\\nb", "unknown section"),
+    "unknown_key_newline": ({"physics__x\ny": 1}, "physics.x\\ny", "unknown key"),
+    "unknown_parameter_long": ({"parameters__" + "k" * 1000: 1}, "parameters." + "k" * MAX_NAME_LENGTH + "...",
+                               "unknown symbol"),
+    "param_newline": (dict(curve__params={"a\nb": "positive"}), "curve.params.a\\nb", "identifier"),
 }
 
 
@@ -476,10 +481,12 @@ BAD_PATH_COMMANDS = {
     "scene_latin1": (lambda d, s: ["run", _write(d / "l.toml", b"name = '\xe9'")], "l.toml: scene file is not UTF-8"),
     "scene_huge": (lambda d, s: ["run", _write(d / "h.toml", b" " * (paths.MAX_INPUT_BYTES + 1))], "h.toml"),
     "scene_newline_name": (lambda d, s: ["run", d / "a\nb.toml"], r"a\\nb.toml"),
+    "scene_long_name": (lambda d, s: ["run", d / ("n" * 300 + ".toml")], "File name too long|no such file"),
     "json_is_dir": (lambda d, s: ["run", s, "--json", d], "is a directory; the --json file"),
     "json_device": (lambda d, s: ["run", s, "--json", "/dev/full"], "--json file"),
     "json_no_folder": (lambda d, s: ["run", s, "--json", d / "no" / "r.json"], "does not exist"),
     "json_under_file": (lambda d, s: ["run", s, "--json", s / "r.json"], "not a folder"),
+    "json_is_scene": (lambda d, s: ["run", s, "--json", s], "would overwrite the scene file"),
     "plot_on_file": (lambda d, s: ["run", s, "--plot", s], r"is a file, not a folder \(the --plot folder\)"),
     "plot_under_file": (lambda d, s: ["run", s, "--plot", s / "figs"], "which is a file"),
     "plot_device": (lambda d, s: ["run", s, "--plot", "/dev/null"], "device"),
@@ -627,3 +634,13 @@ def test_hostile_command_lines_are_one_line_errors(args, message, tmp_path, caps
     assert code == cli.EXIT_BAD_INPUT and out == ""
     assert err.startswith(f"symvib {args[0]}: error: ") and err.count("\n") == 1 and message in err, err
     assert listing(tmp_path) == before
+
+
+def test_a_file_name_that_is_not_a_scene_name_is_made_safe(tmp_path):
+    text = PARABOLA.read_text(encoding="utf-8").replace('name = "paper-parabola"\n', "")
+    path = tmp_path / "a\tb.toml"
+    path.write_text(text, encoding="utf-8")
+    assert load_scene(path).name == safe_stem("a\tb")
+    path = tmp_path / "plain name.toml"
+    path.write_text(text, encoding="utf-8")
+    assert load_scene(path).name == "plain name"
