@@ -27,10 +27,11 @@ import hashlib
 import os
 import re
 import stat
+import tomllib
 from pathlib import Path
 
-__all__ = ["UserPathError", "MAX_INPUT_BYTES", "MAX_STEM_LENGTH", "safe_stem", "inside", "read_user_file",
-           "check_output_file", "check_output_dir"]
+__all__ = ["UserPathError", "MAX_INPUT_BYTES", "MAX_STEM_LENGTH", "MAX_TOML_DOTS", "safe_stem", "inside",
+           "read_user_file", "read_user_toml", "check_output_file", "check_output_dir"]
 
 #: Largest input file (scene, sweep definition) read, in bytes (1 MB; a scene is a few hundred bytes).
 MAX_INPUT_BYTES = 1_000_000
@@ -40,6 +41,14 @@ MAX_STEM_LENGTH = 100
 STEM_HASH_DIGITS = 8
 #: Stem used when nothing of the text is left.
 EMPTY_STEM = "unnamed"
+#: Most dots of dotted keys and table names in one TOML file: the standard parser spends
+#: time and memory quadratic in the depth of a dotted key (100,000 of them take tens of GB).
+MAX_TOML_DOTS = 1000
+
+#: TOML strings (multi-line first) and comments, removed before the dots of keys are counted.
+_TOML_STRINGS = re.compile(r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*')
+#: A dot that is not the decimal point of a number.
+_KEY_DOT = re.compile(r"(?<![0-9])\.|\.(?![0-9])")
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]")
 
@@ -161,6 +170,32 @@ def read_user_file(path, what: str = "file", *, max_bytes: int = MAX_INPUT_BYTES
     except UnicodeDecodeError as exc:
         line = data.count(b"\n", 0, exc.start) + 1
         raise UserPathError(path, f"{what} is not UTF-8 text (byte {data[exc.start]:#04x} on line {line})") from None
+
+
+def read_user_toml(path, what: str = "file", *, max_bytes: int = MAX_INPUT_BYTES) -> dict:
+    """Read a TOML file named by the user (:func:`read_user_file`, then :mod:`tomllib`).
+
+    Before parsing, the dots of keys are counted (at most :data:`MAX_TOML_DOTS`),
+    and nesting too deep for the parser is refused, so no file within the size
+    cap can exhaust memory or escape as a RecursionError.
+
+    Raises
+    ------
+    UserPathError
+        Everything :func:`read_user_file` refuses, and text that is not valid
+        TOML (the message names the file and says ``not valid TOML``).
+    """
+    text = read_user_file(path, what, max_bytes=max_bytes)
+    dots = len(_KEY_DOT.findall(_TOML_STRINGS.sub("", text)))
+    if dots > MAX_TOML_DOTS:
+        raise UserPathError(path, f"not valid TOML for a {what}: {dots} dots in keys and table names; "
+                                  f"at most {MAX_TOML_DOTS} are accepted")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise UserPathError(path, f"not valid TOML: {exc}") from None
+    except (RecursionError, MemoryError):
+        raise UserPathError(path, f"not valid TOML for a {what}: nested too deeply") from None
 
 
 def _reason(exc: BaseException) -> str:

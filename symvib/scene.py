@@ -51,12 +51,11 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import expr as _expr
-from .paths import UserPathError, read_user_file, safe_stem
+from .paths import UserPathError, read_user_toml, safe_stem
 from .shapes import CATALOGUE, Shape
 
 __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS"]
@@ -499,12 +498,8 @@ def load_scene(path) -> Scene:
     """
     path = Path(path)
     try:
-        text = read_user_file(path, "scene file")
+        data = read_user_toml(path, "scene file")
     except UserPathError as exc:
-        raise SceneError(exc.path if exc.path.isprintable() else repr(exc.path), exc.reason) from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(str(path), f"not valid TOML: {exc}") from None
+        raise SceneError(_key(exc.path), exc.reason) from None
     stem = path.stem if path.stem.isprintable() and len(path.stem) <= MAX_NAME_LENGTH else safe_stem(path.stem)
     return scene_from_dict(data, name=data.get("name", stem))

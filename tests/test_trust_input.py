@@ -440,6 +440,11 @@ BAD_SCENE_FILES = {
     "not_toml": (lambda d: _write(d / "bad.toml", b"[curve\nshape = 1"), "not valid TOML"),
     "binary": (lambda d: _write(d / "bin.toml", bytes(range(256))), "not UTF-8"),
     "nul_name": (lambda d: str(d / "a\x00.toml"), "NUL|null"),
+    # TOML bombs within the size cap: quadratic memory in the dotted-key depth, recursion.
+    "dotted_keys": (lambda d: _write(d / "dots.toml", b"a." * 100_000 + b"b = 1\n"), "dots in keys"),
+    "dotted_table": (lambda d: _write(d / "tab.toml", b"[" + b"a." * 5_000 + b"b]\n"), "dots in keys"),
+    "nested_arrays": (lambda d: _write(d / "arr.toml", b"a = " + b"[" * 100_000), "nested too deeply"),
+    "nested_tables": (lambda d: _write(d / "inl.toml", b"a = " + b"{x=" * 20_000), "nested too deeply"),
 }
 
 
@@ -644,3 +649,9 @@ def test_a_file_name_that_is_not_a_scene_name_is_made_safe(tmp_path):
     path = tmp_path / "plain name.toml"
     path.write_text(text, encoding="utf-8")
     assert load_scene(path).name == "plain name"
+
+
+def test_dots_in_strings_and_numbers_are_not_keys(tmp_path):
+    text = 'description = "' + "." * 5000 + '"\n# ' + "." * 5000 + "\nv = 1.5\n"
+    assert read_user_file(_write(tmp_path / "ok.toml", text.encode())) == text
+    assert paths.read_user_toml(tmp_path / "ok.toml")["v"] == 1.5
