@@ -152,8 +152,9 @@ def parse(text: str, symbols=(), *, field: str = "expression") -> Parsed:
     ----------
     text : str
         The expression, in Python syntax (``**`` for powers).
-    symbols : iterable of str
-        Names the expression may use besides functions and constants.
+    symbols : iterable of str, or ANY_NAME
+        Names the expression may use besides functions and constants
+        (:data:`ANY_NAME`: any identifier not starting with ``_``).
     field : str
         Where the text came from (``"curve.z"``); starts every error message.
 
@@ -167,7 +168,13 @@ def parse(text: str, symbols=(), *, field: str = "expression") -> Parsed:
         On anything that is not a plain arithmetic expression of the allowed
         names: attribute access, subscripts, lambdas, comprehensions, strings,
         keyword arguments, unknown names, text longer than ``MAX_LENGTH`` or
-        nested deeper than ``MAX_DEPTH``.
+        nested deeper than ``MAX_DEPTH`` (checked on the text, before the Python
+        parser runs, so no RecursionError or MemoryError escapes), integer
+        literals longer than ``MAX_INT_DIGITS``, a constant part (folded in
+        floats) beyond ``MAX_CONSTANT`` or dividing by zero, a constant exponent
+        beyond ``MAX_EXPONENT``, or nested powers whose exponents multiply to more
+        than ``MAX_EXPONENT_PRODUCT`` (``((9**64)**64)**64`` would make SymPy
+        build an integer of millions of digits).
     """
     allowed = None if symbols is ANY_NAME else frozenset(symbols)
     text = _precheck(text, field)
@@ -215,7 +222,8 @@ def _precheck(text, field: str) -> str:
         if depth > MAX_DEPTH:
             raise ExpressionError(field, f"expression nested deeper than {MAX_DEPTH} levels")
     if re.search(r"(?:[-+~]\s*){%d}" % (MAX_UNARY + 2), text):
-        raise ExpressionError(field, f"expression nested deeper than {MAX_UNARY} levels (more than {MAX_UNARY} signs in a row)")
+        raise ExpressionError(field, f"expression nested deeper than {MAX_UNARY} levels "
+                                     f"(more than {MAX_UNARY} signs in a row)")
     return text
 
 
