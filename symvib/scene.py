@@ -70,6 +70,8 @@ STANDARD_GRAVITY = 9.81
 DEFAULT_MASS = 1.0
 #: Longest scene or curve name, in characters.
 MAX_NAME_LENGTH = 200
+#: Longest scene description, in characters.
+MAX_DESCRIPTION_LENGTH = 10_000
 
 _SECTIONS = {
     "curve": {"shape", "x", "z", "q", "name", "domain", "h", "alpha", "q_scale", "params"},
@@ -419,6 +421,9 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
     for key in data:
         if key not in _SECTIONS and key not in _TOP:
             raise SceneError(_key(key), f"unknown section or key; known: {', '.join(sorted(_SECTIONS) + sorted(_TOP))}")
+    description = data.get("description", "")
+    if not isinstance(description, str) or len(description) > MAX_DESCRIPTION_LENGTH:
+        raise SceneError("description", f"must be a string of at most {MAX_DESCRIPTION_LENGTH} characters")
     for section in ("curve", "physics", "initial"):
         if section not in data:
             raise SceneError(section, f"missing section [{section}]")

@@ -379,6 +379,8 @@ BAD_SCENES = {
     "limiter_attack": (dict(limiters__left="().__class__"), "limiters.left", "not allowed"),
     "qdot_list": (dict(initial__qdot=[1]), "initial.qdot", "got list"),
     "unknown_section": (dict(exec={"x": 1}), "exec", "unknown section"),
+    "description_table": (dict(description={"a": 1}), "description", "must be a string"),
+    "description_long": (dict(description="d" * 10_001), "description", "at most 10000"),
     "unknown_section_newline": ({"a\nb": 1}, "a\\nb", "unknown section"),
     "unknown_key_newline": ({"physics__x\ny": 1}, "physics.x\\ny", "unknown key"),
     "unknown_parameter_long": ({"parameters__" + "k" * 1000: 1}, "parameters." + "k" * MAX_NAME_LENGTH + "...",
