@@ -9,7 +9,9 @@
 ``symvib sweep ...``      parameter sweeps (options: ``symvib sweep --help``)
 
 Every error the user can cause (an unknown shape, a malformed expression, a
-bad scene) is reported in one line naming the field, with exit status 2.
+bad scene, a path that is a directory, a device or not writable) is reported
+in one line naming the field or file, with exit status 2, never a traceback;
+output paths are checked before any work is done.
 """
 from __future__ import annotations
 
@@ -17,10 +19,30 @@ import argparse
 import importlib
 import sys
 
-__all__ = ["main"]
+__all__ = ["main", "one_line"]
 
 #: Exit status for bad input.
 EXIT_BAD_INPUT = 2
+#: Longest error message printed, in characters (a message may quote a long user text).
+MAX_MESSAGE_LENGTH = 500
+
+
+def one_line(message) -> str:
+    """``message`` as one printable line of at most ``MAX_MESSAGE_LENGTH`` characters
+    (control characters and line breaks escaped, the rest cut with ``...``)."""
+    text = str(message)
+    if not text.isprintable():
+        text = "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in text)
+    if len(text) > MAX_MESSAGE_LENGTH:
+        text = text[:MAX_MESSAGE_LENGTH - 3] + "..."
+    return text
+
+
+def _user_errors() -> tuple:
+    """The exception classes a user's input can cause, reported as one line."""
+    from .kernels import KernelError
+
+    return (ValueError, KeyError, OSError, KernelError, RecursionError, MemoryError)
 
 
 def _cmd_derive(args) -> int:
@@ -57,7 +79,10 @@ def _cmd_derive(args) -> int:
 
 def _cmd_audit(args) -> int:
     from .audit import audit, errata_markdown
+    from .paths import check_output_file
 
+    if args.write:
+        check_output_file(args.write, "--write file")
     verdicts = audit()
     if args.write:
         with open(args.write, "w", encoding="utf-8") as fh:
@@ -70,16 +95,20 @@ def _cmd_audit(args) -> int:
 
 def _cmd_generate(args) -> int:
     from . import codegen
-    from .kernels import generated_dir
+    from .kernels import _module_name, generated_dir
+    from .paths import check_output_dir
 
+    if args.out:
+        check_output_dir(args.out, "--out folder")
     if args.scene is not None:
         from .scene import load_scene
 
         if not args.out:
             raise ValueError("--scene: the curve of a scene file is written where --out says")
         shape = load_scene(args.scene).shape
-        path = codegen.generate(shape, args.out, name=shape.module, source=shape.source(), seconds=args.budget)
-        print(f"wrote {path}")
+        path = codegen.generate(shape, args.out, name=_module_name(shape.module), source=shape.source(),
+                                seconds=args.budget)
+        print(f"wrote {_inside(path, args.out)}")
         return 0
     if args.z is not None or args.x is not None:
         if args.z is None:
@@ -91,8 +120,9 @@ def _cmd_generate(args) -> int:
         kind = "parametric" if args.x is not None else "graph"
         user = Shape(name=args.name or "user", kind=kind, q=args.q or ("q" if args.x else "x"), z=args.z,
                      x=args.x)
-        path = codegen.generate(user, args.out, name=user.module, source=user.source(), seconds=args.budget)
-        print(f"wrote {path}")
+        path = codegen.generate(user, args.out, name=_module_name(user.module), source=user.source(),
+                                seconds=args.budget)
+        print(f"wrote {_inside(path, args.out)}")
         return 0
     out = args.out or generated_dir()
     if args.check:
@@ -106,11 +136,30 @@ def _cmd_generate(args) -> int:
     return 0
 
 
+def _inside(path, folder):
+    """``path``, after checking that it lies inside ``folder`` (what the user named)."""
+    from .paths import UserPathError, inside
+
+    if not inside(path, folder):  # pragma: no cover - file names come from safe stems
+        raise UserPathError(path, f"would be written outside {folder}")
+    return path
+
+
 def _cmd_run(args) -> int:
     from .driver import simulate
+    from pathlib import Path
+
+    from .paths import UserPathError, check_output_dir, check_output_file
     from .scene import load_scene
 
+    # Every path first: no simulation is spent on a run whose output cannot be written.
     scene = load_scene(args.scene)
+    if args.json:
+        check_output_file(args.json, "--json file")
+        if Path(args.json).resolve() == Path(args.scene).resolve():
+            raise UserPathError(args.json, "--json would overwrite the scene file")
+    if args.plot:
+        check_output_dir(args.plot, "--plot folder")
     changes = {}
     if args.restitution is not None:
         changes["k"] = args.restitution
@@ -126,8 +175,6 @@ def _cmd_run(args) -> int:
           f"{scene.shape.q}dot0 = {scene.qdot0:.6g}")
     print(result.event_table(scene.shape.q))
     if args.json:
-        from pathlib import Path
-
         Path(args.json).write_text(result.to_json(samples=args.samples) + "\n", encoding="utf-8")
         print(f"wrote {args.json}")
     if args.plot:
@@ -140,7 +187,9 @@ def _cmd_run(args) -> int:
 
 def _cmd_paper(args) -> int:
     from .paper import main as paper_main
+    from .paths import check_output_dir
 
+    check_output_dir(args.out, "--out folder")
     if not 0.0 <= args.restitution < 1.0:
         raise ValueError(f"--restitution: the k < 1 run needs 0 <= k < 1, got {args.restitution}")
     return paper_main(args.out, low_k=args.restitution, quiet=args.quiet)
@@ -209,14 +258,21 @@ def main(argv=None) -> int:
     """Entry point of the ``symvib`` command."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv and argv[0] in FORWARDED:
-        return importlib.import_module(FORWARDED[argv[0]][0]).main(argv[1:])
-    parser = build_parser()
-    args = parser.parse_args(argv)
+        command = argv[0]
+        run = lambda: importlib.import_module(FORWARDED[command][0]).main(argv[1:])  # noqa: E731
+    else:
+        args = build_parser().parse_args(argv)
+        command = args.command
+        run = lambda: args.func(args)  # noqa: E731
     try:
-        return args.func(args)
-    except (ValueError, KeyError) as exc:
+        return run()
+    except _user_errors() as exc:
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"symvib {args.command}: error: {message}", file=sys.stderr)
+        if isinstance(exc, (RecursionError, MemoryError)):
+            message = f"input too large or too deeply nested ({type(exc).__name__})"
+        elif isinstance(exc, OSError) and not str(exc):
+            message = type(exc).__name__
+        print(f"symvib {command}: error: {one_line(message)}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
 

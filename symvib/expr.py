@@ -29,6 +29,7 @@ from __future__ import annotations
 import ast
 import hashlib
 import math
+import re
 from dataclasses import dataclass
 
 __all__ = [
@@ -39,6 +40,7 @@ __all__ = [
     "parse",
     "evaluate",
     "number",
+    "free_names",
 ]
 
 #: Longest accepted expression text, in characters.
@@ -49,8 +51,16 @@ MAX_DEPTH = 40
 MAX_NODES = 400
 #: Largest absolute value of a constant exponent (``x**64`` is accepted, ``x**65`` is not).
 MAX_EXPONENT = 64
+#: Largest product of the constant exponents of nested powers, over the whole expression
+#: (``(x**8)**8`` is accepted, ``((9**64)**64)**64`` is not: SymPy would build a huge integer).
+MAX_EXPONENT_PRODUCT = MAX_EXPONENT
 #: Longest accepted integer literal, in digits.
 MAX_INT_DIGITS = 30
+#: Largest magnitude of a constant (a literal, or a part of the expression without symbols,
+#: folded in floats): beyond it an expression is a mistake or an attack, not a curve.
+MAX_CONSTANT = 1e100
+#: Most unary signs (``-``, ``+``, ``~``) in one expression text.
+MAX_UNARY = MAX_DEPTH
 
 #: Functions allowed in expressions: name -> (number of arguments, math implementation).
 FUNCTIONS: dict[str, tuple[int, object]] = {
@@ -131,7 +141,7 @@ def _canonical(node: tuple) -> str:
 
 
 def _describe(symbols) -> str:
-    known = ", ".join(sorted(symbols)) or "none"
+    known = "any name" if symbols is None else ", ".join(sorted(symbols)) or "none"
     return f"(known symbols: {known}; functions: {', '.join(sorted(FUNCTIONS))}; constants: pi, e)"
 
 
@@ -142,8 +152,9 @@ def parse(text: str, symbols=(), *, field: str = "expression") -> Parsed:
     ----------
     text : str
         The expression, in Python syntax (``**`` for powers).
-    symbols : iterable of str
-        Names the expression may use besides functions and constants.
+    symbols : iterable of str, or ANY_NAME
+        Names the expression may use besides functions and constants
+        (:data:`ANY_NAME`: any identifier not starting with ``_``).
     field : str
         Where the text came from (``"curve.z"``); starts every error message.
 
@@ -157,24 +168,16 @@ def parse(text: str, symbols=(), *, field: str = "expression") -> Parsed:
         On anything that is not a plain arithmetic expression of the allowed
         names: attribute access, subscripts, lambdas, comprehensions, strings,
         keyword arguments, unknown names, text longer than ``MAX_LENGTH`` or
-        nested deeper than ``MAX_DEPTH``.
+        nested deeper than ``MAX_DEPTH`` (checked on the text, before the Python
+        parser runs, so no RecursionError or MemoryError escapes), integer
+        literals longer than ``MAX_INT_DIGITS``, a constant part (folded in
+        floats) beyond ``MAX_CONSTANT`` or dividing by zero, a constant exponent
+        beyond ``MAX_EXPONENT``, or nested powers whose exponents multiply to more
+        than ``MAX_EXPONENT_PRODUCT`` (``((9**64)**64)**64`` would make SymPy
+        build an integer of millions of digits).
     """
-    allowed = frozenset(symbols)
-    if not isinstance(text, str):
-        if isinstance(text, bool) or not isinstance(text, (int, float)):
-            raise ExpressionError(field, f"expected a number or an expression string, got {type(text).__name__}")
-        text = repr(text)
-    if len(text) > MAX_LENGTH:
-        raise ExpressionError(field, f"expression is {len(text)} characters long; at most {MAX_LENGTH} are accepted")
-    if not text.strip():
-        raise ExpressionError(field, "empty expression")
-    # A cheap bound on nesting before the (recursive) Python parser sees the text.
-    depth = 0
-    for ch in text:
-        depth += ch == "("
-        depth -= ch == ")"
-        if depth > MAX_DEPTH:
-            raise ExpressionError(field, f"expression nested deeper than {MAX_DEPTH} levels")
+    allowed = None if symbols is ANY_NAME else frozenset(symbols)
+    text = _precheck(text, field)
     try:
         module = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
@@ -185,7 +188,66 @@ def parse(text: str, symbols=(), *, field: str = "expression") -> Parsed:
     counter = [0]
     used: set[str] = set()
     tree = _convert(module.body, allowed, field, counter, used, 0, text)
+    weight = _power_weight(tree)
+    if weight > MAX_EXPONENT_PRODUCT:
+        raise ExpressionError(field, f"nested powers raise to a total exponent of {weight:g}; "
+                                     f"at most {MAX_EXPONENT_PRODUCT} is accepted")
     return Parsed(text=text, tree=tree, symbols=frozenset(used))
+
+
+#: Pass as ``symbols`` to :func:`parse` to accept every name that is not a function or constant.
+ANY_NAME = object()
+
+
+def _precheck(text, field: str) -> str:
+    """Checks of the raw text before the (recursive) Python parser sees it: type, length,
+    nesting of brackets and the number of unary signs, so that no RecursionError or
+    MemoryError can escape the parser."""
+    if not isinstance(text, str):
+        if isinstance(text, bool) or not isinstance(text, (int, float)):
+            raise ExpressionError(field, f"expected a number or an expression string, got {type(text).__name__}")
+        if isinstance(text, int) and len(str(abs(text))) > MAX_INT_DIGITS:
+            raise ExpressionError(field, f"integer longer than {MAX_INT_DIGITS} digits")
+        if isinstance(text, float) and not math.isfinite(text):
+            raise ExpressionError(field, f"number is not finite, got {text}")
+        text = repr(text)
+    if len(text) > MAX_LENGTH:
+        raise ExpressionError(field, f"expression is {len(text)} characters long; at most {MAX_LENGTH} are accepted")
+    if not text.strip():
+        raise ExpressionError(field, "empty expression")
+    depth = 0
+    for ch in text:
+        depth += ch in "([{"
+        depth -= ch in ")]}"
+        if depth > MAX_DEPTH:
+            raise ExpressionError(field, f"expression nested deeper than {MAX_DEPTH} levels")
+    if re.search(r"(?:[-+~]\s*){%d}" % (MAX_UNARY + 2), text):
+        raise ExpressionError(field, f"expression nested deeper than {MAX_UNARY} levels "
+                                     f"(more than {MAX_UNARY} signs in a row)")
+    return text
+
+
+def free_names(text, *, field: str = "expression") -> frozenset:
+    """The names an expression uses besides functions and constants (parsed safely).
+
+    >>> sorted(free_names("R*(1 - cos(phi)) + pi", field="curve.z"))
+    ['R', 'phi']
+    """
+    return parse(text, ANY_NAME, field=field).symbols
+
+
+def _power_weight(node: tuple) -> float:
+    """The largest product of constant exponents along nested powers in ``node``."""
+    kind = node[0]
+    if kind == "bin":
+        base, exponent = _power_weight(node[2]), _power_weight(node[3])
+        if node[1] == "**":
+            value = _constant_value(node[3])
+            base *= 1.0 if value is None else max(abs(value), 1.0)
+        return max(base, exponent)
+    if kind in ("neg", "call"):
+        return max((_power_weight(a) for a in node[1 if kind == "neg" else 2:]), default=1.0)
+    return 1.0
 
 
 def _convert(node, allowed, field, counter, used, depth, text):
@@ -203,11 +265,18 @@ def _convert(node, allowed, field, counter, used, depth, text):
             raise ExpressionError(field, f"integer literal longer than {MAX_INT_DIGITS} digits")
         if isinstance(value, float) and not math.isfinite(value):
             raise ExpressionError(field, "number is not finite")
+        if abs(value) > MAX_CONSTANT:
+            raise ExpressionError(field, f"number {float(value):g} is larger than {MAX_CONSTANT:g} in magnitude")
         literal = ast.get_source_segment(text.strip(), node) or repr(value)
         return ("num", literal.replace("_", ""))
     if isinstance(node, ast.Name):
         name = node.id
-        if name in allowed:
+        if allowed is None and name not in FUNCTIONS and name not in CONSTANTS:
+            if not name.isidentifier() or name.startswith("_"):
+                raise ExpressionError(field, f"name {name!r} is not allowed (names may not start with _)")
+            used.add(name)
+            return ("sym", name)
+        if allowed is not None and name in allowed:
             used.add(name)
             return ("sym", name)
         if name in CONSTANTS:
@@ -223,13 +292,13 @@ def _convert(node, allowed, field, counter, used, depth, text):
         left, right = rec(node.left), rec(node.right)
         if op == "**":
             _check_exponent(right, field)
-        return ("bin", op, left, right)
+        return _folded(("bin", op, left, right), field)
     if isinstance(node, ast.UnaryOp):
         kind = _UNARY.get(type(node.op))
         if kind is None:
             raise ExpressionError(field, f"operator {type(node.op).__name__} is not allowed")
         operand = rec(node.operand)
-        return operand if kind == "pos" else ("neg", operand)
+        return operand if kind == "pos" else _folded(("neg", operand), field)
     if isinstance(node, ast.Call):
         if isinstance(node.func, ast.Attribute):
             raise ExpressionError(field, f"attribute access ('.{node.func.attr}') is not allowed {_describe(allowed)}")
@@ -242,29 +311,53 @@ def _convert(node, allowed, field, counter, used, depth, text):
         arity = FUNCTIONS[name][0]
         if len(node.args) != arity or any(isinstance(a, ast.Starred) for a in node.args):
             raise ExpressionError(field, f"{name}() takes {arity} argument{'s' * (arity > 1)}")
-        return ("call", name, *(rec(a) for a in node.args))
+        return _folded(("call", name, *(rec(a) for a in node.args)), field)
     raise ExpressionError(field, f"syntax not allowed in an expression: {type(node).__name__}")
 
 
 def _constant_value(node):
-    """Value of a constant subtree, or None when it holds a symbol."""
+    """Value of a constant subtree in floats (``inf`` on overflow), or None when it holds a
+    symbol; a division by zero or a function outside its domain raises :class:`ArithmeticError`
+    or :class:`ValueError`."""
     kind = node[0]
     if kind == "num":
         return float(node[1])
     if kind == "const":
         return CONSTANTS[node[1]]
-    if kind == "neg":
-        inner = _constant_value(node[1])
-        return None if inner is None else -inner
-    if kind == "bin":
-        a, b = _constant_value(node[2]), _constant_value(node[3])
-        if a is None or b is None:
-            return None
-        try:
-            return _apply(node[1], a, b)
-        except (OverflowError, ZeroDivisionError, ValueError):
-            return None
-    return None
+    if kind == "sym":
+        return None
+    args = [_constant_value(a) for a in (node[1:] if kind == "neg" else node[2:] if kind == "bin" else node[2:])]
+    if any(a is None for a in args):
+        return None
+    try:
+        if kind == "neg":
+            return -args[0]
+        if kind == "bin":
+            return _apply(node[1], *args)
+        return float(FUNCTIONS[node[1]][1](*args))
+    except OverflowError:
+        return math.inf
+
+
+def _folded(node: tuple, field: str) -> tuple:
+    """``node``, after checking that a constant part of it is a finite number within MAX_CONSTANT."""
+    try:
+        value = _constant_value(node)
+    except ZeroDivisionError:
+        raise ExpressionError(field, f"division by zero in the constant {_canonical(node)}") from None
+    except ValueError:
+        raise ExpressionError(field, f"the constant {_canonical(node)} is not a real number "
+                                     f"(a function outside its domain)") from None
+    if node[0] == "bin" and node[1] == "/" and _constant_value(node[3]) == 0:
+        raise ExpressionError(field, f"division by the constant {_short(_canonical(node[3]))}, which is zero")
+    if value is not None and not abs(value) <= MAX_CONSTANT:
+        raise ExpressionError(field, f"the constant {_short(_canonical(node))} is larger than {MAX_CONSTANT:g} "
+                                     f"in magnitude")
+    return node
+
+
+def _short(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def _check_exponent(node, field):

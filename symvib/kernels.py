@@ -214,9 +214,14 @@ def cache_dir() -> Path:
 
 
 def _module_name(name: str) -> str:
+    """A module (and cache file) name for a curve name: ASCII letters, digits and ``_`` only
+    (:func:`symvib.paths.safe_stem`, so a hostile or very long name stays one short file
+    name inside the cache folder, and distinct names stay distinct)."""
     import re
 
-    out = re.sub(r"\W", "_", name)
+    from .paths import safe_stem
+
+    out = re.sub(r"[^A-Za-z0-9_]", "_", safe_stem(name))
     return out if out[:1].isalpha() else "c_" + out
 
 

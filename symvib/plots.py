@@ -22,6 +22,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .events import EventKind
+from .paths import UserPathError, check_output_dir, inside, safe_stem
 
 __all__ = ["phase_portrait", "energy_vs_q", "energy_vs_t", "save_run_figures", "QUANTITIES"]
 
@@ -47,7 +48,9 @@ def _coord(result):
 
 
 def _title(result, what):
-    return f"{result.scene.name}: {what} (k = {result.scene.k:g}, $\\mu$ = {result.scene.mu:.4g})"
+    # A `$` of the scene's name would start mathtext (and an odd one fails to draw): escaped.
+    name = result.scene.name.replace("$", r"\$")
+    return f"{name}: {what} (k = {result.scene.k:g}, $\\mu$ = {result.scene.mu:.4g})"
 
 
 def _intervals(result):
@@ -157,11 +160,19 @@ def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None) -
     """Write the phase portrait, the five energy figures and E(t) as PNG; returns the paths.
 
     ``only`` restricts them to some names: ``"phase"``, ``"F_N"``, ``"P_mu"``,
-    ``"Ek"``, ``"Ep"``, ``"E"``, ``"energy-time"``.
+    ``"Ek"``, ``"Ep"``, ``"E"``, ``"energy-time"``.  File names start with
+    ``safe_stem(prefix or scene name)`` (:func:`symvib.paths.safe_stem`): a name
+    such as ``../../x`` or ``/abs/path`` writes inside ``out_dir`` and nowhere else.
+
+    Raises
+    ------
+    symvib.paths.UserPathError
+        When ``out_dir`` is a file or a device, or cannot be created.
     """
-    out = Path(out_dir)
+    out = check_output_dir(out_dir, "figure folder")
     out.mkdir(parents=True, exist_ok=True)
-    prefix = prefix or result.scene.name
+    # File names from user text: a plain stem, and never outside ``out_dir`` (docs: README "Trust").
+    prefix = safe_stem(prefix or result.scene.name)
     paths = []
     figures = [("phase", phase_portrait)] + [(k, (lambda kk: lambda r, ax: energy_vs_q(r, kk, ax))(k))
                                              for k in QUANTITIES] + [("energy-time", energy_vs_t)]
@@ -173,6 +184,8 @@ def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None) -
         draw(result, ax)
         fig.tight_layout()
         path = out / f"{prefix}-{name}.png"
+        if not inside(path, out):
+            raise UserPathError(path, f"figure file name would leave the folder {out}")
         fig.savefig(path)
         paths.append(path)
     return paths

@@ -50,11 +50,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
+import numbers
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import expr as _expr
+from .paths import UserPathError, read_user_toml, safe_stem
 from .shapes import CATALOGUE, Shape
 
 __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS"]
@@ -67,6 +68,10 @@ DEFAULT_MAX_EVENTS = 100_000
 STANDARD_GRAVITY = 9.81
 #: Default mass, kilograms.
 DEFAULT_MASS = 1.0
+#: Longest scene or curve name, in characters.
+MAX_NAME_LENGTH = 200
+#: Longest scene description, in characters.
+MAX_DESCRIPTION_LENGTH = 10_000
 
 _SECTIONS = {
     "curve": {"shape", "x", "z", "q", "name", "domain", "h", "alpha", "q_scale", "params"},
@@ -173,15 +178,62 @@ class Scene:
         return out
 
 
+def _show(value) -> str:
+    """A number as plain text for messages (``2.0``, never ``np.float64(2.0)``)."""
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+        text = str(int(value))
+        return text if len(text) <= _expr.MAX_INT_DIGITS else f"an integer of {len(text)} digits"
+    if isinstance(value, numbers.Real):
+        return repr(float(value))
+    text = repr(value)
+    return text if len(text) <= MAX_NAME_LENGTH else text[:MAX_NAME_LENGTH] + "..."
+
+
 def _finite(value, field):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SceneError(field, f"must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise SceneError(field, f"must be finite, got {value}")
-    return float(value)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise SceneError(field, f"must be a number, got {_show(value)}")
+    try:
+        result = float(value)
+    except OverflowError:
+        raise SceneError(field, f"number too large: {_show(value)}") from None
+    if not math.isfinite(result):
+        raise SceneError(field, f"must be finite, got {_show(value)}")
+    return result
+
+
+def _check_name(value, field):
+    """A scene or curve name: one line of printable text of at most MAX_NAME_LENGTH characters."""
+    if not isinstance(value, str):
+        raise SceneError(field, f"must be a string, got {type(value).__name__}")
+    if not value.strip():
+        raise SceneError(field, "must not be empty")
+    if len(value) > MAX_NAME_LENGTH:
+        raise SceneError(field, f"is {len(value)} characters long; at most {MAX_NAME_LENGTH} are accepted")
+    if not value.isprintable():
+        raise SceneError(field, f"must be one line of printable text, got {_show(value)}")
+
+
+def _key(key) -> str:
+    """A TOML key as it may appear in a field name: one printable line, not too long."""
+    text = str(key)
+    if not text.isprintable():
+        text = repr(text)[1:-1]
+    return text if len(text) <= MAX_NAME_LENGTH else text[:MAX_NAME_LENGTH] + "..."
+
+
+def _check_identifier(value, field, what):
+    """A coordinate or parameter name: a plain identifier that is not a function or constant."""
+    if not isinstance(value, str):
+        raise SceneError(field, f"{what} must be a string, got {type(value).__name__}")
+    if not value.isidentifier() or value.startswith("_") or len(value) > MAX_NAME_LENGTH:
+        raise SceneError(field, f"{what} must be an identifier (letters, digits, _; not starting with _ or "
+                                f"a digit; at most {MAX_NAME_LENGTH} characters), got {_show(value)}")
+    if value in _expr.FUNCTIONS or value in _expr.CONSTANTS:
+        raise SceneError(field, f"{what} {value!r} is the name of a function or constant")
 
 
 def _validate(s: Scene) -> None:
+    _check_name(s.name, "name")
     if not isinstance(s.shape, Shape):
         raise SceneError("curve", "must be a catalogue shape or a curve definition")
     declared = list(s.shape.params)
@@ -196,48 +248,64 @@ def _validate(s: Scene) -> None:
     for n, v in s.params:
         _finite(v, f"parameters.{n}")
         if s.shape.params.get(n, "positive") == "positive" and not v > 0:
-            raise SceneError(f"parameters.{n}", f"must be positive, got {v}")
+            raise SceneError(f"parameters.{n}", f"must be positive, got {_show(v)}")
     if not _finite(s.g, "physics.g") > 0:
-        raise SceneError("physics.g", f"must be positive, got {s.g}")
+        raise SceneError("physics.g", f"must be positive, got {_show(s.g)}")
     if not _finite(s.m, "physics.m") > 0:
-        raise SceneError("physics.m", f"must be positive, got {s.m}")
+        raise SceneError("physics.m", f"must be positive, got {_show(s.m)}")
     if _finite(s.mu, "physics.mu") < 0:
-        raise SceneError("physics.mu", f"friction coefficient must be >= 0, got {s.mu}")
+        raise SceneError("physics.mu", f"friction coefficient must be >= 0, got {_show(s.mu)}")
     k = _finite(s.k, "physics.restitution")
     if not 0.0 <= k <= 1.0:
-        raise SceneError("physics.restitution", f"must be in [0, 1] (1 = ideally elastic, 0 = plastic), got {k}")
+        raise SceneError("physics.restitution",
+                         f"must be in [0, 1] (1 = ideally elastic, 0 = plastic), got {_show(k)}")
     for side in ("left", "right"):
         v = getattr(s, side)
         if v is not None:
             _finite(v, f"limiters.{side}")
     if s.left is not None and s.right is not None and not s.left < s.right:
-        raise SceneError("limiters", f"left limiter ({s.left}) must be left of the right one ({s.right})")
+        raise SceneError("limiters", f"left limiter ({_show(s.left)}) must be left of the right one "
+                                     f"({_show(s.right)})")
     q0 = _finite(s.q0, "initial.q")
     _finite(s.qdot0, "initial.qdot")
     if s.left is not None and q0 < s.left:
-        raise SceneError("initial.q", f"{q0} is outside the limiters: left of the left limiter at {s.left}")
+        raise SceneError("initial.q", f"{_show(q0)} is outside the limiters: left of the left limiter at "
+                                      f"{_show(s.left)}")
     if s.right is not None and q0 > s.right:
-        raise SceneError("initial.q", f"{q0} is outside the limiters: right of the right limiter at {s.right}")
+        raise SceneError("initial.q", f"{_show(q0)} is outside the limiters: right of the right limiter at "
+                                      f"{_show(s.right)}")
     lo, hi = _domain(s)
     for label, v in (("limiters.left", s.left), ("limiters.right", s.right), ("initial.q", q0)):
         if v is not None and not lo < v < hi:
-            raise SceneError(label, f"{v} is outside the curve's regular domain ({lo:.6g}, {hi:.6g})")
+            raise SceneError(label, f"{_show(v)} is outside the curve's regular domain ({lo:.6g}, {hi:.6g})")
     if not _finite(s.t_max, "run.t_max") > 0:
-        raise SceneError("run.t_max", f"must be positive, got {s.t_max}")
+        raise SceneError("run.t_max", f"must be positive, got {_show(s.t_max)}")
     if isinstance(s.max_events, bool) or not isinstance(s.max_events, int) or s.max_events < 1:
-        raise SceneError("run.max_events", f"must be a positive integer, got {s.max_events!r}")
+        raise SceneError("run.max_events", f"must be a positive integer, got {_show(s.max_events)}")
+
+
+#: Texts of an infinite end of a curve's domain (with an optional sign).
+_INFINITE = ("oo", "inf")
 
 
 def _domain(s: Scene) -> tuple:
+    """The curve's domain as floats; a SceneError naming ``curve.domain[i]`` (or ``curve.domain``
+    when the ends are reversed), before any limiter or initial position is compared with it."""
     values = dict(s.params)
     out = []
     for i, end in enumerate(s.shape.domain):
         text = str(end).strip()
-        if text.lstrip("+-") in ("oo", "inf"):
+        if text.lstrip("+-") in _INFINITE:
             out.append(-math.inf if text.startswith("-") else math.inf)
-        else:
+            continue
+        try:
             out.append(_expr.number(text, field=f"curve.domain[{i}]", symbols=values))
-    return tuple(out)
+        except _expr.ExpressionError as exc:
+            raise SceneError(exc.field, exc.reason) from None
+    lo, hi = out
+    if not lo < hi:
+        raise SceneError("curve.domain", f"the low end ({lo:.6g}) must be below the high end ({hi:.6g})")
+    return lo, hi
 
 
 def _number(section: dict, key: str, prefix: str, symbols=None, default=None):
@@ -263,6 +331,9 @@ def _shape(curve: dict) -> Shape:
         if extra:
             raise SceneError(f"curve.{sorted(extra)[0]}", "give either shape = \"...\" or expressions, not both")
         name = curve["shape"]
+        if not isinstance(name, str):
+            raise SceneError("curve.shape", f"must be a string naming a catalogue shape, got {type(name).__name__}; "
+                                            f"known shapes: {', '.join(sorted(CATALOGUE))}")
         if name not in CATALOGUE:
             raise SceneError("curve.shape", f"unknown shape {name!r}; known shapes: {', '.join(sorted(CATALOGUE))}")
         return CATALOGUE[name]
@@ -273,15 +344,26 @@ def _shape(curve: dict) -> Shape:
             raise SceneError(f"curve.{key}", f"must be a string, got {type(value).__name__}")
     kind = "parametric" if "x" in curve else "graph"
     q = curve.get("q", "q" if kind == "parametric" else "x")
+    _check_identifier(q, "curve.q", "the coordinate")
+    if "name" in curve:
+        _check_name(curve["name"], "curve.name")
     # Validate the expressions now (safely), so errors name the field.
     params = curve.get("params")
     names = _curve_symbols(curve, q)
     if params is None:
         params = {n: "positive" for n in names}
     elif isinstance(params, list):
+        for i, n in enumerate(params):
+            _check_identifier(n, f"curve.params[{i}]", "a parameter name")
         params = {n: "positive" for n in params}
     elif not isinstance(params, dict):
         raise SceneError("curve.params", "must be a list of names or a table name -> assumption")
+    for n, assumption in params.items():
+        _check_identifier(n, f"curve.params.{_key(n)}", "a parameter name")
+        if not isinstance(assumption, str):
+            raise SceneError(f"curve.params.{n}", f"the assumption must be a string, got {type(assumption).__name__}")
+    if q in params:
+        raise SceneError(f"curve.params.{q}", f"the coordinate {q!r} cannot also be a parameter")
     unknown = sorted(set(names) - set(params))
     if unknown:
         raise SceneError("curve", f"unknown symbol(s) {', '.join(unknown)} in the curve expressions "
@@ -289,28 +371,40 @@ def _shape(curve: dict) -> Shape:
     domain = curve.get("domain", ["-oo", "oo"])
     if not (isinstance(domain, list) and len(domain) == 2):
         raise SceneError("curve.domain", "must be a list [low, high] of expressions")
+    for i, end in enumerate(domain):
+        _domain_end(end, f"curve.domain[{i}]", params)
+    domain = [end if isinstance(end, str) else _show(_finite(end, f"curve.domain[{i}]"))
+              for i, end in enumerate(domain)]
     return Shape(name=curve.get("name", "user-curve"), kind=kind, q=q, z=curve["z"], x=curve.get("x"),
                  params=dict(params), domain=tuple(str(d) for d in domain), h=curve.get("h"),
                  alpha=curve.get("alpha"), q_scale=str(curve.get("q_scale", "1")))
 
 
-def _curve_symbols(curve: dict, q: str) -> list:
-    """The free symbols of a user curve's expressions (parsed safely)."""
-    import ast
+def _domain_end(end, field, params) -> None:
+    """Check one end of a user curve's domain: ``oo``/``-oo``, a finite number, or an
+    expression of the curve's parameters (its value is checked with the scene's values)."""
+    if isinstance(end, bool) or not isinstance(end, (str, numbers.Real)):
+        raise SceneError(field, f"must be a number or an expression string, got {type(end).__name__}")
+    if not isinstance(end, str):
+        _finite(end, field)
+        return
+    if end.strip().lstrip("+-") in _INFINITE:
+        return
+    try:
+        _expr.parse(end, symbols=tuple(params), field=field)
+    except _expr.ExpressionError as exc:
+        raise SceneError(exc.field, exc.reason) from None
 
+
+def _curve_symbols(curve: dict, q: str) -> list:
+    """The free symbols of a user curve's expressions (parsed safely, :func:`symvib.expr.free_names`)."""
     names = set()
     for key in ("x", "z", "h", "alpha", "q_scale"):
         text = curve.get(key)
         if text is None:
             continue
         try:
-            tree = ast.parse(text.strip(), mode="eval")
-        except SyntaxError as exc:
-            raise SceneError(f"curve.{key}", f"not a valid expression: {exc.msg}") from None
-        found = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
-        found = {n for n in found if n not in _expr.FUNCTIONS and n not in _expr.CONSTANTS}
-        try:
-            _expr.parse(text, symbols=found, field=f"curve.{key}")
+            found = set(_expr.free_names(text, field=f"curve.{key}"))
         except _expr.ExpressionError as exc:
             raise SceneError(exc.field, exc.reason) from None
         if key in ("x", "z") and q not in found and key == "z" and "x" not in curve:
@@ -326,7 +420,10 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         raise SceneError("scene", "must be a table")
     for key in data:
         if key not in _SECTIONS and key not in _TOP:
-            raise SceneError(key, f"unknown section or key; known: {', '.join(sorted(_SECTIONS) + sorted(_TOP))}")
+            raise SceneError(_key(key), f"unknown section or key; known: {', '.join(sorted(_SECTIONS) + sorted(_TOP))}")
+    description = data.get("description", "")
+    if not isinstance(description, str) or len(description) > MAX_DESCRIPTION_LENGTH:
+        raise SceneError("description", f"must be a string of at most {MAX_DESCRIPTION_LENGTH} characters")
     for section in ("curve", "physics", "initial"):
         if section not in data:
             raise SceneError(section, f"missing section [{section}]")
@@ -338,7 +435,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         if keys is not None:
             for key in data[section]:
                 if key not in keys:
-                    raise SceneError(f"{section}.{key}", f"unknown key; known keys of [{section}]: "
+                    raise SceneError(f"{section}.{_key(key)}", f"unknown key; known keys of [{section}]: "
                                                          f"{', '.join(sorted(keys))}")
     shape = _shape(data["curve"])
     raw = data.get("parameters", {})
@@ -348,7 +445,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
     values = {}
     for key in raw:
         if key not in shape.params:
-            raise SceneError(f"parameters.{key}", f"unknown symbol: curve '{shape.name}' has parameters "
+            raise SceneError(f"parameters.{_key(key)}", f"unknown symbol: curve '{shape.name}' has parameters "
                                                   f"{', '.join(shape.params) or 'none'}")
         values[key] = _number(raw, key, "parameters")
     params = tuple((n, values[n]) if n in values else (n, None) for n in shape.params)
@@ -395,13 +492,19 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
 
 
 def load_scene(path) -> Scene:
-    """Read and validate a scene TOML file."""
+    """Read and validate a scene TOML file.
+
+    Raises
+    ------
+    SceneError
+        When the file is missing, not a regular file, larger than
+        ``symvib.paths.MAX_INPUT_BYTES``, not UTF-8 or not TOML (``field`` is
+        then the path), or not a valid scene.
+    """
     path = Path(path)
     try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise SceneError(str(path), "no such file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(str(path), f"not valid TOML: {exc}") from None
-    return scene_from_dict(data, name=data.get("name", path.stem))
+        data = read_user_toml(path, "scene file")
+    except UserPathError as exc:
+        raise SceneError(_key(exc.path), exc.reason) from None
+    stem = path.stem if path.stem.isprintable() and len(path.stem) <= MAX_NAME_LENGTH else safe_stem(path.stem)
+    return scene_from_dict(data, name=data.get("name", stem))
