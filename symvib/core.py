@@ -12,14 +12,17 @@ of this module are its knobs.
 
 Codes (integers, so that compiled code can return them):
 
-* events: ``IMPACT, REVERSAL, ARREST, REST_ON_LIMITER, NORMAL_SIGN_CHANGE``;
-* status: ``RUNNING, ARRESTED, RESTING, T_MAX, MAX_EVENTS, LEFT_DOMAIN``.
+* events: ``IMPACT, REVERSAL, ARREST, REST_ON_LIMITER, NORMAL_SIGN_CHANGE, LEFT_CURVE``;
+* status: ``RUNNING, ARRESTED, RESTING, T_MAX, MAX_EVENTS, LEFT_DOMAIN, NON_FINITE,
+  BUDGET_MISMATCH, LEFT_CURVE``.  The engine itself ends a run with ``NON_FINITE`` as soon
+  as its state stops being finite; ``BUDGET_MISMATCH`` is set after the run by
+  :func:`symvib.driver.checked_status` (the codes :data:`ERROR_CODES` are failures).
 """
 import math
 
 import numpy as np
 
-__all__ = ["EVENT_NAMES", "STATUS_NAMES", "simulate", "samples", "sweep", "SUMMARY", "SCALARS"]
+__all__ = ["EVENT_NAMES", "STATUS_NAMES", "ERROR_CODES", "simulate", "samples", "sweep", "SUMMARY", "SCALARS"]
 
 try:
     jit  # noqa: B018 - set by the combined engine module before this source
@@ -35,9 +38,14 @@ except NameError:  # imported on its own: plain Python
         return tuple(row)
 
 IMPACT, REVERSAL, ARREST, REST_ON_LIMITER, NORMAL_SIGN_CHANGE = 0, 1, 2, 3, 4
+LEFT_CURVE_EVENT = 5
 RUNNING, ARRESTED, RESTING, T_MAX, MAX_EVENTS, LEFT_DOMAIN = 0, 1, 2, 3, 4, 5
-EVENT_NAMES = ("impact", "reversal", "arrest", "rest_on_limiter", "normal_sign_change")
-STATUS_NAMES = ("running", "arrested", "resting_on_limiter", "t_max", "max_events", "left_domain")
+NON_FINITE, BUDGET_MISMATCH, LEFT_CURVE = 6, 7, 8
+#: Status codes of a failed run (its numbers are not a result).
+ERROR_CODES = (NON_FINITE, BUDGET_MISMATCH)
+EVENT_NAMES = ("impact", "reversal", "arrest", "rest_on_limiter", "normal_sign_change", "left_curve")
+STATUS_NAMES = ("running", "arrested", "resting_on_limiter", "t_max", "max_events", "left_domain",
+                "non_finite", "energy_budget_mismatch", "left_curve")
 _LIMIT, _TURN, _NSIGN, _PASS, _EDGE = 0, 1, 2, 3, 4
 
 #: Widest quadrature panel, in units of the curve's q_scale.
@@ -129,6 +137,12 @@ def energy(q, w, m, g, cp):
 @jit
 def qdot_of(q, w, sigma, cp):
     return sigma * math.sqrt(max(w, 0.0)) / h_scalar(q, *cp)
+
+@jit
+def finite_state(t, q, w, Wf, Wimp):
+    """Whether the run's state and energy sums are all finite numbers."""
+    return (math.isfinite(t) and math.isfinite(q) and math.isfinite(w) and math.isfinite(Wf)
+            and math.isfinite(Wimp))
 
 @jit
 def nsign_of(q, w, g, cp):
@@ -594,7 +608,9 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
     elif has_left and q == left:
         side = -1
     pending_impact = sigma != 0 and side == sigma
-    if sigma == 0:
+    if not (math.isfinite(E0) and finite_state(t, q, w, Wf, Wimp)):
+        status = NON_FINITE  # e.g. qdot0 = 1e200: w = inf from the start
+    elif sigma == 0:
         what, direction = rest(q, side, mu, cp)
         if what != 0:
             events, ne = put_event(events, ne, ARREST if what == 1 else REST_ON_LIMITER, t, q, 0.0, 0.0,
@@ -602,6 +618,9 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
             status = ARRESTED if what == 1 else RESTING
         sigma = direction
     while status == RUNNING:
+        if not finite_state(t, q, w, Wf, Wimp):
+            status = NON_FINITE  # overflow: stop at once rather than run max_events impacts at inf
+            break
         if pending_impact:
             # An impact at q with squared speed w moving sigma.
             pending_impact = False
@@ -720,6 +739,8 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
             status = LEFT_DOMAIN
     if status == MAX_EVENTS and w == 0.0:
         sigma = 0
+    if not finite_state(t, q, w, Wf, Wimp):
+        status = NON_FINITE  # e.g. mu = 1e65: an arrest reached at t = nan
     return (status, ne, events, ni, ivs, t, q, w, sigma, Wf, Wimp, E0, zeno)
 
 @jit

@@ -387,7 +387,7 @@ def _sweep_function(scene: Scene, backend: str):
     from .kernels import load
 
     mod = load(scene.shape)
-    return driver.engine(mod.__file__, driver._resolve(backend))[2]
+    return driver.guarded_sweep(driver.engine(mod.__file__, driver._resolve(backend))[2])
 
 
 @dataclass(frozen=True)
