@@ -65,6 +65,11 @@ CONE_RTOL = 1e-9
 ZENO_W = 1e-10
 #: Gauss points at which the normal force is sampled per interval where it may change sign.
 N_SCAN = 32
+#: Golden-section steps of the search for a dip of the normal force below 0 around a local
+#: minimum of its scanned values (the bracket shrinks to 0.618**40 = 4e-9 of two node spacings).
+DIP_ITER = 40
+#: The golden ratio's conjugate, (sqrt(5) - 1) / 2.
+GOLDEN = 0.6180339887498949
 #: Relative bracket width at which root finders stop.
 ROOT_RTOL = 4 * np.finfo(float).eps
 #: Iterations after which a root finder stops (not reached on a bracketed monotone function).
@@ -363,6 +368,28 @@ def normal_on(x, p):
     w = math.exp(-2.0 * s * mu * alpha_scalar(x, *cp)) * max(G, 0.0)
     return nsgn * N_w_scalar(x, w, g, *cp)
 
+@jit
+def dip_below(pn, a, b):
+    """A point of (a, b) where normal_on < 0, by a golden-section search for a minimum (nan if none)."""
+    c = b - GOLDEN * (b - a)
+    d = a + GOLDEN * (b - a)
+    fc = normal_on(c, pn)
+    fd = normal_on(d, pn)
+    for _ in range(DIP_ITER):
+        if fc < 0.0:
+            return c, fc
+        if fd < 0.0:
+            return d, fd
+        if fc < fd:
+            b, d, fd = d, c, fc
+            c = b - GOLDEN * (b - a)
+            fc = normal_on(c, pn)
+        else:
+            a, c, fc = c, d, fd
+            d = a + GOLDEN * (b - a)
+            fd = normal_on(d, pn)
+    return math.nan, 0.0
+
 # --- event location -------------------------------------------------------------
 @jit
 def locate(q, sigma, s, Ga, P, region, roots, count, X):
@@ -411,15 +438,27 @@ def locate(q, sigma, s, Ga, P, region, roots, count, X):
     safe_hi = region[7]
     if safe_lo <= min(q, qe) and max(q, qe) <= safe_hi:
         return kind_out, qe, Ge, roots
+    # N is scanned at the Gauss nodes and at qe (its sign can change after the last node);
+    # around a local minimum of the scanned values a golden-section search looks for a
+    # dip below 0 between nodes.  The start counts as positive (N may be 0 there, just
+    # after a sign change).
     nsgn = 1.0 if s * sigma > 0 else -1.0
     pn = (s, C, nsgn, g, g2, mu, cp)
+    before, fbefore = q, max(normal_on(q, pn), 1e-300)
     prev, fprev = q, 1e-300
-    for j in range(X.shape[0]):
-        x = q + (qe - q) * 0.5 * (X[j] + 1.0)
+    n = X.shape[0]
+    for j in range(n + 1):
+        x = q + (qe - q) * 0.5 * (X[j] + 1.0) if j < n else qe
         fx = normal_on(x, pn)
         if fx < 0.0:
             r = root_normal(pn, prev, x, fprev, fx)
             return _NSIGN, r, C - g2 * Fs(s, r, mu, cp), roots
+        if j > 0 and fprev <= fbefore and fprev <= fx:
+            xd, fd = dip_below(pn, before, x)
+            if not math.isnan(xd):
+                r = root_normal(pn, before, xd, fbefore, fd)
+                return _NSIGN, r, C - g2 * Fs(s, r, mu, cp), roots
+        before, fbefore = prev, max(fprev, 1e-300)
         prev, fprev = x, fx
     return kind_out, qe, Ge, roots
 
