@@ -400,7 +400,55 @@ def _rule(nodes):
 
 
 def _samples(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
-    """Each interval's samples: start point, Gauss nodes (sorted in time), end point."""
+    """Each interval's samples: start point, Gauss nodes (sorted in time), end point.
+
+    Linear in the number of intervals: the nodes are ordered by (interval, time)
+    with one stable sort, and every interval's block is placed by offsets
+    (``benchmarks/bench_samples.py``).
+    """
+    cp = tuple(float(v) for v in scene.param_values)
+    nodes, index = sample_fn(ivs, ni, float(scene.g), float(scene.mu), float(scale), cp, R)
+    if not ni:
+        empty = np.zeros(0)
+        return Samples(*(empty.copy() for _ in range(8)), np.zeros(0, dtype=int), np.zeros(0, dtype=int))
+    order = np.lexsort((nodes[:, 0], index))  # stable: ties keep the engine's order
+    nodes, index = nodes[order], index[order]
+    counts = np.bincount(index, minlength=ni)[:ni]
+    sizes = counts + 2
+    first = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    last = first + sizes - 1
+    total = int(sizes.sum())
+    inner = np.ones(total, dtype=bool)
+    inner[first] = False
+    inner[last] = False
+    ends = np.empty((ni, 8))
+    for i in range(ni):
+        qa, qb, Ga, Gb, s, sigma, t0, T = ivs[i, :8]
+        wa = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qa, *cp))) * Ga
+        wb = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qb, *cp))) * Gb
+        ends[i] = (t0, t0 + T, qa, qb, wa, wb, mod.N_w_scalar(qa, wa, scene.g, *cp),
+                   mod.N_w_scalar(qb, wb, scene.g, *cp))
+    columns = []
+    for c, (a, b) in enumerate(((0, 1), (2, 3), (4, 5), (6, 7))):
+        col = np.empty(total)
+        col[first] = ends[:, a]
+        col[last] = ends[:, b]
+        col[inner] = nodes[:, c]
+        columns.append(col)
+    t, q, w, N = columns
+    interval = np.repeat(np.arange(ni), sizes)
+    branch = np.repeat(ivs[:ni, 4].astype(int), sizes)
+    sig = np.repeat(ivs[:ni, 5], sizes)
+    m, g, mu = scene.m, scene.g, scene.mu
+    v = np.sqrt(np.maximum(w, 0.0))
+    Ep = m * g * mod.z(q, *cp)
+    return Samples(t=t, q=q, qdot=sig * v / mod.h(q, *cp), F_N=m * N, P_mu=-mu * m * np.abs(N) * v,
+                   Ek=0.5 * m * w, Ep=Ep, E=0.5 * m * w + Ep, interval=interval, branch=branch)
+
+
+def _samples_quadratic(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
+    """The former :func:`_samples` (``nodes[index == i]`` per interval, quadratic): the reference
+    of the bitwise test and of ``benchmarks/bench_samples.py``."""
     cp = tuple(float(v) for v in scene.param_values)
     nodes, index = sample_fn(ivs, ni, float(scene.g), float(scene.mu), float(scale), cp, R)
     t_parts, q_parts, w_parts, N_parts, iv_parts, s_parts, sig_parts = [], [], [], [], [], [], []

@@ -63,6 +63,9 @@ __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "DEFAULT_T_MA
 DEFAULT_T_MAX = 1000.0
 #: Default bound on the number of events of a run.
 DEFAULT_MAX_EVENTS = 100_000
+#: Largest ``run.max_events`` accepted: the engine's event log grows with the events (48 bytes
+#: each, so 4.8 GB at this bound) and its counter is an int64.
+MAX_EVENTS = 10**8
 #: Standard gravity, the default of ``physics.g``.
 STANDARD_GRAVITY = 9.81
 #: Default mass, kilograms.
@@ -173,6 +176,16 @@ class Scene:
         return out
 
 
+def _plain(value) -> str:
+    """A number as plain text (``2.0``, not ``np.float64(2.0)``); anything else as its repr."""
+    if isinstance(value, float) or type(value).__name__.startswith("float"):
+        try:
+            return repr(float(value))
+        except (TypeError, ValueError):
+            pass
+    return repr(value)
+
+
 def _finite(value, field):
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SceneError(field, f"must be a number, got {value!r}")
@@ -225,7 +238,9 @@ def _validate(s: Scene) -> None:
     if not _finite(s.t_max, "run.t_max") > 0:
         raise SceneError("run.t_max", f"must be positive, got {s.t_max}")
     if isinstance(s.max_events, bool) or not isinstance(s.max_events, int) or s.max_events < 1:
-        raise SceneError("run.max_events", f"must be a positive integer, got {s.max_events!r}")
+        raise SceneError("run.max_events", f"must be a positive integer, got {_plain(s.max_events)}")
+    if s.max_events > MAX_EVENTS:
+        raise SceneError("run.max_events", f"at most {MAX_EVENTS} (scene.MAX_EVENTS), got {s.max_events}")
 
 
 def _domain(s: Scene) -> tuple:
