@@ -79,7 +79,8 @@ TINY = np.finfo(float).tiny
 #: Lattice steps scanned ahead of the particle at a time.
 CHUNK = 16
 #: Order of the scene scalars passed to the compiled ``simulate``.
-SCALARS = ("g", "m", "mu", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max", "max_events")
+SCALARS = ("g", "m", "mu", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max", "max_events",
+           "unilateral")
 #: Rows of the quadrature's scratch array (node values and the cumulative sums).
 WORK_ROWS = 10
 #: Columns of the interval log: qa, qb, Ga, Gb, s, sigma, t0, T, Wf (per unit mass).
@@ -618,8 +619,12 @@ def rest(q, side, mu, cp):
     return 0, (1 if pull > 0.0 else -1)
 
 @jit
-def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
-    """Simulate one scene.  Returns a tuple; see :func:`symvib.driver.simulate` for its use."""
+def run(P, R, q0, qdot0, t_max, max_events, keep_intervals, unilateral):
+    """Simulate one scene.  Returns a tuple; see :func:`symvib.driver.simulate` for its use.
+
+    ``unilateral``: the curve only pushes along its normal, so where N reaches 0 (or is
+    negative at the start of an interval) the run ends with LEFT_CURVE (physics.md, "Events").
+    """
     (g, m, mu, k, has_left, left, has_right, right, lo, hi, scale, cp) = P
     region, roots, count = map_new(q0, lo, hi, mu, cp, CRIT_STEP * scale)
     X = R[0]
@@ -649,6 +654,10 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
     pending_impact = sigma != 0 and side == sigma
     if not (math.isfinite(E0) and finite_state(t, q, w, Wf, Wimp)):
         status = NON_FINITE  # e.g. qdot0 = 1e200: w = inf from the start
+    elif unilateral and N_w_scalar(q, w, g, *cp) < 0.0:
+        # Unilateral contact and N < 0 at the start: the particle leaves the curve at once.
+        events, ne = put_event(events, ne, LEFT_CURVE_EVENT, t, q, qdot0, qdot0, E0)
+        status = LEFT_CURVE
     elif sigma == 0:
         what, direction = rest(q, side, mu, cp)
         if what != 0:
@@ -720,6 +729,12 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
         else:
             nsign = nsign_of(q, w, g, cp)
         flip = False
+        if unilateral and nsign < 0:
+            # N < 0 here (at the start, or after an impact): the particle is not held.
+            events, ne = put_event(events, ne, LEFT_CURVE_EVENT, t, q, qdot_of(q, w, sigma, cp),
+                                   qdot_of(q, w, sigma, cp), energy(q, w, m, g, cp))
+            status = LEFT_CURVE
+            break
         s = sigma * nsign
         Ga = w * math.exp(2.0 * s * mu * alpha_scalar(q, *cp))
         kind, qb, Gb, roots = locate(q, sigma, s, Ga, P, region, roots, count, X)
@@ -766,6 +781,11 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
         elif kind == _LIMIT:
             q, w = qb, wb
             pending_impact = True
+        elif kind == _NSIGN and unilateral:
+            qd = qdot_of(qb, wb, sigma, cp)
+            events, ne = put_event(events, ne, LEFT_CURVE_EVENT, t, qb, qd, qd, energy(qb, wb, m, g, cp))
+            q, w = qb, wb
+            status = LEFT_CURVE
         elif kind == _NSIGN:
             qd = qdot_of(qb, wb, sigma, cp)
             events, ne = put_event(events, ne, NORMAL_SIGN_CHANGE, t, qb, qd, qd, energy(qb, wb, m, g, cp))
@@ -817,11 +837,12 @@ def simulate(scal, cp, R, keep):
     g, m, mu, k = scal[0], scal[1], scal[2], scal[3]
     has_left, left, has_right, right = scal[4] != 0.0, scal[5], scal[6] != 0.0, scal[7]
     q0, qdot0, t_max, max_events = scal[8], scal[9], scal[10], int(scal[11])
+    unilateral = scal[12] != 0.0
     lo, hi = domain(*cp)
     scale = q_scale_scalar(*cp)
     P = (g, m, mu, k, has_left, left, has_right, right, lo, hi, scale, cp)
     (status, ne, events, ni, ivs, t, q, w, sigma, Wf, Wimp, E0, zeno) = run(
-        P, R, q0, qdot0, t_max, max_events, keep)
+        P, R, q0, qdot0, t_max, max_events, keep, unilateral)
     E_final = energy(q, w, m, g, cp)
     qdot_final = qdot_of(q, w, sigma, cp) if sigma != 0 else 0.0
     return (status, ne, events, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale)

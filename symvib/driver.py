@@ -235,7 +235,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     scal = np.array([scene.g, scene.m, scene.mu, scene.k, scene.left is not None,
                      0.0 if scene.left is None else scene.left, scene.right is not None,
                      0.0 if scene.right is None else scene.right, scene.q0, scene.qdot0, scene.t_max,
-                     scene.max_events], dtype=float)
+                     scene.max_events, scene.contact == "unilateral"], dtype=float)
     try:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
             (status, ne, ev, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale) = sim(
@@ -343,7 +343,8 @@ def guarded_sweep(sweep_fn):
 
     def guarded(scal_rows, cp_rows, R, max_log):
         try:
-            out, logs = sweep_fn(scal_rows, cp_rows, R, max_log)
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
+                out, logs = sweep_fn(scal_rows, cp_rows, R, max_log)
         except (ArithmeticError, ValueError) as exc:
             if not _math_error(exc):
                 raise

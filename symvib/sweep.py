@@ -83,7 +83,7 @@ _FIELDS = {
 #: Scene-file names of the columns of core.SCALARS (for error messages).
 _SCALAR_FIELDS = ("physics.g", "physics.m", "physics.mu", "physics.restitution", "limiters.left",
                   "limiters.left", "limiters.right", "limiters.right", "initial.q", "initial.qdot",
-                  "run.t_max", "run.max_events")
+                  "run.t_max", "run.max_events", "physics.contact")
 _SHORT = {"q": "initial.q", "qdot": "initial.qdot", "q0": "initial.q", "qdot0": "initial.qdot",
           "mu": "physics.mu", "alpha0": "physics.alpha0", "restitution": "physics.restitution",
           "k": "physics.restitution", "g": "physics.g", "m": "physics.m", "left": "limiters.left",
@@ -235,7 +235,7 @@ class SweepSpec:
         n = len(values[0]) if values else 0
         base = np.array([s.g, s.m, s.mu, s.k, s.left is not None, 0.0 if s.left is None else s.left,
                          s.right is not None, 0.0 if s.right is None else s.right, s.q0, s.qdot0, s.t_max,
-                         s.max_events], dtype=float)
+                         s.max_events, s.contact == "unilateral"], dtype=float)
         scal = np.repeat(base[None, :], n, axis=0)
         names = [name for name, _ in s.params]
         cp = np.repeat(np.array(s.param_values, dtype=float)[None, :], n, axis=0)
@@ -265,7 +265,7 @@ def _require(values, ok, fld, reason):
 
 def _check_rows(spec: SweepSpec, scal, cp, names) -> None:
     """Vectorized :func:`symvib.scene._validate` over the rows of one chunk."""
-    g, m, mu, k, hl, left, hr, right, q0, qdot0, t_max, max_events = scal.T
+    g, m, mu, k, hl, left, hr, right, q0, qdot0, t_max, max_events, _unilateral = scal.T
     for label, v in zip(_SCALAR_FIELDS, scal.T):
         _require(v, np.isfinite(v), label, "must be finite")
     _require(g, g > 0, "physics.g", "must be positive")
