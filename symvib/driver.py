@@ -29,6 +29,20 @@ series once below ``ZENO_W``), plastic impacts, ``mu = 0`` with ``k = 1``
 (bounded by ``t_max``/``max_events``), the normal force changing sign, and the
 ends of the curve's regular domain.
 
+Where ``N`` may change sign (outside the region where ``kappa >= 0`` and
+``x' > 0``), it is scanned at the Gauss nodes of the interval and at its end,
+and around every local minimum of the scanned values a golden-section search
+looks for a dip below 0 between nodes.  With ``physics.contact = "unilateral"``
+the first zero of ``N`` ends the run (status ``left_curve``); with the default
+``"bilateral"`` the branch flips and the motion goes on.
+
+Every result is checked (:func:`checked_status`): a state that stops being
+finite ends the run at once with status ``non_finite`` (on the plain-Python
+backend, where ``math`` raises ``OverflowError`` instead, the message is kept
+in ``stats["error"]``), and a run whose energy budget misses by more than
+:data:`BUDGET_RTOL` ends ``energy_budget_mismatch``; ``Result.success`` is then
+False and ``symvib run`` exits with status 3.
+
 The loop itself is :mod:`symvib.core`, run compiled by numba when it is
 installed (``pip install symvib[fast]``) and as plain Python otherwise; both
 give the same events.
