@@ -642,7 +642,8 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals, unilateral):
     status = RUNNING
     q = q0
     w = (h_scalar(q, *cp) * qdot0) ** 2
-    sigma = 0 if qdot0 == 0.0 else (1 if qdot0 > 0.0 else -1)
+    # At rest also when w underflows to 0 (qdot0 = 1e-300): the rest test decides.
+    sigma = 0 if qdot0 == 0.0 or w == 0.0 else (1 if qdot0 > 0.0 else -1)
     E0 = energy(q, w, m, g, cp)
     flip = False
     nsign = 1

@@ -75,6 +75,29 @@ def test_overflowing_inputs_end_non_finite(changes, error):
     assert data["status"] == "non_finite" and data["success"] is False
 
 
+@pytest.mark.parametrize("changes, status", [
+    ({"initial__qdot": 1e154}, Status.ARRESTED),  # w = 1e308 still finite: 1234 events, budget closes
+    ({"initial__qdot": 1e160}, Status.NON_FINITE),
+    ({"initial__qdot": 1e-300}, Status.ARRESTED),  # w underflows to 0: at rest, the rest test decides
+    ({"parameters__p": 1e-300}, Status.ARRESTED),  # (was t_max with an open budget)
+    ({"parameters__p": 1e150}, Status.T_MAX),
+    ({"physics__g": 1e300}, Status.ARRESTED),
+    ({"physics__g": 1e-300}, Status.T_MAX),
+    ({"physics__m": 1e300}, Status.ARRESTED),
+    ({"physics__m": 1e-300}, Status.ARRESTED),
+    ({"physics__restitution": 1e-300}, Status.ARRESTED),
+    ({"run__t_max": 1e308}, Status.ARRESTED),
+])
+def test_extreme_numbers_end_in_a_checked_result(changes, status):
+    r = driver.simulate(scene(**changes), backend="python")
+    assert r.status is status
+    if r.success:
+        b = r.energy_budget
+        assert abs(b.residual) <= driver.BUDGET_RTOL * max(abs(b.initial), abs(b.final), b.friction_work,
+                                                           b.impact_loss)
+        strict_json(r.to_json(samples=True))
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(not driver.backend_available("numba"), reason="needs numba")
 @pytest.mark.parametrize("mu, status", [(1e60, Status.BUDGET_MISMATCH), (1e65, Status.NON_FINITE),
