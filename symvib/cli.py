@@ -23,6 +23,8 @@ __all__ = ["main", "one_line"]
 
 #: Exit status for bad input.
 EXIT_BAD_INPUT = 2
+#: Exit status of a run that ended with an error status (non_finite, energy_budget_mismatch).
+EXIT_RUN_FAILED = 3
 #: Longest error message printed, in characters (a message may quote a long user text).
 MAX_MESSAGE_LENGTH = 500
 
@@ -177,11 +179,16 @@ def _cmd_run(args) -> int:
     if args.json:
         Path(args.json).write_text(result.to_json(samples=args.samples) + "\n", encoding="utf-8")
         print(f"wrote {args.json}")
-    if args.plot:
+    if args.plot and result.samples is not None:  # a non_finite run has no samples to draw
         from .plots import save_run_figures
 
         for path in save_run_figures(result, args.plot):
             print(f"wrote {path}")
+    if not result.success:
+        detail = f" ({result.stats['error']})" if result.stats.get("error") else ""
+        print(f"symvib run: error: run failed with status {result.status.value}: {result.message}{detail}",
+              file=sys.stderr)
+        return EXIT_RUN_FAILED
     return 0
 
 

@@ -12,14 +12,17 @@ of this module are its knobs.
 
 Codes (integers, so that compiled code can return them):
 
-* events: ``IMPACT, REVERSAL, ARREST, REST_ON_LIMITER, NORMAL_SIGN_CHANGE``;
-* status: ``RUNNING, ARRESTED, RESTING, T_MAX, MAX_EVENTS, LEFT_DOMAIN``.
+* events: ``IMPACT, REVERSAL, ARREST, REST_ON_LIMITER, NORMAL_SIGN_CHANGE, LEFT_CURVE``;
+* status: ``RUNNING, ARRESTED, RESTING, T_MAX, MAX_EVENTS, LEFT_DOMAIN, NON_FINITE,
+  BUDGET_MISMATCH, LEFT_CURVE``.  The engine itself ends a run with ``NON_FINITE`` as soon
+  as its state stops being finite; ``BUDGET_MISMATCH`` is set after the run by
+  :func:`symvib.driver.checked_status` (the codes :data:`ERROR_CODES` are failures).
 """
 import math
 
 import numpy as np
 
-__all__ = ["EVENT_NAMES", "STATUS_NAMES", "simulate", "samples", "sweep", "SUMMARY", "SCALARS"]
+__all__ = ["EVENT_NAMES", "STATUS_NAMES", "ERROR_CODES", "simulate", "samples", "sweep", "SUMMARY", "SCALARS"]
 
 try:
     jit  # noqa: B018 - set by the combined engine module before this source
@@ -35,9 +38,14 @@ except NameError:  # imported on its own: plain Python
         return tuple(row)
 
 IMPACT, REVERSAL, ARREST, REST_ON_LIMITER, NORMAL_SIGN_CHANGE = 0, 1, 2, 3, 4
+LEFT_CURVE_EVENT = 5
 RUNNING, ARRESTED, RESTING, T_MAX, MAX_EVENTS, LEFT_DOMAIN = 0, 1, 2, 3, 4, 5
-EVENT_NAMES = ("impact", "reversal", "arrest", "rest_on_limiter", "normal_sign_change")
-STATUS_NAMES = ("running", "arrested", "resting_on_limiter", "t_max", "max_events", "left_domain")
+NON_FINITE, BUDGET_MISMATCH, LEFT_CURVE = 6, 7, 8
+#: Status codes of a failed run (its numbers are not a result).
+ERROR_CODES = (NON_FINITE, BUDGET_MISMATCH)
+EVENT_NAMES = ("impact", "reversal", "arrest", "rest_on_limiter", "normal_sign_change", "left_curve")
+STATUS_NAMES = ("running", "arrested", "resting_on_limiter", "t_max", "max_events", "left_domain",
+                "non_finite", "energy_budget_mismatch", "left_curve")
 _LIMIT, _TURN, _NSIGN, _PASS, _EDGE = 0, 1, 2, 3, 4
 
 #: Widest quadrature panel, in units of the curve's q_scale.
@@ -57,6 +65,11 @@ CONE_RTOL = 1e-9
 ZENO_W = 1e-10
 #: Gauss points at which the normal force is sampled per interval where it may change sign.
 N_SCAN = 32
+#: Golden-section steps of the search for a dip of the normal force below 0 around a local
+#: minimum of its scanned values (the bracket shrinks to 0.618**40 = 4e-9 of two node spacings).
+DIP_ITER = 40
+#: The golden ratio's conjugate, (sqrt(5) - 1) / 2.
+GOLDEN = 0.6180339887498949
 #: Relative bracket width at which root finders stop.
 ROOT_RTOL = 4 * np.finfo(float).eps
 #: Iterations after which a root finder stops (not reached on a bracketed monotone function).
@@ -66,7 +79,8 @@ TINY = np.finfo(float).tiny
 #: Lattice steps scanned ahead of the particle at a time.
 CHUNK = 16
 #: Order of the scene scalars passed to the compiled ``simulate``.
-SCALARS = ("g", "m", "mu", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max", "max_events")
+SCALARS = ("g", "m", "mu", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max", "max_events",
+           "unilateral")
 #: Rows of the quadrature's scratch array (node values and the cumulative sums).
 WORK_ROWS = 10
 #: Columns of the interval log: qa, qb, Ga, Gb, s, sigma, t0, T, Wf (per unit mass).
@@ -129,6 +143,12 @@ def energy(q, w, m, g, cp):
 @jit
 def qdot_of(q, w, sigma, cp):
     return sigma * math.sqrt(max(w, 0.0)) / h_scalar(q, *cp)
+
+@jit
+def finite_state(t, q, w, Wf, Wimp):
+    """Whether the run's state and energy sums are all finite numbers."""
+    return (math.isfinite(t) and math.isfinite(q) and math.isfinite(w) and math.isfinite(Wf)
+            and math.isfinite(Wimp))
 
 @jit
 def nsign_of(q, w, g, cp):
@@ -349,6 +369,28 @@ def normal_on(x, p):
     w = math.exp(-2.0 * s * mu * alpha_scalar(x, *cp)) * max(G, 0.0)
     return nsgn * N_w_scalar(x, w, g, *cp)
 
+@jit
+def dip_below(pn, a, b):
+    """A point of (a, b) where normal_on < 0, by a golden-section search for a minimum (nan if none)."""
+    c = b - GOLDEN * (b - a)
+    d = a + GOLDEN * (b - a)
+    fc = normal_on(c, pn)
+    fd = normal_on(d, pn)
+    for _ in range(DIP_ITER):
+        if fc < 0.0:
+            return c, fc
+        if fd < 0.0:
+            return d, fd
+        if fc < fd:
+            b, d, fd = d, c, fc
+            c = b - GOLDEN * (b - a)
+            fc = normal_on(c, pn)
+        else:
+            a, c, fc = c, d, fd
+            d = a + GOLDEN * (b - a)
+            fd = normal_on(d, pn)
+    return math.nan, 0.0
+
 # --- event location -------------------------------------------------------------
 @jit
 def locate(q, sigma, s, Ga, P, region, roots, count, X):
@@ -397,15 +439,27 @@ def locate(q, sigma, s, Ga, P, region, roots, count, X):
     safe_hi = region[7]
     if safe_lo <= min(q, qe) and max(q, qe) <= safe_hi:
         return kind_out, qe, Ge, roots
+    # N is scanned at the Gauss nodes and at qe (its sign can change after the last node);
+    # around a local minimum of the scanned values a golden-section search looks for a
+    # dip below 0 between nodes.  The start counts as positive (N may be 0 there, just
+    # after a sign change).
     nsgn = 1.0 if s * sigma > 0 else -1.0
     pn = (s, C, nsgn, g, g2, mu, cp)
+    before, fbefore = q, max(normal_on(q, pn), 1e-300)
     prev, fprev = q, 1e-300
-    for j in range(X.shape[0]):
-        x = q + (qe - q) * 0.5 * (X[j] + 1.0)
+    n = X.shape[0]
+    for j in range(n + 1):
+        x = q + (qe - q) * 0.5 * (X[j] + 1.0) if j < n else qe
         fx = normal_on(x, pn)
         if fx < 0.0:
             r = root_normal(pn, prev, x, fprev, fx)
             return _NSIGN, r, C - g2 * Fs(s, r, mu, cp), roots
+        if j > 0 and fprev <= fbefore and fprev <= fx:
+            xd, fd = dip_below(pn, before, x)
+            if not math.isnan(xd):
+                r = root_normal(pn, before, xd, fbefore, fd)
+                return _NSIGN, r, C - g2 * Fs(s, r, mu, cp), roots
+        before, fbefore = prev, max(fprev, 1e-300)
         prev, fprev = x, fx
     return kind_out, qe, Ge, roots
 
@@ -565,8 +619,12 @@ def rest(q, side, mu, cp):
     return 0, (1 if pull > 0.0 else -1)
 
 @jit
-def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
-    """Simulate one scene.  Returns a tuple; see :func:`symvib.driver.simulate` for its use."""
+def run(P, R, q0, qdot0, t_max, max_events, keep_intervals, unilateral):
+    """Simulate one scene.  Returns a tuple; see :func:`symvib.driver.simulate` for its use.
+
+    ``unilateral``: the curve only pushes along its normal, so where N reaches 0 (or is
+    negative at the start of an interval) the run ends with LEFT_CURVE (physics.md, "Events").
+    """
     (g, m, mu, k, has_left, left, has_right, right, lo, hi, scale, cp) = P
     region, roots, count = map_new(q0, lo, hi, mu, cp, CRIT_STEP * scale)
     X = R[0]
@@ -584,7 +642,8 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
     status = RUNNING
     q = q0
     w = (h_scalar(q, *cp) * qdot0) ** 2
-    sigma = 0 if qdot0 == 0.0 else (1 if qdot0 > 0.0 else -1)
+    # At rest also when w underflows to 0 (qdot0 = 1e-300): the rest test decides.
+    sigma = 0 if qdot0 == 0.0 or w == 0.0 else (1 if qdot0 > 0.0 else -1)
     E0 = energy(q, w, m, g, cp)
     flip = False
     nsign = 1
@@ -594,7 +653,13 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
     elif has_left and q == left:
         side = -1
     pending_impact = sigma != 0 and side == sigma
-    if sigma == 0:
+    if not (math.isfinite(E0) and finite_state(t, q, w, Wf, Wimp)):
+        status = NON_FINITE  # e.g. qdot0 = 1e200: w = inf from the start
+    elif unilateral and N_w_scalar(q, w, g, *cp) < 0.0:
+        # Unilateral contact and N < 0 at the start: the particle leaves the curve at once.
+        events, ne = put_event(events, ne, LEFT_CURVE_EVENT, t, q, qdot0, qdot0, E0)
+        status = LEFT_CURVE
+    elif sigma == 0:
         what, direction = rest(q, side, mu, cp)
         if what != 0:
             events, ne = put_event(events, ne, ARREST if what == 1 else REST_ON_LIMITER, t, q, 0.0, 0.0,
@@ -602,6 +667,9 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
             status = ARRESTED if what == 1 else RESTING
         sigma = direction
     while status == RUNNING:
+        if not finite_state(t, q, w, Wf, Wimp):
+            status = NON_FINITE  # overflow: stop at once rather than run max_events impacts at inf
+            break
         if pending_impact:
             # An impact at q with squared speed w moving sigma.
             pending_impact = False
@@ -662,6 +730,12 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
         else:
             nsign = nsign_of(q, w, g, cp)
         flip = False
+        if unilateral and nsign < 0:
+            # N < 0 here (at the start, or after an impact): the particle is not held.
+            events, ne = put_event(events, ne, LEFT_CURVE_EVENT, t, q, qdot_of(q, w, sigma, cp),
+                                   qdot_of(q, w, sigma, cp), energy(q, w, m, g, cp))
+            status = LEFT_CURVE
+            break
         s = sigma * nsign
         Ga = w * math.exp(2.0 * s * mu * alpha_scalar(q, *cp))
         kind, qb, Gb, roots = locate(q, sigma, s, Ga, P, region, roots, count, X)
@@ -708,6 +782,11 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
         elif kind == _LIMIT:
             q, w = qb, wb
             pending_impact = True
+        elif kind == _NSIGN and unilateral:
+            qd = qdot_of(qb, wb, sigma, cp)
+            events, ne = put_event(events, ne, LEFT_CURVE_EVENT, t, qb, qd, qd, energy(qb, wb, m, g, cp))
+            q, w = qb, wb
+            status = LEFT_CURVE
         elif kind == _NSIGN:
             qd = qdot_of(qb, wb, sigma, cp)
             events, ne = put_event(events, ne, NORMAL_SIGN_CHANGE, t, qb, qd, qd, energy(qb, wb, m, g, cp))
@@ -720,6 +799,8 @@ def run(P, R, q0, qdot0, t_max, max_events, keep_intervals):
             status = LEFT_DOMAIN
     if status == MAX_EVENTS and w == 0.0:
         sigma = 0
+    if not finite_state(t, q, w, Wf, Wimp):
+        status = NON_FINITE  # e.g. mu = 1e65: an arrest reached at t = nan
     return (status, ne, events, ni, ivs, t, q, w, sigma, Wf, Wimp, E0, zeno)
 
 @jit
@@ -757,11 +838,12 @@ def simulate(scal, cp, R, keep):
     g, m, mu, k = scal[0], scal[1], scal[2], scal[3]
     has_left, left, has_right, right = scal[4] != 0.0, scal[5], scal[6] != 0.0, scal[7]
     q0, qdot0, t_max, max_events = scal[8], scal[9], scal[10], int(scal[11])
+    unilateral = scal[12] != 0.0
     lo, hi = domain(*cp)
     scale = q_scale_scalar(*cp)
     P = (g, m, mu, k, has_left, left, has_right, right, lo, hi, scale, cp)
     (status, ne, events, ni, ivs, t, q, w, sigma, Wf, Wimp, E0, zeno) = run(
-        P, R, q0, qdot0, t_max, max_events, keep)
+        P, R, q0, qdot0, t_max, max_events, keep, unilateral)
     E_final = energy(q, w, m, g, cp)
     qdot_final = qdot_of(q, w, sigma, cp) if sigma != 0 else 0.0
     return (status, ne, events, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale)

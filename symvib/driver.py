@@ -29,6 +29,20 @@ series once below ``ZENO_W``), plastic impacts, ``mu = 0`` with ``k = 1``
 (bounded by ``t_max``/``max_events``), the normal force changing sign, and the
 ends of the curve's regular domain.
 
+Where ``N`` may change sign (outside the region where ``kappa >= 0`` and
+``x' > 0``), it is scanned at the Gauss nodes of the interval and at its end,
+and around every local minimum of the scanned values a golden-section search
+looks for a dip below 0 between nodes.  With ``physics.contact = "unilateral"``
+the first zero of ``N`` ends the run (status ``left_curve``); with the default
+``"bilateral"`` the branch flips and the motion goes on.
+
+Every result is checked (:func:`checked_status`): a state that stops being
+finite ends the run at once with status ``non_finite`` (on the plain-Python
+backend, where ``math`` raises ``OverflowError`` instead, the message is kept
+in ``stats["error"]``), and a run whose energy budget misses by more than
+:data:`BUDGET_RTOL` ends ``energy_budget_mismatch``; ``Result.success`` is then
+False and ``symvib run`` exits with status 3.
+
 The loop itself is :mod:`symvib.core`, run compiled by numba when it is
 installed (``pip install symvib[fast]``) and as plain Python otherwise; both
 give the same events.
@@ -60,7 +74,7 @@ from .events import EnergyBudget, Event, EventKind, Result, Samples, Status, Zen
 from .kernels import cache_dir, check_text, load
 from .quadrature import rule
 
-__all__ = ["simulate", "NODES", "backend_available", "engine"]
+__all__ = ["simulate", "NODES", "backend_available", "engine", "checked_status", "guarded_sweep", "BUDGET_RTOL"]
 
 #: Gauss-Legendre nodes per quadrature panel (the accuracy knob of the times).
 NODES = 16
@@ -68,6 +82,14 @@ NODES = 16
 SWEEP_GRAIN = 16
 #: Environment variable that forces a backend ("numba" or "python").
 BACKEND_ENV = "SYMVIB_BACKEND"
+#: Largest relative residual of the energy budget (physics.md, "Energies") a trusted run may
+#: end with: ``|E0 - E_final - W_friction - W_impacts|`` over the largest of those four
+#: magnitudes.  Each term is exact to rounding or to the quadrature (about 1e-15 relative per
+#: interval at 16 nodes, so at most about 1e-10 after the default 100,000 events; the catalogue
+#: scenes and the test suite end below 1e-13), while a missed or misplaced event (a turning
+#: point, a branch flip, a normal-force zero) or an overflow leaves a residual of the order of
+#: the energy it mislays.  A run beyond it ends with status ``energy_budget_mismatch``.
+BUDGET_RTOL = 1e-9
 #: Kernel-module functions compiled besides the ``*_scalar`` kernels.
 _JIT_EXTRA = ("_antiderivative_scalar", "domain")
 
@@ -75,9 +97,11 @@ _JIT_EXTRA = ("_antiderivative_scalar", "domain")
 _BOUND: dict = {}
 
 _KINDS = [EventKind.IMPACT, EventKind.REVERSAL, EventKind.ARREST, EventKind.REST_ON_LIMITER,
-          EventKind.NORMAL_SIGN_CHANGE]
+          EventKind.NORMAL_SIGN_CHANGE, EventKind.LEFT_CURVE]
 _STATUS = {core.ARRESTED: Status.ARRESTED, core.RESTING: Status.RESTING_ON_LIMITER, core.T_MAX: Status.T_MAX,
-           core.MAX_EVENTS: Status.MAX_EVENTS, core.LEFT_DOMAIN: Status.LEFT_DOMAIN}
+           core.MAX_EVENTS: Status.MAX_EVENTS, core.LEFT_DOMAIN: Status.LEFT_DOMAIN,
+           core.NON_FINITE: Status.NON_FINITE, core.BUDGET_MISMATCH: Status.BUDGET_MISMATCH,
+           core.LEFT_CURVE: Status.LEFT_CURVE}
 
 
 def backend_available(name: str) -> bool:
@@ -225,8 +249,16 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     scal = np.array([scene.g, scene.m, scene.mu, scene.k, scene.left is not None,
                      0.0 if scene.left is None else scene.left, scene.right is not None,
                      0.0 if scene.right is None else scene.right, scene.q0, scene.qdot0, scene.t_max,
-                     scene.max_events], dtype=float)
-    (status, ne, ev, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale) = sim(scal, cp, R, samples)
+                     scene.max_events, scene.contact == "unilateral"], dtype=float)
+    try:
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
+            (status, ne, ev, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale) = sim(
+                scal, cp, R, samples)
+    except (ArithmeticError, ValueError) as exc:
+        if not _math_error(exc):
+            raise
+        return _non_finite(scene, exc)
+    status = checked_status(status, t, q, qdot_final, E0, E_final, Wf, Wimp)
     detail = "plastic" if scene.k == 0.0 else ""
     events = [Event(_KINDS[int(r[0])], r[1], r[2], r[3], r[4], r[5], detail if r[0] == core.IMPACT else "")
               for r in ev[:ne].tolist()]
@@ -236,10 +268,114 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         events[-1] = events[-1]._replace(
             detail=f"Zeno accumulation: geometric series of bounces, ratio {zeno[0]:.9g}")
     budget = EnergyBudget(float(E0), float(E_final), float(Wf), float(Wimp))
-    S = _samples(sample_fn, ivs, ni, scale, R, scene, mod) if samples else None
+    S = None
+    if samples and status != core.NON_FINITE:
+        try:
+            S = _samples(sample_fn, ivs, ni, scale, R, scene, mod)
+        except (ArithmeticError, ValueError) as exc:
+            if not _math_error(exc):
+                raise
+            return _non_finite(scene, exc)
     return Result(scene=scene, status=_STATUS[int(status)], events=tuple(events), samples=S,
                   energy_budget=budget, t_final=float(t), q_final=float(q), qdot_final=float(qdot_final),
                   zeno=zinfo, stats={"intervals": int(ni) if samples else None})
+
+
+#: Messages of the exceptions Python's ``math`` raises where compiled code returns inf or NaN.
+_MATH_MESSAGES = ("math range error", "math domain error", "float division by zero", "division by zero",
+                  "Numerical result out of range", "float modulo", "integer division or modulo by zero")
+
+
+def _math_error(exc: BaseException) -> bool:
+    """Whether ``exc`` is a floating-point failure of the plain-Python engine (not a bug)."""
+    if isinstance(exc, ArithmeticError):
+        return True  # OverflowError, ZeroDivisionError, FloatingPointError
+    return isinstance(exc, ValueError) and any(m in str(exc) for m in _MATH_MESSAGES)
+
+
+def _non_finite(scene, exc: BaseException) -> Result:
+    """The result of a run the plain-Python engine stopped by an overflow (status ``non_finite``).
+
+    The compiled engine returns inf or NaN where Python's ``math`` raises, and
+    ends the same run with the same status; the exception's text is kept in
+    ``stats["error"]``.
+    """
+    nan = math.nan
+    return Result(scene=scene, status=Status.NON_FINITE, events=(), samples=None,
+                  energy_budget=EnergyBudget(nan, nan, nan, nan), t_final=nan, q_final=nan, qdot_final=nan,
+                  stats={"intervals": None, "error": f"{type(exc).__name__}: {exc}"})
+
+
+def checked_status(status, t_final, q_final, qdot_final, E0, E_final, friction_work, impact_loss):
+    """The engine's status code after the checks of a trusted result (physics.md, "Energies").
+
+    A run whose final state or energy sums are not finite ends ``NON_FINITE``;
+    one whose energy budget ``E0 - E_final = W_friction + W_impacts`` misses by
+    more than :data:`BUDGET_RTOL` of the largest of those terms ends
+    ``BUDGET_MISMATCH``; any other status is kept.  Works on one run (numbers)
+    or on the columns of a sweep (arrays).
+
+    Returns
+    -------
+    int or ndarray of int
+        Codes of :mod:`symvib.core` (``core.STATUS_NAMES`` names them).
+
+    Examples
+    --------
+    >>> checked_status(core.ARRESTED, 1.0, 0.0, 0.0, 4.9, 0.1, 2.8, 2.0) == core.ARRESTED
+    True
+    >>> checked_status(core.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 9.9, 0.0) == core.BUDGET_MISMATCH
+    True
+    >>> checked_status(core.ARRESTED, math.nan, 0.0, 0.0, 4.9, 0.0, 4.9, 0.0) == core.NON_FINITE
+    True
+    """
+    scalar = np.ndim(status) == 0
+    code = np.asarray(status, dtype=np.int64)
+    E0, E_final, Wf, Wimp = (np.asarray(v, dtype=float) for v in (E0, E_final, friction_work, impact_loss))
+    finite = np.ones(code.shape, dtype=bool)
+    for v in (t_final, q_final, qdot_final, E0, E_final, Wf, Wimp):
+        finite &= np.isfinite(v)
+    with np.errstate(invalid="ignore", over="ignore"):
+        residual = np.abs(E0 - E_final - Wf - Wimp)
+        scale = np.maximum(np.maximum(np.abs(E0), np.abs(E_final)), np.maximum(np.abs(Wf), np.abs(Wimp)))
+        closes = residual <= BUDGET_RTOL * scale
+    out = np.where(~finite, core.NON_FINITE, np.where(closes | np.isin(code, core.ERROR_CODES), code,
+                                                       core.BUDGET_MISMATCH))
+    return int(out) if scalar else out.astype(np.int64)
+
+
+def guarded_sweep(sweep_fn):
+    """``sweep_fn`` (the engine's ``sweep``) with each scene's status checked as :func:`simulate` checks it.
+
+    The summary's status column goes through :func:`checked_status`, so a
+    scene whose state overflowed or whose energy budget does not close is
+    ``non_finite`` / ``energy_budget_mismatch`` in a sweep too.  On the
+    plain-Python backend an overflow raises: the scenes then run one at a time
+    and the failing ones get status ``non_finite`` and NaN values.
+    """
+    col = {name: j for j, name in enumerate(core.SUMMARY)}
+
+    def guarded(scal_rows, cp_rows, R, max_log):
+        try:
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
+                out, logs = sweep_fn(scal_rows, cp_rows, R, max_log)
+        except (ArithmeticError, ValueError) as exc:
+            if not _math_error(exc):
+                raise
+            if len(scal_rows) == 1:
+                out = np.full((1, len(core.SUMMARY)), np.nan)
+                out[:, [col["status"], col["events"], col["impacts"], col["reversals"],
+                        col["normal_sign_changes"]]] = [core.NON_FINITE, 0, 0, 0, 0]
+                return out, np.zeros((1, max(max_log, 1), 6))
+            parts = [guarded(scal_rows[i:i + 1], cp_rows[i:i + 1], R, max_log) for i in range(len(scal_rows))]
+            return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+        out[:, col["status"]] = checked_status(
+            out[:, col["status"]], out[:, col["t_final"]], out[:, col["q_final"]], out[:, col["qdot_final"]],
+            out[:, col["E0"]], out[:, col["E_final"]], out[:, col["friction_work"]], out[:, col["impact_loss"]])
+        return out, logs
+
+    guarded.__wrapped__ = sweep_fn
+    return guarded
 
 
 def plain_nodes(nodes: int) -> int:
@@ -279,7 +415,55 @@ def _rule(nodes):
 
 
 def _samples(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
-    """Each interval's samples: start point, Gauss nodes (sorted in time), end point."""
+    """Each interval's samples: start point, Gauss nodes (sorted in time), end point.
+
+    Linear in the number of intervals: the nodes are ordered by (interval, time)
+    with one stable sort, and every interval's block is placed by offsets
+    (``benchmarks/bench_samples.py``).
+    """
+    cp = tuple(float(v) for v in scene.param_values)
+    nodes, index = sample_fn(ivs, ni, float(scene.g), float(scene.mu), float(scale), cp, R)
+    if not ni:
+        empty = np.zeros(0)
+        return Samples(*(empty.copy() for _ in range(8)), np.zeros(0, dtype=int), np.zeros(0, dtype=int))
+    order = np.lexsort((nodes[:, 0], index))  # stable: ties keep the engine's order
+    nodes, index = nodes[order], index[order]
+    counts = np.bincount(index, minlength=ni)[:ni]
+    sizes = counts + 2
+    first = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    last = first + sizes - 1
+    total = int(sizes.sum())
+    inner = np.ones(total, dtype=bool)
+    inner[first] = False
+    inner[last] = False
+    ends = np.empty((ni, 8))
+    for i in range(ni):
+        qa, qb, Ga, Gb, s, sigma, t0, T = ivs[i, :8]
+        wa = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qa, *cp))) * Ga
+        wb = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qb, *cp))) * Gb
+        ends[i] = (t0, t0 + T, qa, qb, wa, wb, mod.N_w_scalar(qa, wa, scene.g, *cp),
+                   mod.N_w_scalar(qb, wb, scene.g, *cp))
+    columns = []
+    for c, (a, b) in enumerate(((0, 1), (2, 3), (4, 5), (6, 7))):
+        col = np.empty(total)
+        col[first] = ends[:, a]
+        col[last] = ends[:, b]
+        col[inner] = nodes[:, c]
+        columns.append(col)
+    t, q, w, N = columns
+    interval = np.repeat(np.arange(ni), sizes)
+    branch = np.repeat(ivs[:ni, 4].astype(int), sizes)
+    sig = np.repeat(ivs[:ni, 5], sizes)
+    m, g, mu = scene.m, scene.g, scene.mu
+    v = np.sqrt(np.maximum(w, 0.0))
+    Ep = m * g * mod.z(q, *cp)
+    return Samples(t=t, q=q, qdot=sig * v / mod.h(q, *cp), F_N=m * N, P_mu=-mu * m * np.abs(N) * v,
+                   Ek=0.5 * m * w, Ep=Ep, E=0.5 * m * w + Ep, interval=interval, branch=branch)
+
+
+def _samples_quadratic(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
+    """The former :func:`_samples` (``nodes[index == i]`` per interval, quadratic): the reference
+    of the bitwise test and of ``benchmarks/bench_samples.py``."""
     cp = tuple(float(v) for v in scene.param_values)
     nodes, index = sample_fn(ivs, ni, float(scene.g), float(scene.mu), float(scale), cp, R)
     t_parts, q_parts, w_parts, N_parts, iv_parts, s_parts, sig_parts = [], [], [], [], [], [], []

@@ -18,7 +18,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Status", "EventKind", "Event", "EnergyBudget", "Samples", "ZenoInfo", "Result", "MESSAGES"]
+__all__ = ["Status", "EventKind", "Event", "EnergyBudget", "Samples", "ZenoInfo", "Result", "MESSAGES",
+           "ERROR_STATUSES", "json_safe"]
 
 
 class Status(enum.Enum):
@@ -29,7 +30,18 @@ class Status(enum.Enum):
     T_MAX = "t_max"
     MAX_EVENTS = "max_events"
     LEFT_DOMAIN = "left_domain"
+    LEFT_CURVE = "left_curve"
+    NON_FINITE = "non_finite"
+    BUDGET_MISMATCH = "energy_budget_mismatch"
 
+    @property
+    def is_error(self) -> bool:
+        """Whether a run that stopped so failed (its numbers are not a result)."""
+        return self in ERROR_STATUSES
+
+
+#: Statuses of a failed run: the state stopped being finite, or the energy budget does not close.
+ERROR_STATUSES = (Status.NON_FINITE, Status.BUDGET_MISMATCH)
 
 #: One sentence per status, for reports.
 MESSAGES = {
@@ -38,6 +50,9 @@ MESSAGES = {
     Status.T_MAX: "the time bound t_max was reached",
     Status.MAX_EVENTS: "the event bound max_events was reached",
     Status.LEFT_DOMAIN: "the particle reached an end of the curve's regular domain (a singular point)",
+    Status.LEFT_CURVE: "the normal force reached 0 and the particle left the curve (unilateral contact)",
+    Status.NON_FINITE: "error: the state stopped being finite (overflow); the numbers are not a result",
+    Status.BUDGET_MISMATCH: "error: the energy budget does not close; the numbers are not a result",
 }
 
 
@@ -49,6 +64,7 @@ class EventKind(enum.Enum):
     ARREST = "arrest"
     REST_ON_LIMITER = "rest_on_limiter"
     NORMAL_SIGN_CHANGE = "normal_sign_change"
+    LEFT_CURVE = "left_curve"
 
 
 class Event(NamedTuple):
@@ -172,6 +188,11 @@ class Result:
     def message(self) -> str:
         return MESSAGES[self.status]
 
+    @property
+    def success(self) -> bool:
+        """False when the run failed (:attr:`Status.is_error`), like ``solve_ivp``'s ``success``."""
+        return not self.status.is_error
+
     def count(self, kind: EventKind) -> int:
         return sum(e.kind is kind for e in self.events)
 
@@ -180,6 +201,7 @@ class Result:
         out = {
             "scene": getattr(self.scene, "name", ""),
             "status": self.status.value,
+            "success": self.success,
             "message": self.message,
             "t_final": self.t_final,
             "q_final": self.q_final,
@@ -187,6 +209,8 @@ class Result:
             "events": [e.to_dict() for e in self.events],
             "energy_budget": self.energy_budget.to_dict(),
         }
+        if self.stats.get("error"):
+            out["error"] = self.stats["error"]
         if self.zeno is not None:
             out["zeno"] = {k: getattr(self.zeno, k) for k in self.zeno.__dataclass_fields__}
         if samples and self.samples is not None:
@@ -194,7 +218,8 @@ class Result:
         return out
 
     def to_json(self, **kwargs) -> str:
-        return json.dumps(self.to_dict(**kwargs), indent=2)
+        """Strict JSON of :meth:`to_dict`: a non-finite number is written ``null``."""
+        return json.dumps(json_safe(self.to_dict(**kwargs)), indent=2, allow_nan=False)
 
     def event_table(self, coordinate: str = "q") -> str:
         """A readable table of the events and a summary."""
@@ -219,3 +244,29 @@ class Result:
             lines.append(f"Zeno accumulation at the {z.limiter} limiter: ratio {z.ratio:.9g}, {z.simulated} "
                          f"impacts simulated, remaining time {z.remaining_time:.3g} s summed")
         return "\n".join(lines)
+
+
+def json_safe(value):
+    """``value`` with every non-finite float (NaN, +-inf, also NumPy's) replaced by ``None``.
+
+    JSON has no NaN or Infinity (``json.dumps`` writes them as non-standard
+    tokens that strict readers refuse), so they become ``null``.
+
+    Examples
+    --------
+    >>> json_safe({"E": float("inf"), "q": [1.0, float("nan")], "n": 3})
+    {'E': None, 'q': [1.0, None], 'n': 3}
+    """
+    if isinstance(value, dict):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_safe(value.tolist())
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value

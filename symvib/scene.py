@@ -64,6 +64,13 @@ __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "DEFAULT_T_MA
 DEFAULT_T_MAX = 1000.0
 #: Default bound on the number of events of a run.
 DEFAULT_MAX_EVENTS = 100_000
+#: Largest ``run.max_events`` accepted: the engine's event log grows with the events (48 bytes
+#: each, so 4.8 GB at this bound) and its counter is an int64.
+MAX_EVENTS = 10**8
+#: Values of ``physics.contact`` (physics.md, "Assumptions"): ``bilateral`` (the default, the
+#: paper's model: a bead on a wire, held on both sides, N may change sign) or ``unilateral``
+#: (a particle on the surface, supported only along the normal n: the run ends when N reaches 0).
+CONTACTS = ("bilateral", "unilateral")
 #: Standard gravity, the default of ``physics.g``.
 STANDARD_GRAVITY = 9.81
 #: Default mass, kilograms.
@@ -76,7 +83,7 @@ MAX_DESCRIPTION_LENGTH = 10_000
 _SECTIONS = {
     "curve": {"shape", "x", "z", "q", "name", "domain", "h", "alpha", "q_scale", "params"},
     "parameters": None,  # free names: the curve's symbols
-    "physics": {"g", "m", "mu", "alpha0", "restitution"},
+    "physics": {"g", "m", "mu", "alpha0", "restitution", "contact"},
     "limiters": {"left", "right"},
     "initial": {"q", "qdot"},
     "run": {"t_max", "max_events"},
@@ -113,6 +120,11 @@ class Scene:
         Initial state.
     t_max : float
     max_events : int
+    contact : {"bilateral", "unilateral"}
+        Whether the curve holds the particle on both sides (a bead on a wire) or
+        only pushes it along the normal ``n = (-sin alpha, cos alpha)`` (a particle
+        on top of a graph; for a parametric curve, on the left of the direction
+        of increasing ``q``), :data:`CONTACTS`.
     """
 
     name: str
@@ -129,6 +141,7 @@ class Scene:
     t_max: float = DEFAULT_T_MAX
     max_events: int = DEFAULT_MAX_EVENTS
     alpha0: float | None = field(default=None, compare=False)
+    contact: str = "bilateral"
 
     def __post_init__(self):
         _validate(self)
@@ -280,8 +293,12 @@ def _validate(s: Scene) -> None:
             raise SceneError(label, f"{_show(v)} is outside the curve's regular domain ({lo:.6g}, {hi:.6g})")
     if not _finite(s.t_max, "run.t_max") > 0:
         raise SceneError("run.t_max", f"must be positive, got {_show(s.t_max)}")
+    if s.contact not in CONTACTS:
+        raise SceneError("physics.contact", f"must be one of {', '.join(map(repr, CONTACTS))}, got {_show(s.contact)}")
     if isinstance(s.max_events, bool) or not isinstance(s.max_events, int) or s.max_events < 1:
         raise SceneError("run.max_events", f"must be a positive integer, got {_show(s.max_events)}")
+    if s.max_events > MAX_EVENTS:
+        raise SceneError("run.max_events", f"at most {MAX_EVENTS} (scene.MAX_EVENTS), got {_show(s.max_events)}")
 
 
 #: Texts of an infinite end of a curve's domain (with an optional sign).
@@ -488,6 +505,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         qdot0=_number(ini, "qdot", "initial", symbols=values),
         t_max=_number(run, "t_max", "run", default=DEFAULT_T_MAX),
         max_events=max_events,
+        contact=phys.get("contact", "bilateral"),
     )
 
 

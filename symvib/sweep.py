@@ -57,7 +57,7 @@ import numpy as np
 
 from . import core
 from . import expr as _expr
-from .scene import Scene, SceneError, load_scene, scene_from_dict
+from .scene import MAX_EVENTS, Scene, SceneError, load_scene, scene_from_dict
 
 __all__ = ["SweepSpec", "SweepResult", "make_spec", "sweep", "load_sweep", "run_chunk", "main",
            "FORMAT", "DEFAULT_CHUNK"]
@@ -83,7 +83,7 @@ _FIELDS = {
 #: Scene-file names of the columns of core.SCALARS (for error messages).
 _SCALAR_FIELDS = ("physics.g", "physics.m", "physics.mu", "physics.restitution", "limiters.left",
                   "limiters.left", "limiters.right", "limiters.right", "initial.q", "initial.qdot",
-                  "run.t_max", "run.max_events")
+                  "run.t_max", "run.max_events", "physics.contact")
 _SHORT = {"q": "initial.q", "qdot": "initial.qdot", "q0": "initial.q", "qdot0": "initial.qdot",
           "mu": "physics.mu", "alpha0": "physics.alpha0", "restitution": "physics.restitution",
           "k": "physics.restitution", "g": "physics.g", "m": "physics.m", "left": "limiters.left",
@@ -235,7 +235,7 @@ class SweepSpec:
         n = len(values[0]) if values else 0
         base = np.array([s.g, s.m, s.mu, s.k, s.left is not None, 0.0 if s.left is None else s.left,
                          s.right is not None, 0.0 if s.right is None else s.right, s.q0, s.qdot0, s.t_max,
-                         s.max_events], dtype=float)
+                         s.max_events, s.contact == "unilateral"], dtype=float)
         scal = np.repeat(base[None, :], n, axis=0)
         names = [name for name, _ in s.params]
         cp = np.repeat(np.array(s.param_values, dtype=float)[None, :], n, axis=0)
@@ -260,12 +260,12 @@ class SweepSpec:
 def _require(values, ok, fld, reason):
     bad = np.flatnonzero(~ok)
     if bad.size:
-        raise SceneError(fld, f"{reason}, got {values[bad[0]]!r} (sweep row {bad[0]} of its chunk)")
+        raise SceneError(fld, f"{reason}, got {np.asarray(values)[bad[0]].item()!r} (sweep row {bad[0]} of its chunk)")
 
 
 def _check_rows(spec: SweepSpec, scal, cp, names) -> None:
     """Vectorized :func:`symvib.scene._validate` over the rows of one chunk."""
-    g, m, mu, k, hl, left, hr, right, q0, qdot0, t_max, max_events = scal.T
+    g, m, mu, k, hl, left, hr, right, q0, qdot0, t_max, max_events, _unilateral = scal.T
     for label, v in zip(_SCALAR_FIELDS, scal.T):
         _require(v, np.isfinite(v), label, "must be finite")
     _require(g, g > 0, "physics.g", "must be positive")
@@ -274,6 +274,10 @@ def _check_rows(spec: SweepSpec, scal, cp, names) -> None:
     _require(k, (k >= 0) & (k <= 1), "physics.restitution", "must be in [0, 1]")
     _require(t_max, t_max > 0, "run.t_max", "must be positive")
     _require(max_events, max_events >= 1, "run.max_events", "must be a positive integer")
+    over = np.flatnonzero(max_events > MAX_EVENTS)
+    if over.size:
+        raise SceneError("run.max_events", f"at most {MAX_EVENTS} (scene.MAX_EVENTS), got {float(max_events[over[0]]):g} "
+                                           f"(sweep row {over[0]} of its chunk)")
     both = (hl != 0) & (hr != 0)
     _require(left, ~both | (left < right), "limiters", "left limiter must be left of the right one")
     _require(q0, (hl == 0) | (q0 >= left), "initial.q", "is left of the left limiter")
@@ -387,7 +391,7 @@ def _sweep_function(scene: Scene, backend: str):
     from .kernels import load
 
     mod = load(scene.shape)
-    return driver.engine(mod.__file__, driver._resolve(backend))[2]
+    return driver.guarded_sweep(driver.engine(mod.__file__, driver._resolve(backend))[2])
 
 
 @dataclass(frozen=True)
@@ -738,6 +742,10 @@ def _main(args) -> int:
     print(f"sweep of {res.count} scenes of {scene.name} into {out}: {len(res.computed)} chunk(s) computed, "
           f"{len(res.reused)} reused")
     print(f"  status: {status}; {events} events; {np.mean(res['impacts']):.3g} impacts per scene on average")
+    failed = int(np.sum(np.isin(res["status"], core.ERROR_CODES)))
+    if failed:
+        print(f"  {failed} of {res.count} scenes failed (status "
+              f"{' or '.join(core.STATUS_NAMES[c] for c in core.ERROR_CODES)}): their numbers are not results")
     if res.computed and res.seconds > 0:
         n = sum(len(res.spec.rows(i)[0]) for i in res.computed)
         print(f"  {n / res.seconds:,.0f} scenes/s over {res.seconds:.3g} s")

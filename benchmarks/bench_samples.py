@@ -1,0 +1,67 @@
+"""Cost of the driver's samples against the number of events: linear (now) vs quadratic (before).
+
+Run from the project folder (numba recommended)::
+
+    python benchmarks/bench_samples.py [--max-events 32000] [--skip-old-above 16000]
+
+For a frictionless, ideally elastic parabola scene bounded by ``max_events``
+(1k, 2k, ... events), one run logs its intervals; then both
+``driver._samples`` (one stable sort, blocks placed by offsets) and the former
+``driver._samples_quadratic`` (``nodes[index == i]`` per interval) build the
+samples from the same log.  Both results are checked to be bitwise identical,
+and the ratio old / new is measured in the same run.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from symvib import driver  # noqa: E402
+from symvib.kernels import load  # noqa: E402
+from symvib.sweep import _resolve_scene  # noqa: E402
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--max-events", type=int, default=32000)
+    ap.add_argument("--skip-old-above", type=int, default=32000, help="do not time the old code beyond this")
+    args = ap.parse_args(argv)
+    base = _resolve_scene("paper-parabola").replace(mu=0.0, k=1.0, t_max=1e9)
+    mod = load(base.shape)
+    sim, sample_fn, _ = driver.engine(mod.__file__, driver._resolve("auto"))
+    R = driver._rule(driver.NODES)
+    cp = tuple(float(v) for v in base.param_values)
+    print(f"{'events':>8} {'new [s]':>10} {'old [s]':>10} {'old/new':>8}")
+    n = 1000
+    while n <= args.max_events:
+        sc = base.replace(max_events=n)
+        scal = np.array([sc.g, sc.m, sc.mu, sc.k, 1.0, sc.left, 1.0, sc.right, sc.q0, sc.qdot0, sc.t_max,
+                         sc.max_events], dtype=float)
+        out = sim(scal, cp, R, True)
+        ni, ivs, scale = out[3], out[4], out[13]
+        start = time.perf_counter()
+        new = driver._samples(sample_fn, ivs, ni, scale, R, sc, mod)
+        t_new = time.perf_counter() - start
+        if n <= args.skip_old_above:
+            start = time.perf_counter()
+            old = driver._samples_quadratic(sample_fn, ivs, ni, scale, R, sc, mod)
+            t_old = time.perf_counter() - start
+            for name in new.__dataclass_fields__:
+                if getattr(new, name).tobytes() != getattr(old, name).tobytes():
+                    raise SystemExit(f"samples differ in {name} at {n} events")
+            print(f"{n:>8} {t_new:>10.3f} {t_old:>10.3f} {t_old / t_new:>8.1f}")
+        else:
+            print(f"{n:>8} {t_new:>10.3f} {'-':>10} {'-':>8}")
+        n *= 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
