@@ -105,3 +105,95 @@ def test_user_curve_sweeps_through_the_cli(tmp_path, capsys):
     assert "sweep of 8 scenes of bowl-scene" in text and "0 reused" in text
     assert main([str(scene), "--vary", "qdot=1:4:4", "--vary", "mu=0.01,0.1", "-o", str(out), "--quiet"]) == 0
     assert "0 chunk(s) computed, 1 reused" in capsys.readouterr().out
+
+
+# --------------------------------------------------------------------- class 6: sizes before memory
+
+import os  # noqa: E402
+import socket  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import tracemalloc  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+from symvib import sweep as sweep_mod  # noqa: E402
+from symvib.sweep import (FORMAT, MAX_LIST_VALUES, SweepError, WriterLock, load_sweep, make_spec,  # noqa: E402
+                          sweep_id, _linspace_at)
+
+PARABOLA = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
+            "physics": {"g": 9.81, "m": 0.2, "mu": 0.05, "restitution": 0.8},
+            "limiters": {"left": "-pi/6", "right": "pi/4"}, "initial": {"q": 0.0, "qdot": 7.0}}
+#: Bytes a definition may cost while it is checked (an axis of 10**9 values once cost 14 GB).
+SMALL = 2_000_000
+
+
+def parabola():
+    return scene_from_dict(PARABOLA)
+
+
+@pytest.mark.parametrize("start, stop, count", [
+    (3.0, 12.0, 400), (0.01, 0.2, 250), (-math.pi / 3, -math.pi / 12, 10), (0.0, 1.0, 2), (1.0, 1.0, 5),
+    (2.5, 2.5, 1), (12.0, 3.0, 7), (5e-324, 1e-323, 9), (-1e300, 1e300, 11), (0.1, 0.7, 1000),
+])
+def test_grid_values_are_numpy_linspace_bit_for_bit(start, stop, count):
+    ref = np.linspace(start, stop, count) if count > 1 else np.array([start])
+    idx = np.arange(count)
+    assert np.array_equal(_linspace_at(start, stop, count, idx), ref)
+    assert np.array_equal(_linspace_at(start, stop, count, idx[::-3]), ref[::-3])
+
+
+@pytest.mark.parametrize("vary, kwargs, field", [
+    ({"qdot": "3:12:1000000000"}, {}, "vary.qdot"),                       # the 14 GB tuple
+    ({"qdot": "3:12:100000", "mu": "0.01:0.2:100000"}, {}, "vary"),       # 10**10 scenes
+    ({"qdot": "3:12:4"}, {"log_events": 100_000_000}, "log_events"),      # the 16 GB event log
+    ({"qdot": "3:12:4096"}, {"log_events": 1_000_000}, "chunk"),          # a chunk's log: 196 GB
+    ({"qdot": "3:12:4096"}, {"log_events": 6000}, "chunk"),               # 1.18 GB > MAX_CHUNK_BYTES
+    ({"qdot": "3:12:4"}, {"log_events": 10**7}, "log_events"),            # > MAX_LOG_EVENTS
+    ({"qdot": "3:12:1000000"}, {"log_events": 1000, "chunk": 1000}, "log_events"),   # 48 GB in all
+    ({"qdot": "3:12:10000000"}, {"chunk": 1}, "chunk"),                   # 10**7 chunk files
+    ({"qdot": "3:12:4"}, {"nodes": 1}, "nodes"),
+    ({"qdot": "3:12:4"}, {"nodes": 65}, "nodes"),
+    ({"qdot": "3:12:4"}, {"nodes": True}, "nodes"),
+    ({"qdot": "3:12:4"}, {"chunk": 2.5}, "chunk"),
+    ({"qdot": "3:12:4"}, {"seed": -1}, "seed"),
+    ({"qdot": "3:12"}, {"random": 10**12}, "random"),
+    ({"k": ",".join(["0.5"] * (MAX_LIST_VALUES + 1))}, {}, "vary.k"),
+    ({"k": [0.5] * (MAX_LIST_VALUES + 1)}, {}, "vary.k"),
+    ({"max_events": "1e19"}, {}, "run.max_events"),                        # overflows int64 in the core
+    ({"max_events": "2.5"}, {}, "run.max_events"),
+])
+def test_sizes_are_checked_before_memory_is_spent(vary, kwargs, field):
+    tracemalloc.start()
+    try:
+        with pytest.raises(SceneError) as info:
+            make_spec(parabola(), vary, **kwargs)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert info.value.field == field and "\n" not in str(info.value)
+    assert peak < SMALL + 40 * MAX_LIST_VALUES   # a listed axis's own text is the only size paid
+
+
+def test_a_large_grid_costs_three_numbers_until_its_chunks_run():
+    tracemalloc.start()
+    try:
+        spec = make_spec(parabola(), {"qdot": "3:12:100000000"})
+        text = json.dumps(spec.to_dict())
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < SMALL and len(text) < 10_000 and spec.count == 10**8
+    rows, (values,) = spec.rows(spec.chunks - 1)
+    assert rows[-1] == 10**8 - 1 and values[-1] == 12.0
+    assert np.allclose(values, 3.0 + rows * (9.0 / (10**8 - 1)), rtol=1e-15, atol=0)
+
+
+def test_cli_refuses_sizes_before_creating_the_folder(tmp_path, capsys):
+    out = tmp_path / "never"
+    assert main(["paper-parabola", "--vary", "qdot=3:12:1000000000", "-o", str(out), "--quiet"]) == 2
+    assert main(["paper-parabola", "--vary", "qdot=3:12:4", "--log-events", "100000000", "-o", str(out)]) == 2
+    assert main(["paper-parabola", "--vary", "qdot=3:12:4", "--nodes", "100", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and "vary.qdot" in err[0] and "log_events" in err[1] and "nodes" in err[2]
+    assert not out.exists()
