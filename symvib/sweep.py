@@ -973,13 +973,15 @@ def _read_manifest(out: Path) -> tuple:
             raise SweepError(str(path), f"is {size} bytes, more than a manifest may hold ({MAX_MANIFEST_BYTES})")
         with open(path, "rb") as fh:
             raw = fh.read(MAX_MANIFEST_BYTES + 1)
-        manifest = json.loads(raw.decode("utf-8"))
+        manifest = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
     except SweepError:
         raise
     except OSError as exc:
         raise SweepError(str(path), f"cannot read it: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
-        reason = exc.args[0] if isinstance(exc, json.JSONDecodeError) else type(exc).__name__
+    except UnicodeDecodeError:
+        raise SweepError(str(path), "not a JSON manifest (not UTF-8 text)") from None
+    except (ValueError, RecursionError) as exc:
+        reason = exc.args[0] if isinstance(exc, ValueError) else "nested too deeply"
         raise SweepError(str(path), f"not a JSON manifest ({reason})") from None
     if not isinstance(manifest, dict):
         raise SweepError(str(path), f"must hold a JSON object, got {type(manifest).__name__}")
@@ -998,6 +1000,11 @@ def _read_manifest(out: Path) -> tuple:
     if manifest.get("sweep_id") != ident:
         raise SweepError(str(path), "sweep_id does not match the definition (the manifest was edited)")
     return manifest, spec, ident
+
+
+def _no_constant(name: str):
+    """``json.loads`` hook: a manifest holds finite numbers only (no NaN or Infinity)."""
+    raise ValueError(f"non-finite number {name}")
 
 
 def _chunk_files(out: Path) -> set:

@@ -197,3 +197,349 @@ def test_cli_refuses_sizes_before_creating_the_folder(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 3 and "vary.qdot" in err[0] and "log_events" in err[1] and "nodes" in err[2]
     assert not out.exists()
+
+
+# --------------------------------------------------------------------- classes 4 and 7: storage
+
+VARY = {"qdot": "3:12:4", "mu": "0.01:0.2:3"}
+CHUNK = 5
+
+
+def _written(tmp_path, name="sw", vary=VARY, **kw):
+    out = tmp_path / name
+    sweep(parabola(), vary, chunk=CHUNK, out=out, **kw)
+    return out
+
+
+def _chunk(out, i):
+    return out / "chunks" / f"chunk-{i:06d}.npz"
+
+
+def _rewrite(path, **changes):
+    """Rewrite a chunk file with some columns changed (None removes one)."""
+    with np.load(path) as data:
+        cols = {k: data[k] for k in data.files}
+    for k, v in changes.items():
+        if v is None:
+            cols.pop(k)
+        else:
+            cols[k] = v(cols) if callable(v) else v
+    with open(path, "wb") as fh:
+        np.savez(fh, **cols)
+
+
+def test_manifest_and_every_chunk_carry_the_sweep_identity(tmp_path):
+    out = _written(tmp_path)
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["format"] == FORMAT == "symvib-sweep/2"
+    assert manifest["sweep_id"] == sweep_id(manifest["definition"]) == sweep_id(
+        make_spec(parabola(), VARY, chunk=CHUNK).to_dict())
+    assert manifest["definition"]["axes"][0] == {"key": "qdot", "field": "initial.qdot", "start": 3.0,
+                                                 "stop": 12.0, "count": 4}
+    for i in range(manifest["chunks"]):
+        with np.load(_chunk(out, i)) as data:
+            assert str(data["sweep_id"]) == manifest["sweep_id"]
+    assert not (out / "sweep.lock").exists()       # released
+    other = make_spec(parabola(), {"qdot": "3:12:4", "mu": "0.01:0.2:4"}, chunk=CHUNK).to_dict()
+    assert sweep_id(other) != manifest["sweep_id"]
+
+
+#: Ways a chunk file goes bad: name -> (how, what the error says).
+BAD_CHUNKS = {
+    "truncated": (lambda p, other: p.write_bytes(p.read_bytes()[: p.stat().st_size // 2]), "truncated"),
+    "empty": (lambda p, other: p.write_bytes(b""), "truncated"),
+    "garbage": (lambda p, other: p.write_bytes(b"PK\x03\x04" + bytes(range(256)) * 4), "truncated"),
+    "foreign": (lambda p, other: p.write_bytes(other.read_bytes()), "another sweep"),
+    "no identity": (lambda p, other: _rewrite(p, sweep_id=None), "no sweep identity"),
+    "identity of bytes": (lambda p, other: _rewrite(p, sweep_id=np.frombuffer(b"x" * 32, dtype=np.uint8)),
+                          "another sweep"),
+    "float32 row": (lambda p, other: _rewrite(p, row=lambda c: c["row"].astype(np.float32)), "column row"),
+    "short column": (lambda p, other: _rewrite(p, impacts=lambda c: c["impacts"][:-1]), "column impacts"),
+    "extra column": (lambda p, other: _rewrite(p, extra=np.zeros(5)), "columns"),
+    "missing column": (lambda p, other: _rewrite(p, zeno_ratio=None), "columns"),
+    "other rows": (lambda p, other: _rewrite(p, row=lambda c: c["row"] + 5), "rows"),
+    "other values": (lambda p, other: _rewrite(p, **{"physics.mu": lambda c: c["physics.mu"] * 2}), "varied"),
+    "status out of range": (lambda p, other: _rewrite(p, status=lambda c: c["status"] + 99), "status"),
+    "pickled object": (lambda p, other: _rewrite(p, impacts=np.array([object()] * 5, dtype=object)),
+                       "truncated or unreadable"),
+    "a directory": (lambda p, other: (p.unlink(), p.mkdir()), "truncated or unreadable"),
+}
+
+
+@pytest.mark.parametrize("how", sorted(BAD_CHUNKS))
+def test_a_bad_chunk_is_refused_on_load_and_recomputed_on_resume(tmp_path, how):
+    mem = sweep(parabola(), VARY, chunk=CHUNK)
+    out = _written(tmp_path)
+    other = _written(tmp_path, "other", vary={"qdot": "3:12:4", "mu": "0.01:0.3:3"})
+    spoil, says = BAD_CHUNKS[how]
+    spoil(_chunk(out, 1), _chunk(other, 1))
+    with pytest.raises(SweepError) as info:
+        load_sweep(out)
+    assert info.value.field == str(_chunk(out, 1)) and says in info.value.reason
+    assert "\n" not in str(info.value)
+    if how == "a directory":
+        _chunk(out, 1).rmdir()       # a folder in place of a chunk: not removed for the user
+        mem_again = sweep(parabola(), VARY, chunk=CHUNK, out=out)
+        assert mem_again.computed == (1,)
+        return
+    again = sweep(parabola(), VARY, chunk=CHUNK, out=out)
+    assert again.discarded == (1,) and again.computed == (1,) and again.reused == (0, 2)
+    for name in mem.columns:
+        assert np.array_equal(again[name], mem[name])
+
+
+def _manifest_of(out):
+    return json.loads((out / "manifest.json").read_text())
+
+
+#: Bad manifests: name -> (the text written, a phrase of the error).
+BAD_MANIFESTS = {
+    "empty list": ("[]", "JSON object"),
+    "not json": ("format = 'toml?'", "not a JSON manifest"),
+    "empty": ("", "not a JSON manifest"),
+    "deep nesting": ("[" * 200_000 + "]" * 200_000, "not a JSON manifest"),
+    "not utf-8": (b"\xff\xfe{}", "not a JSON manifest"),
+    "a number": ("3", "JSON object"),
+    "no format": ('{"definition": {}}', "unknown format"),
+    "old format": ('{"format": "symvib-sweep/1", "definition": {}}', "symvib-sweep/1"),
+    "definition a number": (lambda m: m | {"definition": 3}, "definition: must be a table"),
+    "no sweep id": (lambda m: {k: v for k, v in m.items() if k != "sweep_id"}, "sweep_id"),
+    "edited": (lambda m: m | {"definition": m["definition"] | {"seed": 5}}, "sweep_id"),
+    "unknown key": (lambda m: m | {"definition": m["definition"] | {"extra": 1}}, "definition.extra"),
+    "huge log": (lambda m: m | {"definition": m["definition"] | {"log_events": 10**8}}, "definition.log_events"),
+    "huge axis": (lambda m: _axis0(m, count=10**12), "definition.axes[0].count"),
+    "axis count text": (lambda m: _axis0(m, count="4"), "definition.axes[0].count"),
+    "axis nan": (lambda m: _axis0(m, start=float("nan")), "non-finite number NaN"),
+    "infinity": (lambda m: m | {"definition": m["definition"] | {"seed": float("inf")}}, "non-finite number"),
+    "axis kinds mixed": (lambda m: _axis0(m, low=1.0), "definition.axes[0]"),
+    "axis field": (lambda m: _axis0(m, field="physics.evil"), "definition.axes[0].field"),
+    "count lies": (lambda m: m | {"definition": m["definition"] | {"count": 11}}, "definition.count"),
+    "mode": (lambda m: m | {"definition": m["definition"] | {"mode": "random"}}, "definition.mode"),
+    "scene": (lambda m: m | {"definition": m["definition"] | {"scene": {"curve": 1}}}, "definition.scene"),
+    "nodes": (lambda m: m | {"definition": m["definition"] | {"nodes": 1000}}, "definition.nodes"),
+}
+
+
+def _axis0(m, **changes):
+    d = json.loads(json.dumps(m["definition"]))
+    d["axes"][0].update(changes)
+    return m | {"definition": d}
+
+
+def _spoil_manifest(out, how):
+    text = BAD_MANIFESTS[how][0]
+    path = out / "manifest.json"
+    if callable(text):
+        m = text(_manifest_of(out))
+        if "sweep_id" in m and m.get("definition") != _manifest_of(out)["definition"] and how != "edited":
+            try:
+                m["sweep_id"] = sweep_id(m["definition"])    # a consistent but hostile manifest
+            except ValueError:
+                pass                                         # NaN: no identity can be made of it
+        text = json.dumps(m)
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+
+
+@pytest.mark.parametrize("how", sorted(BAD_MANIFESTS))
+def test_a_bad_manifest_is_a_one_line_error_and_overwrite_replaces_it(tmp_path, how, capsys):
+    out = _written(tmp_path)
+    _spoil_manifest(out, how)
+    tracemalloc.start()
+    try:
+        with pytest.raises(SweepError) as info:
+            load_sweep(out)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert "manifest.json" in info.value.field and BAD_MANIFESTS[how][1] in str(info.value)
+    assert "\n" not in str(info.value) and peak < 50 * SMALL
+    with pytest.raises(SweepError, match="--overwrite"):
+        sweep(parabola(), VARY, chunk=CHUNK, out=out)
+    args = ["paper-parabola", "--vary", "qdot=3:12:4", "-o", str(out), "--quiet"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "manifest.json" in err
+    assert main(args + ["--overwrite"]) == 0
+    assert load_sweep(out).count == 4
+
+
+def test_incomplete_sweep_is_a_sweep_error_naming_the_folder(tmp_path):
+    out = _written(tmp_path)
+    _chunk(out, 2).unlink()
+    with pytest.raises(SweepError, match="incomplete: 1 of 3 chunks missing") as info:
+        load_sweep(out)
+    assert info.value.field == str(out)
+    with pytest.raises(SweepError, match="no sweep here"):
+        load_sweep(tmp_path / "nothing")
+
+
+# --------------------------------------------------------------------- class 7: output paths
+
+def _file(tmp_path):
+    p = tmp_path / "a-file"
+    p.write_text("x")
+    return p
+
+
+def _folder_with(tmp, name, entry, kind):
+    folder = tmp / name
+    folder.mkdir()
+    (folder / entry).mkdir() if kind == "dir" else (folder / entry).write_text("x")
+    return folder
+
+
+OUT_PATHS = {
+    "a file": (lambda tmp: _file(tmp), "not a folder"),
+    "a device": (lambda tmp: Path("/dev/null"), "not a folder"),
+    "below a file": (lambda tmp: _file(tmp) / "sub", "is a file"),
+    "below a device": (lambda tmp: Path("/dev/null/sub"), "is a file"),
+    "unwritable system folder": (lambda tmp: Path("/sys/symvib-sweep-out"), "cannot create the folder"),
+    "chunks is a file": (lambda tmp: _folder_with(tmp, "o", "chunks", "file"), "not a folder"),
+    "manifest is a folder": (lambda tmp: _folder_with(tmp, "m", "manifest.json", "dir"), "not a regular file"),
+    "NUL in the name": (lambda tmp: str(tmp / "a\0b"), "not a usable folder name"),
+}
+
+
+@pytest.mark.parametrize("how", sorted(OUT_PATHS))
+def test_unusable_output_paths_are_one_line_errors(tmp_path, how, capsys):
+    make, says = OUT_PATHS[how]
+    out = make(tmp_path)
+    with pytest.raises(SweepError) as info:
+        sweep(parabola(), {"qdot": "3:12:2"}, out=out)
+    assert says in str(info.value) and "\n" not in str(info.value)
+    assert main(["paper-parabola", "--vary", "qdot=3:12:2", "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and says in err
+
+
+@pytest.mark.skipif(hasattr(os, "geteuid") and os.geteuid() == 0, reason="root may write any folder")
+def test_a_read_only_folder_is_refused(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        with pytest.raises(SweepError, match="not writable|cannot create"):
+            sweep(parabola(), {"qdot": "3:12:2"}, out=ro / "out")
+    finally:
+        ro.chmod(0o700)
+
+
+# --------------------------------------------------------------------- class 4: one writer per folder
+
+def _dead_pid():
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def _lock(out, **fields):
+    out.mkdir(parents=True, exist_ok=True)
+    data = {"pid": os.getpid(), "host": socket.gethostname(), "nonce": "n" * 32, "since": "now"} | fields
+    (out / WriterLock.NAME).write_text(json.dumps(data))
+
+
+def _snapshot(out):
+    return {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+
+
+def test_a_held_lock_stops_a_second_writer_even_with_overwrite(tmp_path, capsys):
+    out = _written(tmp_path)
+    _lock(out)                                   # this (live) process holds it
+    before = _snapshot(out)
+    other = {"qdot": "3:12:4", "mu": "0.01:0.3:3"}
+    with pytest.raises(SweepError, match=r"another sweep writes .* \(pid \d+ on .*\)") as info:
+        sweep(parabola(), other, chunk=CHUNK, out=out, overwrite=True)
+    assert info.value.field == "out" and "\n" not in str(info.value)
+    assert main(["paper-parabola", "--vary", "qdot=3:12:4", "-o", str(out), "--overwrite", "--quiet"]) == 2
+    assert "another sweep writes" in capsys.readouterr().err
+    assert _snapshot(out) == before              # nothing of the folder touched
+    assert load_sweep(out).spec.to_dict() == make_spec(parabola(), VARY, chunk=CHUNK).to_dict()
+
+
+@pytest.mark.parametrize("holder, taken", [
+    ({"pid": "dead"}, True),                     # a killed sweep on this host
+    ({"host": "elsewhere.example"}, False),      # cannot tell: another machine's sweep
+    ({"pid": "dead", "host": "elsewhere.example"}, False),
+    ({"pid": 1}, False),                         # alive (init)
+    ({"pid": -5}, False),
+    ({"pid": 2**80}, False),
+    ({"pid": True}, False),
+])
+def test_stale_locks_of_dead_local_writers_are_taken_over(tmp_path, holder, taken):
+    out = tmp_path / "sw"
+    if holder.get("pid") == "dead":
+        holder = holder | {"pid": _dead_pid()}
+    _lock(out, **holder)
+    if taken:
+        res = sweep(parabola(), VARY, chunk=CHUNK, out=out)
+        assert res.count == 12 and not (out / WriterLock.NAME).exists()
+    else:
+        with pytest.raises(SweepError, match="another sweep writes"):
+            sweep(parabola(), VARY, chunk=CHUNK, out=out)
+
+
+def test_an_empty_lock_is_stale_only_after_its_grace_time(tmp_path):
+    out = tmp_path / "sw"
+    out.mkdir()
+    lock = out / WriterLock.NAME
+    lock.write_bytes(b"")
+    with pytest.raises(SweepError, match="lock file being written"):
+        sweep(parabola(), VARY, chunk=CHUNK, out=out)
+    old = time.time() - 2 * sweep_mod.LOCK_GRACE
+    os.utime(lock, (old, old))
+    assert sweep(parabola(), VARY, chunk=CHUNK, out=out).count == 12
+
+
+def test_writer_lock_excludes_verifies_and_releases_only_its_own(tmp_path):
+    a = WriterLock(tmp_path).acquire()
+    with pytest.raises(SweepError, match="another sweep writes"):
+        WriterLock(tmp_path).acquire()
+    a.verify()
+    (tmp_path / WriterLock.NAME).write_text(json.dumps({"pid": 1, "host": "h", "nonce": "other"}))
+    with pytest.raises(SweepError, match="lost the lock"):
+        a.verify()
+    a.release()                                  # not ours any more: left in place
+    assert (tmp_path / WriterLock.NAME).exists()
+
+
+def test_a_writer_that_loses_its_lock_stops_before_writing_another_chunk(tmp_path, monkeypatch):
+    out = tmp_path / "sw"
+    real = sweep_mod.run_chunk
+    calls = []
+
+    def run_chunk(definition, index, backend="auto"):
+        calls.append(index)
+        if index == 1:   # another writer takes the folder over while chunk 1 computes
+            (out / WriterLock.NAME).write_text(json.dumps({"pid": 1, "host": "h", "nonce": "thief"}))
+        return real(definition, index, backend)
+
+    monkeypatch.setattr(sweep_mod, "run_chunk", run_chunk)
+    with pytest.raises(SweepError, match="lost the lock"):
+        sweep(parabola(), VARY, chunk=CHUNK, out=out)
+    assert calls == [0, 1] and sorted(p.name for p in (out / "chunks").iterdir()) == ["chunk-000000.npz"]
+
+
+def test_the_issues_race_two_processes_one_folder(tmp_path, capsys):
+    """A sweep restarted with --overwrite while another writes the folder: refused, nothing mixed."""
+    out = tmp_path / "race"
+    first = ["paper-parabola", "--vary", "qdot=3:12:12", "--vary", "mu=0.01:0.2:25", "--chunk", "4",
+             "-o", str(out), "--backend", "python", "--quiet"]
+    env = dict(os.environ, SYMVIB_BACKEND="python")
+    proc = subprocess.Popen([sys.executable, "-m", "symvib.cli", "sweep", *first], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None and not _chunk(out, 0).exists():
+            time.sleep(0.01)
+        assert proc.poll() is None, "the first sweep must still be running"
+        second = ["paper-parabola", "--vary", "qdot=3:12:12", "--vary", "mu=0.01:0.3:25", "--chunk", "4",
+                  "-o", str(out), "--overwrite", "--quiet"]
+        assert main(second) == 2
+        assert "another sweep writes" in capsys.readouterr().err
+    finally:
+        stdout, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 0, stderr
+    res = load_sweep(out)                        # every chunk checked against the first sweep's identity
+    assert res.spec.axes[1].stop == 0.2 and np.array_equal(res["row"], np.arange(300))
+    assert main(second) == 0                     # once the first is done, --overwrite replaces it
+    assert load_sweep(out).spec.axes[1].stop == 0.3
