@@ -1236,11 +1236,28 @@ def _sweep_file(path: Path) -> dict:
     for key in data:
         if key not in known:
             raise SceneError(f"{path.name}:{key}", f"unknown key; known: {', '.join(sorted(known))}")
+    _check_sweep_file(data, path)
     if "scene" in data:
         scene = Path(data["scene"])
         data["scene"] = str(scene if scene.is_absolute() or not (path.parent / scene).exists()
                             else path.parent / scene)
     return data
+
+
+#: Types of the keys of a sweep file (``vary`` is a table; integers are checked by :func:`make_spec`).
+_SWEEP_FILE_TYPES = {"scene": str, "out": str, "vary": dict, "random": int, "seed": int, "chunk": int,
+                     "log_events": int, "nodes": int}
+
+
+def _check_sweep_file(data: dict, path: Path) -> None:
+    """Refuse keys of the wrong type in a sweep file, naming the file and key."""
+    for key, kind in _SWEEP_FILE_TYPES.items():
+        if key in data and (not isinstance(data[key], kind) or isinstance(data[key], bool)):
+            raise SceneError(f"{path.name}:{key}", f"must be {'a table' if kind is dict else kind.__name__}, "
+                                                   f"got {type(data[key]).__name__}")
+    for key in ("scene", "out"):
+        if key in data and (not data[key] or "\0" in data[key]):
+            raise SceneError(f"{path.name}:{key}", "must be a non-empty path")
 
 
 def build_parser() -> argparse.ArgumentParser:

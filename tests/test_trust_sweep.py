@@ -543,3 +543,33 @@ def test_the_issues_race_two_processes_one_folder(tmp_path, capsys):
     assert res.spec.axes[1].stop == 0.2 and np.array_equal(res["row"], np.arange(300))
     assert main(second) == 0                     # once the first is done, --overwrite replaces it
     assert load_sweep(out).spec.axes[1].stop == 0.3
+
+
+# --------------------------------------------------------------------- sweep files
+
+@pytest.mark.parametrize("text, field", [
+    ('scene = "paper-parabola"\nvary = 3\n', "vary"),
+    ('scene = "paper-parabola"\nvary = [1, 2]\n', "vary"),
+    ('scene = 5\n[vary]\nqdot = "3:12:2"\n', "scene"),
+    ('scene = ""\n[vary]\nqdot = "3:12:2"\n', "scene"),
+    ('scene = "paper-parabola"\nout = 5\n[vary]\nqdot = "3:12:2"\n', "out"),
+    ('scene = "paper-parabola"\nchunk = "4"\n[vary]\nqdot = "3:12:2"\n', "chunk"),
+    ('scene = "paper-parabola"\nrandom = true\n[vary]\nqdot = "3:12"\n', "random"),
+    ('scene = "paper-parabola"\nseed = 1.5\n[vary]\nqdot = "3:12:2"\n', "seed"),
+    ('scene = "paper-parabola"\nlog_events = 100000000\n[vary]\nqdot = "3:12:2"\n', "log_events"),
+    ('scene = "paper-parabola"\n[vary]\nqdot = [[1, 2], [3, 4]]\n', "vary.qdot"),
+    ('scene = "paper-parabola"\n[vary]\nqdot = 1979-05-27\n', "vary.qdot"),
+    ('scene = "paper-parabola"\n[vary.qdot]\nstart = 3\nstop = 12\ncount = 1000000000\n', "vary.qdot"),
+])
+def test_hostile_sweep_files_are_one_line_errors(tmp_path, capsys, text, field):
+    sw = tmp_path / "sweep.toml"
+    sw.write_text(text)
+    assert main(["--file", str(sw), "-o", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and field in err and "Traceback" not in err
+
+
+def test_a_directory_as_sweep_file_is_a_one_line_error(tmp_path, capsys):
+    assert main(["--file", str(tmp_path), "-o", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(tmp_path) in err
