@@ -780,6 +780,7 @@ def _read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
     """
     rows, values = spec.rows(index)
     n = len(rows)
+    expected = _column_names(spec)
     try:
         if path.stat().st_size > spec.chunk_bytes() + MAX_MANIFEST_BYTES:
             raise _bad_chunk(path, "larger than a chunk of this sweep can be")
@@ -787,23 +788,23 @@ def _read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
             names = set(data.files)
             if "sweep_id" not in names:
                 raise _bad_chunk(path, "no sweep identity: not a chunk of this sweep")
-            stored = data["sweep_id"]
-            if stored.shape != () or stored.dtype.kind != "U" or str(stored) != ident:
+            _check_header(path, data, "sweep_id", lambda d, sh: d.kind == "U" and sh == () and d.itemsize <= 4 * 64,
+                          "a text")
+            if str(data["sweep_id"]) != ident:
                 raise _bad_chunk(path, "made by another sweep (its sweep_id differs from the manifest's)")
-            expected = _column_names(spec)
             if names != set(expected) | {"sweep_id"}:
                 raise _bad_chunk(path, f"columns {sorted(names - {'sweep_id'})} are not this sweep's")
-            columns = {name: data[name] for name in expected}
+            columns = {}
+            for name in expected:   # each header checked before its array is allocated
+                want = np.dtype(np.int64 if name == "row" or name in _INTEGER_COLUMNS else np.float64)
+                shape = (n, spec.log_events, _EVENT_WIDTH) if name == "event_log" else (n,)
+                _check_header(path, data, name, lambda d, sh: d == want and sh == shape,
+                              f"{want}{list(shape)}")
+                columns[name] = data[name]
     except SweepError:
         raise
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
         raise _bad_chunk(path, f"truncated or unreadable ({type(exc).__name__})") from None
-    for name, col in columns.items():
-        want = (np.int64 if name == "row" or name in _INTEGER_COLUMNS else np.float64)
-        shape = (n, spec.log_events, _EVENT_WIDTH) if name == "event_log" else (n,)
-        if col.dtype != want or col.shape != shape:
-            raise _bad_chunk(path, f"column {name} is {col.dtype}{list(col.shape)}, expected "
-                                   f"{np.dtype(want)}{list(shape)}")
     if not np.array_equal(columns["row"], rows) or not all(
             np.array_equal(columns[a.field], v) for a, v in zip(spec.axes, values)):
         raise _bad_chunk(path, f"rows or varied values are not those of chunk {index}")
@@ -811,6 +812,16 @@ def _read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
     if status.size and (status.min() < 0 or status.max() >= len(core.STATUS_NAMES)):
         raise _bad_chunk(path, "status codes out of range")
     return columns
+
+
+def _check_header(path: Path, data, name: str, ok, expected: str) -> None:
+    """Check the ``.npy`` header of member ``name`` (dtype, shape) before its array is read."""
+    with data.zip.open(f"{name}.npy") as fh:
+        version = np.lib.format.read_magic(fh)
+        read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, fortran, dtype = read(fh)
+    if fortran or dtype.hasobject or not ok(dtype, shape):
+        raise _bad_chunk(path, f"column {name} is {dtype}{list(shape)}, expected {expected}")
 
 
 class WriterLock:
@@ -930,6 +941,8 @@ class WriterLock:
 
 def _check_out(out) -> Path:
     """Create the sweep folder ``out`` (and its ``chunks``), or raise a one-line :class:`SweepError`."""
+    if not isinstance(out, (str, os.PathLike)):
+        raise SweepError("out", f"must be a folder path, got {type(out).__name__}")
     out = Path(out)
     if not str(out) or "\0" in str(out):
         raise SweepError("out", f"not a usable folder name: {str(out)!r}")
@@ -942,8 +955,8 @@ def _check_out(out) -> Path:
             raise SweepError("out", f"{folder}: a parent of it is a file, not a folder") from None
         except OSError as exc:
             raise SweepError("out", f"cannot create the folder {folder}: {exc.strerror or exc}") from None
-        if not folder.is_dir():
-            raise SweepError("out", f"{folder} is not a folder")
+        if not folder.is_dir() or folder.name == "chunks" and folder.is_symlink():
+            raise SweepError("out", f"{folder} is not a folder (or a symbolic link, which could lead outside {out})")
         if not os.access(folder, os.W_OK | os.X_OK):
             raise SweepError("out", f"folder {folder} is not writable")
     manifest = out / "manifest.json"
@@ -972,7 +985,9 @@ def _read_manifest(out: Path) -> tuple:
         if size > MAX_MANIFEST_BYTES:
             raise SweepError(str(path), f"is {size} bytes, more than a manifest may hold ({MAX_MANIFEST_BYTES})")
         with open(path, "rb") as fh:
-            raw = fh.read(MAX_MANIFEST_BYTES + 1)
+            raw = fh.read(size + 1)   # the size was checked: no buffer of the bound's size
+        if len(raw) > MAX_MANIFEST_BYTES:
+            raise SweepError(str(path), f"is more than a manifest may hold ({MAX_MANIFEST_BYTES} bytes)")
         manifest = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
     except SweepError:
         raise
