@@ -99,6 +99,8 @@ MAX_ROW_EVENTS = 2**53
 MAX_MANIFEST_BYTES = 2**26
 #: Seconds a lock file may stay empty (its writer between creating and filling it) before it counts as stale.
 LOCK_GRACE = 10.0
+#: Exit status of ``symvib sweep`` when some scenes failed (their rows are written, with their status).
+EXIT_FAILED_SCENES = 1
 #: Seconds between progress-bar redraws.
 PROGRESS_EVERY = 0.2
 #: Chunks in flight per Dask worker.
@@ -682,6 +684,12 @@ class SweepResult:
             raise ValueError("this sweep kept no event log (log_events = 0)")
         n = min(int(self.columns["events"][row]), self.spec.log_events)
         return [(core.EVENT_NAMES[int(r[0])], *map(float, r[1:])) for r in self.columns["event_log"][row, :n]]
+
+    @property
+    def failed(self) -> np.ndarray:
+        """Rows whose run failed (a status of ``symvib.core.ERROR_CODES``: non-finite state, energy
+        budget not closing): their numbers are not a result."""
+        return np.isin(self.columns["status"], getattr(core, "ERROR_CODES", ()))
 
     @property
     def impact_share(self) -> np.ndarray:
@@ -1334,7 +1342,7 @@ def _main(args) -> int:
     status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in core.STATUS_NAMES if np.any(names == s))
     events = int(np.sum(res["events"]))
     print(f"sweep of {res.count} scenes of {scene.name} into {out}: {len(res.computed)} chunk(s) computed, "
-          f"{len(res.reused)} reused")
+          f"{len(res.reused)} reused" + (f" ({len(res.discarded)} found truncated or foreign)" if res.discarded else ""))
     print(f"  status: {status}; {events} events; {np.mean(res['impacts']):.3g} impacts per scene on average")
     if res.computed and res.seconds > 0:
         n = sum(len(res.spec.rows(i)[0]) for i in res.computed)
@@ -1344,4 +1352,10 @@ def _main(args) -> int:
 
         for path in sweep_maps(res, Path(out) / "maps"):
             print(f"wrote {path}")
+    failed = res.failed
+    if failed.any():
+        kinds = ", ".join(sorted(set(names[failed])))
+        print(f"symvib sweep: error: {int(failed.sum())} of {res.count} scenes failed ({kinds}; first: row "
+              f"{int(np.flatnonzero(failed)[0])}): their rows hold no result", file=sys.stderr)
+        return EXIT_FAILED_SCENES
     return 0

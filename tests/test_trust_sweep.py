@@ -607,3 +607,20 @@ def test_a_directory_as_sweep_file_is_a_one_line_error(tmp_path, capsys):
     assert main(["--file", str(tmp_path), "-o", str(tmp_path / "out"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and str(tmp_path) in err
+
+
+# --------------------------------------------------------------------- class 3 in sweeps: failed rows
+
+def test_cli_exits_nonzero_when_scenes_failed(tmp_path, capsys, monkeypatch):
+    """Rows of an error status (the driver's ERROR_CODES) make the sweep exit 1 in one line; here the
+    'arrested' code stands in for one, so the test does not depend on which inputs overflow."""
+    from symvib import core
+
+    args = ["paper-parabola", "--vary", "qdot=3:12:3", "-o", str(tmp_path / "o"), "--quiet"]
+    assert main(args) == 0
+    monkeypatch.setattr(core, "ERROR_CODES", (core.STATUS_NAMES.index("arrested"),), raising=False)
+    capsys.readouterr()
+    assert main(args) == sweep_mod.EXIT_FAILED_SCENES
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "3 of 3 scenes failed (arrested; first: row 0)" in err
+    assert load_sweep(tmp_path / "o").failed.all()
