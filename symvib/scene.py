@@ -88,6 +88,25 @@ class SceneError(ValueError):
         super().__init__(f"{field}: {reason}")
 
 
+#: Keys of ``Shape.source()`` that a scene file's ``[curve]`` table takes (``kind`` is implied by ``x``).
+_CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params")
+
+
+def _curve_dict(sh: Shape) -> dict:
+    """The ``[curve]`` table of a shape: its catalogue name, or its expressions."""
+    if CATALOGUE.get(sh.name) == sh:
+        return {"shape": sh.name}
+    source = sh.source()
+    return {k: source[k] for k in _CURVE_KEYS if source.get(k) is not None}
+
+
+def _friction_dict(s: "Scene") -> dict:
+    """``{"alpha0": ...}`` when the scene's ``mu`` is ``tan(alpha0)``, else ``{"mu": ...}``."""
+    if s.alpha0 is not None and math.tan(s.alpha0) == s.mu:
+        return {"alpha0": s.alpha0}
+    return {"mu": s.mu}
+
+
 @dataclass(frozen=True)
 class Scene:
     """A validated scene (immutable).  Build with :func:`load_scene`,
@@ -178,25 +197,6 @@ class Scene:
         if limiters:
             out["limiters"] = limiters
         return out
-
-
-#: Keys of ``Shape.source()`` that a scene file's ``[curve]`` table takes (``kind`` is implied by ``x``).
-_CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params")
-
-
-def _curve_dict(sh: Shape) -> dict:
-    """The ``[curve]`` table of a shape: its catalogue name, or its expressions."""
-    if CATALOGUE.get(sh.name) == sh:
-        return {"shape": sh.name}
-    source = sh.source()
-    return {k: source[k] for k in _CURVE_KEYS if source.get(k) is not None}
-
-
-def _friction_dict(s: "Scene") -> dict:
-    """``{"alpha0": ...}`` when the scene's ``mu`` is ``tan(alpha0)``, else ``{"mu": ...}``."""
-    if s.alpha0 is not None and math.tan(s.alpha0) == s.mu:
-        return {"alpha0": s.alpha0}
-    return {"mu": s.mu}
 
 
 def _finite(value, field):
