@@ -624,3 +624,17 @@ def test_cli_exits_nonzero_when_scenes_failed(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "3 of 3 scenes failed (arrested; first: row 0)" in err
     assert load_sweep(tmp_path / "o").failed.all()
+
+
+@pytest.mark.skipif(not hasattr(sweep_mod.core, "ERROR_CODES"), reason="needs the driver lane's error statuses")
+def test_the_issues_overflow_inputs_fail_a_sweep(tmp_path, capsys):
+    """qdot = 1e200 and mu = 1e60 (issue 13, class 3) in a sweep: exit 1, never exit 0 with inf/NaN rows."""
+    out = tmp_path / "o"
+    assert main(["paper-parabola", "--vary", "qdot=1e200,7", "--vary", "mu=0.05,1e60", "-o", str(out),
+                 "--quiet"]) == sweep_mod.EXIT_FAILED_SCENES
+    assert "scenes failed" in capsys.readouterr().err
+    res = load_sweep(out)
+    ok = ~res.failed
+    for name in ("t_final", "q_final", "E0", "E_final", "friction_work", "impact_loss"):
+        assert np.isfinite(res[name][ok]).all()
+    assert res.failed[0] and res.failed[1]          # qdot = 1e200 rows
