@@ -553,13 +553,22 @@ def test_a_writer_that_loses_its_lock_stops_before_writing_another_chunk(tmp_pat
     assert calls == [0, 1] and sorted(p.name for p in (out / "chunks").iterdir()) == ["chunk-000000.npz"]
 
 
+#: Seconds the first writer of the race test waits before each chunk (75 chunks: the second
+#: writer surely comes while it writes).
+SLOW_CHUNK = 0.05
+
+
+@pytest.mark.slow
 def test_the_issues_race_two_processes_one_folder(tmp_path, capsys):
     """A sweep restarted with --overwrite while another writes the folder: refused, nothing mixed."""
     out = tmp_path / "race"
     first = ["paper-parabola", "--vary", "qdot=3:12:12", "--vary", "mu=0.01:0.2:25", "--chunk", "4",
              "-o", str(out), "--backend", "python", "--quiet"]
     env = dict(os.environ, SYMVIB_BACKEND="python")
-    proc = subprocess.Popen([sys.executable, "-m", "symvib.cli", "sweep", *first], env=env,
+    slow_writer = ("import sys, time\nimport symvib.sweep as s\nreal = s.run_chunk\n"
+                   "s.run_chunk = lambda *a, **k: (time.sleep(SLOW_CHUNK), real(*a, **k))[1]\n"
+                   "sys.exit(s.main(sys.argv[1:]))\n").replace("SLOW_CHUNK", repr(SLOW_CHUNK))
+    proc = subprocess.Popen([sys.executable, "-c", slow_writer, *first], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         deadline = time.monotonic() + 120
