@@ -23,7 +23,8 @@ __all__ = ["main", "one_line"]
 
 #: Exit status for bad input.
 EXIT_BAD_INPUT = 2
-#: Exit status of a run that ended with an error status (non_finite, energy_budget_mismatch).
+#: Exit status of a run that ended with an error status (non_finite, energy_budget_mismatch),
+#: and of a sweep with such rows (``symvib.sweep.EXIT_FAILED_SCENES``).
 EXIT_RUN_FAILED = 3
 #: Longest error message printed, in characters (a message may quote a long user text).
 MAX_MESSAGE_LENGTH = 500

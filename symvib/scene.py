@@ -100,6 +100,25 @@ class SceneError(ValueError):
         super().__init__(f"{field}: {reason}")
 
 
+#: Keys of ``Shape.source()`` that a scene file's ``[curve]`` table takes (``kind`` is implied by ``x``).
+_CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params")
+
+
+def _curve_dict(sh: Shape) -> dict:
+    """The ``[curve]`` table of a shape: its catalogue name, or its expressions."""
+    if CATALOGUE.get(sh.name) == sh:
+        return {"shape": sh.name}
+    source = sh.source()
+    return {k: source[k] for k in _CURVE_KEYS if source.get(k) is not None}
+
+
+def _friction_dict(s: "Scene") -> dict:
+    """``{"alpha0": ...}`` when the scene's ``mu`` is ``tan(alpha0)``, else ``{"mu": ...}``."""
+    if s.alpha0 is not None and math.tan(s.alpha0) == s.mu:
+        return {"alpha0": s.alpha0}
+    return {"mu": s.mu}
+
+
 @dataclass(frozen=True)
 class Scene:
     """A validated scene (immutable).  Build with :func:`load_scene`,
@@ -175,16 +194,23 @@ class Scene:
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict:
-        """The scene as TOML-ready data (``load`` of it gives the same scene)."""
+        """The scene as TOML-ready data: ``scene_from_dict(s.to_dict()) == s``.
+
+        A catalogue shape is written by name, any other curve by the keys of a
+        scene file's ``[curve]`` (``z``, ``x``, ``q``, ``name``, ``domain``,
+        ``h``, ``alpha``, ``q_scale``, ``params``), so user curves round-trip too
+        (sweep manifests and Dask tasks carry scenes this way).  The friction
+        angle ``alpha0`` is written when the scene was given one (so it survives
+        the round trip), else ``mu``.
+        """
         sh = self.shape
-        curve = {"shape": sh.name} if CATALOGUE.get(sh.name) == sh else {
-            k: v for k, v in sh.source().items() if v is not None and k != "params"}
-        if CATALOGUE.get(sh.name) != sh:
-            curve["params"] = dict(sh.params)
-        out = {"name": self.name, "curve": curve, "parameters": dict(self.params),
-               "physics": {"g": self.g, "m": self.m, "mu": self.mu, "restitution": self.k},
+        out = {"name": self.name, "curve": _curve_dict(sh), "parameters": dict(self.params),
+               "physics": {"g": self.g, "m": self.m, **_friction_dict(self), "restitution": self.k},
                "initial": {"q": self.q0, "qdot": self.qdot0},
                "run": {"t_max": self.t_max, "max_events": self.max_events}}
+        contact = getattr(self, "contact", None)  # physics.contact, where the driver's Scene has it
+        if contact is not None:
+            out["physics"]["contact"] = contact
         limiters = {k: v for k, v in (("left", self.left), ("right", self.right)) if v is not None}
         if limiters:
             out["limiters"] = limiters

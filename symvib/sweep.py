@@ -47,9 +47,12 @@ import hashlib
 import json
 import math
 import os
+import secrets
+import socket
 import sys
 import time
-import tomllib
+import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -59,19 +62,58 @@ from . import core
 from . import expr as _expr
 from .scene import MAX_EVENTS, Scene, SceneError, load_scene, scene_from_dict
 
-__all__ = ["SweepSpec", "SweepResult", "make_spec", "sweep", "load_sweep", "run_chunk", "main",
-           "FORMAT", "DEFAULT_CHUNK"]
+__all__ = ["SweepSpec", "SweepResult", "SweepError", "WriterLock", "make_spec", "sweep", "load_sweep",
+           "run_chunk", "sweep_id", "main", "FORMAT", "DEFAULT_CHUNK", "MAX_SCENES", "MAX_CHUNKS",
+           "MAX_LIST_VALUES", "MAX_LOG_EVENTS", "MAX_CHUNK_BYTES", "MAX_EVENT_LOG_BYTES", "NODES_RANGE"]
 
-#: Identifier of the on-disk layout (manifest key ``format``).
-FORMAT = "symvib-sweep/1"
+#: Identifier of the on-disk layout (manifest key ``format``).  Version 2 added the
+#: sweep identity (``sweep_id``) to the manifest and to every chunk.
+FORMAT = "symvib-sweep/2"
+#: Layouts this version recognizes but does not read (their chunks carry no sweep identity).
+OLD_FORMATS = ("symvib-sweep/1",)
 #: Scenes per chunk: the unit of writing, resuming and distribution.
 DEFAULT_CHUNK = 4096
-#: Largest number of scenes a sweep may declare.
-MAX_SCENES = 10**9
+#: Default Gauss-Legendre nodes per quadrature panel (as :func:`symvib.driver.simulate`).
+DEFAULT_NODES = 16
+#: Allowed Gauss-Legendre nodes per panel, inclusive (``symvib.gauss`` tabulates rules up to this size).
+NODES_RANGE = (2, 64)
+#: Largest number of scenes a sweep may declare: its joined columns (about 130 bytes a
+#: scene with two varied fields) are held in memory by :func:`load_sweep`.
+MAX_SCENES = 10**8
+#: Largest number of chunk files of a sweep (chunk files are numbered with six digits).
+MAX_CHUNKS = 10**6
+#: Largest number of values of one listed grid axis (``k=0.6,0.8,1``); a
+#: ``start:stop:count`` axis is stored as its three numbers, whatever its count.
+MAX_LIST_VALUES = 10**5
+#: Largest number of events logged per scene (``--log-events``).
+MAX_LOG_EVENTS = 10**6
+#: Largest memory of one chunk's columns while it is computed, written or read, in bytes.
+MAX_CHUNK_BYTES = 2**30
+#: Largest event log of a whole sweep (scenes x ``log_events`` x 6 floats), in bytes:
+#: :func:`load_sweep` joins it in memory.
+MAX_EVENT_LOG_BYTES = 2**32
+#: Largest manifest read, in bytes (listed axes of MAX_LIST_VALUES values fit many times).
+MAX_MANIFEST_BYTES = 2**26
+#: Seconds a lock file may stay empty (its writer between creating and filling it) before it counts as stale.
+LOCK_GRACE = 10.0
+#: Exit status of ``symvib sweep`` when some scenes failed (their rows are written, with their
+#: status): the status of ``symvib run`` for a failed run, one code for one meaning.
+EXIT_FAILED_SCENES = 3
 #: Seconds between progress-bar redraws.
 PROGRESS_EVERY = 0.2
 #: Chunks in flight per Dask worker.
 DASK_INFLIGHT = 2
+#: Bytes of one float64 or int64 value.
+_ITEM = 8
+#: Values per logged event (kind, t, q, qdot_before, qdot_after, energy).
+_EVENT_WIDTH = 6
+#: Hex digits of the sweep identity (a SHA-256 of the format and definition).
+_ID_DIGITS = 32
+
+
+class SweepError(SceneError):
+    """A sweep folder, manifest or chunk cannot be used; ``field`` names the file or the option."""
+
 
 #: Scene fields a sweep can vary: canonical name -> (Scene attribute, column of core.SCALARS).
 _FIELDS = {
@@ -113,30 +155,128 @@ def canonical_field(scene: Scene, key: str) -> str:
                                     f"(or a dotted scene-file name such as initial.qdot)")
 
 
+def _linspace_at(start: float, stop: float, count: int, index) -> np.ndarray:
+    """Entries ``index`` of ``numpy.linspace(start, stop, count)``, bit for bit, without building it."""
+    index = np.asarray(index, dtype=np.int64)
+    if count == 1:
+        return np.full(index.shape, float(start))
+    div = count - 1
+    delta = stop - start
+    step = delta / div
+    # numpy.linspace: arange * step + start (arange / div * delta when the step underflows to 0), last = stop
+    y = index / div * delta + start if step == 0 else index * step + start
+    return np.where(index == div, float(stop), y)
+
+
 @dataclass(frozen=True)
 class Axis:
-    """One varied field: grid ``values``, or a random range ``[low, high]``."""
+    """One varied field: a grid ``start:stop:count`` (stored as those three
+    numbers), listed grid values ``items``, or a random range ``[low, high]``.
+
+    Values are computed per chunk (:meth:`at`), so an axis of any count costs
+    three numbers until its chunk is run.
+    """
 
     key: str
     field: str
-    values: tuple | None = None
+    items: tuple | None = None
+    start: float | None = None
+    stop: float | None = None
+    count: int | None = None
     low: float | None = None
     high: float | None = None
 
+    @property
+    def grid(self) -> bool:
+        """Whether this is a grid axis (else a random range)."""
+        return self.items is not None or self.count is not None
+
+    @property
+    def size(self) -> int | None:
+        """Number of grid values (``None`` for a random range)."""
+        if self.items is not None:
+            return len(self.items)
+        return self.count
+
+    def at(self, index) -> np.ndarray:
+        """Grid values at positions ``index`` (an integer array)."""
+        if self.items is not None:
+            return np.asarray(self.items, dtype=float)[np.asarray(index, dtype=np.int64)]
+        return _linspace_at(self.start, self.stop, self.count, index)
+
+    @property
+    def first(self) -> float | None:
+        """The first grid value (``None`` for a random range)."""
+        return float(self.at(np.zeros(1, dtype=np.int64))[0]) if self.grid else None
+
+    @property
+    def values(self) -> tuple | None:
+        """All grid values (built on demand: use :meth:`at` for large axes); ``None`` if random."""
+        return tuple(float(v) for v in self.at(np.arange(self.size))) if self.grid else None
+
+    @property
+    def bounds(self) -> tuple:
+        """Smallest and largest value the axis takes."""
+        if self.items is not None:
+            return min(self.items), max(self.items)
+        if self.count is not None:
+            return min(self.start, self.stop), max(self.start, self.stop)
+        return self.low, self.high
+
     def to_dict(self) -> dict:
-        return {"key": self.key, "field": self.field,
-                **({"values": list(self.values)} if self.values is not None else {"low": self.low, "high": self.high})}
+        head = {"key": self.key, "field": self.field}
+        if self.items is not None:
+            return head | {"values": list(self.items)}
+        if self.count is not None:
+            return head | {"start": self.start, "stop": self.stop, "count": self.count}
+        return head | {"low": self.low, "high": self.high}
+
+    @classmethod
+    def from_dict(cls, data, label: str) -> "Axis":
+        """An axis from a manifest's definition (types and sizes checked; ``label`` names it)."""
+        if not isinstance(data, dict) or not isinstance(data.get("key"), str) \
+                or not isinstance(data.get("field"), str):
+            raise SweepError(label, "must be a table with text 'key' and 'field'")
+        kinds = [k for k in (("values",), ("start", "stop", "count"), ("low", "high")) if k[0] in data]
+        if len(kinds) != 1 or set(data) != {"key", "field", *kinds[0]}:
+            raise SweepError(label, "must hold values, or start, stop and count, or low and high")
+        if "values" in data:
+            items = data["values"]
+            if not isinstance(items, list) or not 1 <= len(items) <= MAX_LIST_VALUES:
+                raise SweepError(f"{label}.values", f"must be a list of 1 to {MAX_LIST_VALUES} numbers")
+            return cls(data["key"], data["field"], items=tuple(_real(v, f"{label}.values") for v in items))
+        if "count" in data:
+            count = data["count"]
+            if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= MAX_SCENES:
+                raise SweepError(f"{label}.count", f"must be an integer in [1, {MAX_SCENES}], got {count!r}")
+            return cls(data["key"], data["field"], start=_real(data["start"], f"{label}.start"),
+                       stop=_real(data["stop"], f"{label}.stop"), count=count)
+        low, high = _real(data["low"], f"{label}.low"), _real(data["high"], f"{label}.high")
+        if not low <= high:
+            raise SweepError(label, f"low must not exceed high, got {low!r} > {high!r}")
+        return cls(data["key"], data["field"], low=low, high=high)
+
+
+def _real(value, label: str) -> float:
+    """A finite number from a manifest (JSON), else a :class:`SweepError` naming ``label``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SweepError(label, f"must be a finite number, got {value!r}")
+    return float(value)
 
 
 def _axis(scene: Scene, key: str, spec, random: bool) -> Axis:
-    """An :class:`Axis` from ``"start:stop:count"``, ``"start:stop"``, ``"a,b,c"`` or a sequence."""
+    """An :class:`Axis` from ``"start:stop:count"``, ``"start:stop"``, ``"a,b,c"`` or a sequence.
+
+    Sizes are checked before anything of that size is built: a count beyond
+    :data:`MAX_SCENES`, or more than :data:`MAX_LIST_VALUES` listed values, is refused.
+    """
     fld = canonical_field(scene, key)
     label = f"vary.{key}"
 
     def num(text):
-        if isinstance(text, (int, float)) and not isinstance(text, bool):
+        if isinstance(text, (int, float, np.integer, np.floating)) and not isinstance(text, (bool, np.bool_)):
             if not math.isfinite(text):
-                raise SceneError(label, f"must be finite, got {text}")
+                raise SceneError(label, f"must be finite, got {float(text)}")
             return float(text)
         try:
             return _expr.number(str(text), field=label, symbols=dict(scene.params))
@@ -163,15 +303,27 @@ def _axis(scene: Scene, key: str, spec, random: bool) -> Axis:
             raise SceneError(label, f"count must be an integer, got {parts[2]!r}") from None
         if count < 1:
             raise SceneError(label, f"count must be at least 1, got {count}")
+        if count > MAX_SCENES:
+            raise SceneError(label, f"count {count} is more scenes than a sweep may hold ({MAX_SCENES}, "
+                                    f"symvib.sweep.MAX_SCENES)")
         start, stop = num(parts[0]), num(parts[1])
-        values = np.linspace(start, stop, count) if count > 1 else np.array([start])
-        return Axis(key, fld, values=tuple(float(v) for v in values))
-    items = spec.split(",") if isinstance(spec, str) else list(np.atleast_1d(spec))
+        return Axis(key, fld, start=start, stop=stop, count=count)
     if random:
         raise SceneError(label, "a random sweep takes a range start:stop, not a list of values")
-    if not items or items == [""]:
+    if isinstance(spec, str):
+        if spec.count(",") >= MAX_LIST_VALUES:
+            raise SceneError(label, f"more than {MAX_LIST_VALUES} listed values (symvib.sweep.MAX_LIST_VALUES); "
+                                    f"use start:stop:count")
+        items = spec.split(",")
+    else:
+        items = np.atleast_1d(spec)
+        if items.ndim != 1 or items.size > MAX_LIST_VALUES:
+            raise SceneError(label, f"must be a flat list of at most {MAX_LIST_VALUES} values "
+                                    f"(symvib.sweep.MAX_LIST_VALUES); use start:stop:count")
+        items = list(items)
+    if not len(items) or items == [""]:
         raise SceneError(label, "no values given")
-    return Axis(key, fld, values=tuple(num(v) for v in items))
+    return Axis(key, fld, items=tuple(num(v) for v in items))
 
 
 @dataclass(frozen=True)
@@ -189,12 +341,12 @@ class SweepSpec:
     seed: int = 0
     chunk: int = DEFAULT_CHUNK
     log_events: int = 0
-    nodes: int = 16
+    nodes: int = DEFAULT_NODES
 
     @property
     def shape(self) -> tuple:
         """The grid's shape (one entry per axis); ``(count,)`` for random samples."""
-        return tuple(len(a.values) for a in self.axes) if self.mode == "grid" else (self.count,)
+        return tuple(a.size for a in self.axes) if self.mode == "grid" else (self.count,)
 
     @property
     def chunks(self) -> int:
@@ -207,11 +359,48 @@ class SweepSpec:
 
     @classmethod
     def from_dict(cls, data: dict) -> "SweepSpec":
-        scene = scene_from_dict(data["scene"])
-        axes = tuple(Axis(a["key"], a["field"], tuple(a["values"]) if "values" in a else None,
-                          a.get("low"), a.get("high")) for a in data["axes"])
-        return cls(scene, axes, data["mode"], int(data["count"]), int(data["seed"]), int(data["chunk"]),
-                   int(data["log_events"]), int(data["nodes"]))
+        """The spec of a definition (:meth:`to_dict`), checked as :func:`make_spec` checks one.
+
+        A definition comes from a manifest or a Dask task: every type and size
+        is checked (:func:`_check_sizes`) before anything is allocated.
+
+        Raises
+        ------
+        SweepError
+            Naming the key of the definition (``definition.axes[0].count``).
+        """
+        label = "definition"
+        if not isinstance(data, dict):
+            raise SweepError(label, f"must be a table, got {type(data).__name__}")
+        keys = {"scene", "axes", "mode", "count", "seed", "chunk", "log_events", "nodes"}
+        if set(data) != keys:
+            wrong = sorted(set(data) ^ keys)[0]
+            raise SweepError(f"{label}.{wrong}", "missing" if wrong in keys else "unknown key")
+        try:
+            scene = scene_from_dict(data["scene"])
+        except SceneError as exc:
+            raise SweepError(f"{label}.scene.{exc.field}", exc.reason) from None
+        if not isinstance(data["axes"], list) or not data["axes"]:
+            raise SweepError(f"{label}.axes", "must be a non-empty list")
+        axes = tuple(Axis.from_dict(a, f"{label}.axes[{i}]") for i, a in enumerate(data["axes"]))
+        for i, a in enumerate(axes):
+            try:
+                if canonical_field(scene, a.field) != a.field:
+                    raise SceneError(a.field, "not canonical")
+            except SceneError:
+                raise SweepError(f"{label}.axes[{i}].field", f"{a.field!r} is not a sweepable field of the scene") \
+                    from None
+        ints = {}
+        for key in ("count", "seed", "chunk", "log_events", "nodes"):
+            value = data[key]
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise SweepError(f"{label}.{key}", f"must be an integer, got {value!r}")
+            ints[key] = value
+        if data["mode"] not in ("grid", "random") or any(a.grid != (data["mode"] == "grid") for a in axes):
+            raise SweepError(f"{label}.mode", "must be 'grid' (axes of values) or 'random' (axes of ranges)")
+        spec = cls(scene, axes, data["mode"], **ints)
+        _check_sizes(spec, prefix=f"{label}.")
+        return spec
 
     def rows(self, index: int) -> tuple:
         """Row numbers and varied values (one array per axis) of chunk ``index``."""
@@ -220,10 +409,15 @@ class SweepSpec:
         rows = np.arange(start, stop, dtype=np.int64)
         if self.mode == "grid":
             idx = np.unravel_index(rows, self.shape)
-            return rows, [np.asarray(a.values)[i] for a, i in zip(self.axes, idx)]
+            return rows, [a.at(i) for a, i in zip(self.axes, idx)]
         rng = np.random.default_rng([self.seed, index])
         u = rng.random((stop - start, len(self.axes)))
         return rows, [a.low + (a.high - a.low) * u[:, j] for j, a in enumerate(self.axes)]
+
+    def chunk_bytes(self) -> int:
+        """Bytes of the columns of one full chunk (row, varied fields, summary, event log)."""
+        per_row = (1 + len(self.axes) + len(core.SUMMARY) + _EVENT_WIDTH * self.log_events) * _ITEM
+        return min(self.chunk, self.count) * per_row
 
     def scalars(self, values) -> tuple:
         """Rows of :data:`symvib.core.SCALARS` and of curve parameters for varied ``values``.
@@ -309,7 +503,7 @@ def _domain(scene: Scene, values) -> tuple:
 
 
 def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
-              chunk: int = DEFAULT_CHUNK, log_events: int = 0, nodes: int = 16) -> SweepSpec:
+              chunk: int = DEFAULT_CHUNK, log_events: int = 0, nodes: int = DEFAULT_NODES) -> SweepSpec:
     """Validate a sweep definition.
 
     Parameters
@@ -324,11 +518,18 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
     seed, chunk, log_events : int
         Random seed, scenes per chunk, events kept per scene.
     nodes : int
-        Gauss-Legendre nodes per quadrature panel (as :func:`symvib.driver.simulate`).
+        Gauss-Legendre nodes per quadrature panel (as :func:`symvib.driver.simulate`),
+        in :data:`NODES_RANGE`.
+
+    Raises
+    ------
+    SceneError
+        Naming the field or option; sizes (:func:`_check_sizes`) are checked
+        before anything of that size is built.
     """
     if not isinstance(scene, Scene):
         raise SceneError("scene", f"must be a Scene, got {type(scene).__name__}")
-    if not vary:
+    if not isinstance(vary, dict) or not vary:
         raise SceneError("vary", "nothing to vary: give at least one field, e.g. qdot=3:12:200")
     axes = tuple(_axis(scene, key, value, random is not None) for key, value in vary.items())
     fields = [a.field for a in axes]
@@ -342,20 +543,55 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
             raise SceneError("random", f"number of samples must be a positive integer, got {random!r}")
         count = random
     else:
-        count = math.prod(len(a.values) for a in axes)
-    if count > MAX_SCENES:
-        raise SceneError("vary", f"{count} scenes is more than a sweep may hold ({MAX_SCENES})")
-    for label, value, least in (("chunk", chunk, 1), ("log_events", log_events, 0), ("seed", seed, 0),
-                                ("nodes", nodes, 2)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < least:
-            raise SceneError(label, f"must be an integer >= {least}, got {value!r}")
+        count = math.prod(a.size for a in axes)   # Python integers: no overflow
     spec = SweepSpec(scene, axes, "grid" if random is None else "random", count, seed, chunk, log_events, nodes)
+    _check_sizes(spec)
     # Every corner of the box of varied values is a valid scene (the linear
     # constraints then hold inside it); each chunk is checked row by row too.
-    corners = [(min(a.values), max(a.values)) if a.values is not None else (a.low, a.high) for a in axes]
+    corners = [a.bounds for a in axes]
     for corner in np.array(np.meshgrid(*corners, indexing="ij")).reshape(len(axes), -1).T:
         spec.scalars([np.array([v]) for v in corner])
     return spec
+
+
+def _check_sizes(spec: SweepSpec, prefix: str = "") -> None:
+    """Refuse, before anything is allocated, a sweep beyond the module's bounds.
+
+    Bounds: :data:`MAX_SCENES`, :data:`MAX_CHUNKS`, :data:`MAX_LOG_EVENTS`,
+    :data:`MAX_CHUNK_BYTES`, :data:`MAX_EVENT_LOG_BYTES`, :data:`NODES_RANGE`
+    (module constants: assign them to change a bound).  Errors name the option.
+    """
+    for label, value, least in (("chunk", spec.chunk, 1), ("log_events", spec.log_events, 0),
+                                ("seed", spec.seed, 0), ("nodes", spec.nodes, NODES_RANGE[0])):
+        if isinstance(value, bool) or not isinstance(value, int) or value < least:
+            raise SceneError(prefix + label, f"must be an integer >= {least}, got {value!r}")
+    if spec.nodes > NODES_RANGE[1]:
+        raise SceneError(prefix + "nodes", f"must be in [{NODES_RANGE[0]}, {NODES_RANGE[1]}], got {spec.nodes}")
+    if isinstance(spec.count, bool) or not isinstance(spec.count, int) or spec.count < 1:
+        raise SceneError(prefix + "count", f"must be a positive integer, got {spec.count!r}")
+    if spec.mode == "grid" and spec.count != math.prod(a.size for a in spec.axes):
+        raise SceneError(prefix + "count", f"{spec.count} is not the product of the axes' sizes")
+    if spec.count > MAX_SCENES:
+        sizes = " x ".join(f"{a.key} {a.size}" for a in spec.axes) if spec.mode == "grid" else "--random"
+        raise SceneError(prefix + ("vary" if spec.mode == "grid" else "random"),
+                         f"{spec.count} scenes ({sizes}) is more than a sweep may hold ({MAX_SCENES}, "
+                         f"symvib.sweep.MAX_SCENES)")
+    if spec.chunks > MAX_CHUNKS:
+        raise SceneError(prefix + "chunk", f"{spec.chunk} scenes per chunk makes {spec.chunks} chunk files, more "
+                                           f"than {MAX_CHUNKS} (symvib.sweep.MAX_CHUNKS): choose a larger --chunk")
+    if spec.log_events > MAX_LOG_EVENTS:
+        raise SceneError(prefix + "log_events", f"{spec.log_events} events per scene is more than "
+                                                f"{MAX_LOG_EVENTS} (symvib.sweep.MAX_LOG_EVENTS)")
+    if spec.chunk_bytes() > MAX_CHUNK_BYTES:
+        raise SceneError(prefix + "chunk", f"a chunk of {min(spec.chunk, spec.count)} scenes with --log-events "
+                                           f"{spec.log_events} takes {spec.chunk_bytes()} bytes, more than "
+                                           f"{MAX_CHUNK_BYTES} (symvib.sweep.MAX_CHUNK_BYTES): choose a smaller "
+                                           f"--chunk or --log-events")
+    log_bytes = spec.count * spec.log_events * _EVENT_WIDTH * _ITEM
+    if log_bytes > MAX_EVENT_LOG_BYTES:
+        raise SceneError(prefix + "log_events", f"{spec.count} scenes x {spec.log_events} logged events take "
+                                                f"{log_bytes} bytes, more than {MAX_EVENT_LOG_BYTES} "
+                                                f"(symvib.sweep.MAX_EVENT_LOG_BYTES): log fewer events")
 
 
 def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
@@ -366,7 +602,9 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
     :data:`symvib.core.SUMMARY` columns, and ``event_log`` when asked).
     """
     spec = SweepSpec.from_dict(definition)
-    rows, values = spec.rows(index)
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < spec.chunks:
+        raise SweepError("chunk", f"index must be an integer in [0, {spec.chunks}), got {index!r}")
+    rows, values = spec.rows(int(index))
     scal, cp = spec.scalars(values)
     fn = _sweep_function(spec.scene, backend)
     from .driver import _rule
@@ -406,9 +644,14 @@ class SweepResult:
         ``event_log`` (shape ``(count, log_events, 6)``: kind, t, q,
         qdot_before, qdot_after, energy) when events were logged.
     computed, reused : tuple of int
-        Chunks computed by this call, and chunks found complete on disk.
+        Chunks computed by this call, and chunks found complete (and valid) on disk.
     seconds : float
         Wall time of the computation.
+    out : str or None
+        The sweep folder.
+    discarded : tuple of int
+        Chunks found on disk but truncated, unreadable or made by another sweep:
+        removed and computed again (they are in ``computed`` too).
     """
 
     spec: SweepSpec
@@ -417,6 +660,7 @@ class SweepResult:
     reused: tuple = ()
     seconds: float = 0.0
     out: str | None = field(default=None)
+    discarded: tuple = ()
 
     @property
     def count(self) -> int:
@@ -441,6 +685,12 @@ class SweepResult:
             raise ValueError("this sweep kept no event log (log_events = 0)")
         n = min(int(self.columns["events"][row]), self.spec.log_events)
         return [(core.EVENT_NAMES[int(r[0])], *map(float, r[1:])) for r in self.columns["event_log"][row, :n]]
+
+    @property
+    def failed(self) -> np.ndarray:
+        """Rows whose run failed (a status of ``symvib.core.ERROR_CODES``: non-finite state, energy
+        budget not closing): their numbers are not a result."""
+        return np.isin(self.columns["status"], core.ERROR_CODES)
 
     @property
     def impact_share(self) -> np.ndarray:
@@ -482,50 +732,359 @@ class Progress:
         self.stream.flush()
 
 
-def _manifest(spec: SweepSpec) -> dict:
+def sweep_id(definition: dict) -> str:
+    """The identity of a sweep: a hash of the layout :data:`FORMAT` and its definition.
+
+    Written in the manifest and in every chunk; a chunk is used only by the
+    sweep of the same identity (the definition's canonical JSON, so a
+    definition read back from a manifest has the identity it was written with).
+    """
+    text = json.dumps({"format": FORMAT, "definition": definition}, sort_keys=True, separators=(",", ":"),
+                      allow_nan=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:_ID_DIGITS]
+
+
+def _manifest(spec: SweepSpec, ident: str) -> dict:
     from . import __version__
 
-    return {"format": FORMAT, "definition": spec.to_dict(), "chunks": spec.chunks,
-            "columns": ["row"] + [a.field for a in spec.axes] + list(core.SUMMARY)
-            + (["event_log"] if spec.log_events else []),
+    return {"format": FORMAT, "sweep_id": ident, "definition": spec.to_dict(), "chunks": spec.chunks,
+            "columns": _column_names(spec),
             "status_names": list(core.STATUS_NAMES), "event_names": list(core.EVENT_NAMES),
             "event_log_columns": ["kind", "t", "q", "qdot_before", "qdot_after", "energy"],
             "symvib_version": __version__}
+
+
+def _column_names(spec: SweepSpec) -> list:
+    return ["row"] + [a.field for a in spec.axes] + list(core.SUMMARY) + (["event_log"] if spec.log_events else [])
 
 
 def _chunk_path(out: Path, index: int) -> Path:
     return out / "chunks" / f"chunk-{index:06d}.npz"
 
 
-def _write_chunk(out: Path, index: int, columns: dict) -> None:
+def _write_chunk(out: Path, index: int, columns: dict, ident: str) -> None:
+    """Write a chunk with its sweep's identity: to a temporary name, then renamed (atomic)."""
     path = _chunk_path(out, index)
     tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
-    np.savez(tmp, **columns)
-    os.replace(tmp, path)
+    try:
+        np.savez(tmp, sweep_id=np.array(ident), **columns)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise SweepError(str(path), f"cannot write the chunk: {exc.strerror or exc}") from None
 
 
-def _prepare(out: Path, spec: SweepSpec, overwrite: bool) -> list:
-    """Create or reopen ``out``; the chunks already complete there."""
-    manifest = _manifest(spec)
+def _bad_chunk(path: Path, reason: str) -> SweepError:
+    return SweepError(str(path), f"{reason}; run the same sweep again to recompute it")
+
+
+def _read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
+    """The columns of chunk ``index``, checked against the sweep: identity, names, dtypes, shapes, rows.
+
+    Raises
+    ------
+    SweepError
+        Naming the chunk file: truncated or unreadable, made by another sweep,
+        or columns that are not this sweep's.
+    """
+    rows, values = spec.rows(index)
+    n = len(rows)
+    expected = _column_names(spec)
+    try:
+        if path.stat().st_size > spec.chunk_bytes() + MAX_MANIFEST_BYTES:
+            raise _bad_chunk(path, "larger than a chunk of this sweep can be")
+        with np.load(path, allow_pickle=False) as data:
+            names = set(data.files)
+            if "sweep_id" not in names:
+                raise _bad_chunk(path, "no sweep identity: not a chunk of this sweep")
+            _check_header(path, data, "sweep_id", lambda d, sh: d.kind == "U" and sh == () and d.itemsize <= 4 * 64,
+                          "a text")
+            if str(data["sweep_id"]) != ident:
+                raise _bad_chunk(path, "made by another sweep (its sweep_id differs from the manifest's)")
+            if names != set(expected) | {"sweep_id"}:
+                raise _bad_chunk(path, f"columns {sorted(names - {'sweep_id'})} are not this sweep's")
+            columns = {}
+            for name in expected:   # each header checked before its array is allocated
+                want = np.dtype(np.int64 if name == "row" or name in _INTEGER_COLUMNS else np.float64)
+                shape = (n, spec.log_events, _EVENT_WIDTH) if name == "event_log" else (n,)
+                _check_header(path, data, name, lambda d, sh: d == want and sh == shape,
+                              f"{want}{list(shape)}")
+                columns[name] = data[name]
+    except SweepError:
+        raise
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+        raise _bad_chunk(path, f"truncated or unreadable ({type(exc).__name__})") from None
+    if not np.array_equal(columns["row"], rows) or not all(
+            np.array_equal(columns[a.field], v) for a, v in zip(spec.axes, values)):
+        raise _bad_chunk(path, f"rows or varied values are not those of chunk {index}")
+    status = columns["status"]
+    if status.size and (status.min() < 0 or status.max() >= len(core.STATUS_NAMES)):
+        raise _bad_chunk(path, "status codes out of range")
+    return columns
+
+
+def _check_header(path: Path, data, name: str, ok, expected: str) -> None:
+    """Check the ``.npy`` header of member ``name`` (dtype, shape) before its array is read."""
+    with data.zip.open(f"{name}.npy") as fh:
+        version = np.lib.format.read_magic(fh)
+        read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, fortran, dtype = read(fh)
+    if fortran or dtype.hasobject or not ok(dtype, shape):
+        raise _bad_chunk(path, f"column {name} is {dtype}{list(shape)}, expected {expected}")
+
+
+class WriterLock:
+    """The one writer of a sweep folder: ``FOLDER/sweep.lock``, created with ``O_CREAT | O_EXCL``.
+
+    The lock file holds the writer's pid, host and a random nonce (JSON).  A
+    lock whose pid is dead on this host (a killed sweep) is taken over; any
+    other lock stops the second writer with a one-line :class:`SweepError`.
+    The writer checks (:meth:`verify`) before each chunk it writes that the
+    lock still holds its nonce, so even a lock taken over wrongly (a pid reused
+    on another host sharing the folder) stops one writer instead of mixing two.
+    """
+
+    NAME = "sweep.lock"
+
+    def __init__(self, folder):
+        self.folder = Path(folder)
+        self.path = self.folder / self.NAME
+        self.nonce = secrets.token_hex(16)
+        self.held = False
+
+    def _text(self) -> str:
+        return json.dumps({"pid": os.getpid(), "host": socket.gethostname(), "nonce": self.nonce,
+                           "since": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())})
+
+    def _holder(self):
+        """The lock file's content as (raw bytes, parsed dict or None); ``None`` if there is no lock."""
+        try:
+            with open(self.path, "rb") as fh:
+                raw = fh.read(4096)
+        except FileNotFoundError:
+            return None
+        except OSError as exc:
+            raise SweepError(str(self.path), f"cannot read the lock: {exc.strerror or exc}") from None
+        try:
+            data = json.loads(raw.decode("utf-8"))
+        except (UnicodeDecodeError, ValueError):
+            data = None
+        return raw, data if isinstance(data, dict) else None
+
+    def _stale(self, data) -> bool:
+        if data is None:   # empty or garbled: its writer died between creating and filling it, or is filling it
+            try:
+                return time.time() - self.path.stat().st_mtime > LOCK_GRACE
+            except FileNotFoundError:
+                return True
+        pid, host = data.get("pid"), data.get("host")
+        if host != socket.gethostname() or isinstance(pid, bool) or not isinstance(pid, int) or pid <= 0:
+            return False
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        except (PermissionError, OverflowError):
+            return False
+        return False
+
+    def acquire(self) -> "WriterLock":
+        """Take the lock, or raise :class:`SweepError` naming the folder and the holder."""
+        for _ in range(3):
+            try:
+                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                holder = self._holder()
+                if holder is None:
+                    continue   # released meanwhile
+                raw, data = holder
+                if not self._stale(data):
+                    who = (f"pid {data.get('pid')} on {data.get('host')}, since {data.get('since')}"
+                           if data else "lock file being written")
+                    raise SweepError("out", f"another sweep writes {self.folder} ({who}); wait for it, or delete "
+                                            f"{self.path} if that sweep is dead") from None
+                self._take_over(raw)
+                continue
+            except OSError as exc:
+                raise SweepError(str(self.path), f"cannot create the lock: {exc.strerror or exc}") from None
+            try:
+                os.write(fd, self._text().encode("utf-8"))
+            finally:
+                os.close(fd)
+            self.held = True
+            return self
+        raise SweepError("out", f"could not take the lock {self.path}: other writers keep taking it")
+
+    def _take_over(self, raw: bytes) -> None:
+        """Remove a stale lock whose content is ``raw`` (and only that one)."""
+        aside = self.path.with_name(f"{self.NAME}.stale-{self.nonce}")
+        try:
+            os.rename(self.path, aside)
+        except FileNotFoundError:
+            return
+        try:
+            if aside.read_bytes() != raw:   # another writer replaced the stale lock meanwhile: put it back
+                try:
+                    os.link(aside, self.path)
+                except FileExistsError:
+                    pass
+        finally:
+            aside.unlink(missing_ok=True)
+
+    def verify(self) -> None:
+        """Raise :class:`SweepError` unless the lock file still holds this writer's nonce."""
+        holder = self._holder()
+        if holder is None or holder[1] is None or holder[1].get("nonce") != self.nonce:
+            raise SweepError("out", f"lost the lock {self.path}: another sweep took over {self.folder}; "
+                                    f"this one stops")
+
+    def release(self) -> None:
+        """Remove the lock file if it is still this writer's."""
+        if not self.held:
+            return
+        self.held = False
+        holder = self._holder()
+        if holder is not None and holder[1] is not None and holder[1].get("nonce") == self.nonce:
+            self.path.unlink(missing_ok=True)
+
+
+def _check_out(out) -> Path:
+    """Create the sweep folder ``out`` (and its ``chunks``), or raise a one-line :class:`SweepError`."""
+    if not isinstance(out, (str, os.PathLike)):
+        raise SweepError("out", f"must be a folder path, got {type(out).__name__}")
+    out = Path(out)
+    if not str(out) or "\0" in str(out):
+        raise SweepError("out", f"not a usable folder name: {str(out)!r}")
+    for folder in (out, out / "chunks"):
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except FileExistsError:
+            raise SweepError("out", f"{folder} exists and is not a folder (a file or a device)") from None
+        except NotADirectoryError:
+            raise SweepError("out", f"{folder}: a parent of it is a file, not a folder") from None
+        except OSError as exc:
+            raise SweepError("out", f"cannot create the folder {folder}: {exc.strerror or exc}") from None
+        if not folder.is_dir() or folder.name == "chunks" and folder.is_symlink():
+            raise SweepError("out", f"{folder} is not a folder (or a symbolic link, which could lead outside {out})")
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise SweepError("out", f"folder {folder} is not writable")
+    manifest = out / "manifest.json"
+    if manifest.exists() and not manifest.is_file():
+        raise SweepError(str(manifest), "is not a regular file")
+    return out
+
+
+def _read_manifest(out: Path) -> tuple:
+    """``(manifest, spec, sweep_id)`` of the sweep in ``out``, every part checked.
+
+    Raises
+    ------
+    SweepError
+        One line naming ``manifest.json``: missing, not a small regular file,
+        not JSON, not an object, an old or unknown format, a definition that
+        is not valid or not the one its ``sweep_id`` was made of.
+    """
     path = out / "manifest.json"
+    if not path.exists():
+        raise SweepError(str(out), "no sweep here (manifest.json missing)")
+    if not path.is_file():
+        raise SweepError(str(path), "is not a regular file")
+    try:
+        size = path.stat().st_size
+        if size > MAX_MANIFEST_BYTES:
+            raise SweepError(str(path), f"is {size} bytes, more than a manifest may hold ({MAX_MANIFEST_BYTES})")
+        with open(path, "rb") as fh:
+            raw = fh.read(size + 1)   # the size was checked: no buffer of the bound's size
+        if len(raw) > MAX_MANIFEST_BYTES:
+            raise SweepError(str(path), f"is more than a manifest may hold ({MAX_MANIFEST_BYTES} bytes)")
+        manifest = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
+    except SweepError:
+        raise
+    except OSError as exc:
+        raise SweepError(str(path), f"cannot read it: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise SweepError(str(path), "not a JSON manifest (not UTF-8 text)") from None
+    except (ValueError, RecursionError) as exc:
+        reason = exc.args[0] if isinstance(exc, ValueError) else "nested too deeply"
+        raise SweepError(str(path), f"not a JSON manifest ({reason})") from None
+    if not isinstance(manifest, dict):
+        raise SweepError(str(path), f"must hold a JSON object, got {type(manifest).__name__}")
+    fmt = manifest.get("format")
+    if fmt in OLD_FORMATS:
+        raise SweepError(str(path), f"written in the older layout {fmt}, whose chunks carry no sweep identity; "
+                                    f"run the sweep again with --overwrite (layout {FORMAT})")
+    if fmt != FORMAT:
+        raise SweepError(str(path), f"unknown format {fmt!r}; expected {FORMAT}")
+    definition = manifest.get("definition")
+    try:
+        spec = SweepSpec.from_dict(definition)
+    except SceneError as exc:
+        raise SweepError(str(path), f"{exc.field}: {exc.reason}") from None
+    ident = sweep_id(definition)
+    if manifest.get("sweep_id") != ident:
+        raise SweepError(str(path), "sweep_id does not match the definition (the manifest was edited)")
+    return manifest, spec, ident
+
+
+def _no_constant(name: str):
+    """``json.loads`` hook: a manifest holds finite numbers only (no NaN or Infinity)."""
+    raise ValueError(f"non-finite number {name}")
+
+
+def _chunk_files(out: Path) -> set:
+    try:
+        return set(os.listdir(out / "chunks"))
+    except (FileNotFoundError, NotADirectoryError):
+        return set()
+
+
+def _prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool) -> tuple:
+    """Open ``out`` for the sweep ``ident`` (the caller holds its lock).
+
+    Returns ``(done, discarded)``: chunks complete and valid there, and chunks
+    removed because they were truncated, unreadable or another sweep's.
+    """
+    path = out / "manifest.json"
+    old = None
     if path.exists():
-        old = json.loads(path.read_text(encoding="utf-8"))
-        if old.get("definition") != json.loads(json.dumps(manifest["definition"])) and not overwrite:
-            raise SceneError("out", f"{out} holds a different sweep; choose another folder or overwrite it")
-        if overwrite and old.get("definition") != json.loads(json.dumps(manifest["definition"])):
-            for p in (out / "chunks").glob("chunk-*"):
-                p.unlink()
-    (out / "chunks").mkdir(parents=True, exist_ok=True)
-    for stale in (out / "chunks").glob("*.tmp.npz"):
-        stale.unlink()  # a killed writer's partial file
+        try:
+            old = _read_manifest(out)[2]
+        except SweepError as exc:
+            if not overwrite:
+                raise SweepError(exc.field, f"{exc.reason}; --overwrite replaces it with this sweep") from None
+    if old is not None and old != ident and not overwrite:
+        raise SweepError("out", f"{out} holds a different sweep; choose another folder or overwrite it")
+    files = _chunk_files(out)
+    if old != ident:
+        for name in files:
+            if name.startswith("chunk-"):
+                (out / "chunks" / name).unlink(missing_ok=True)
+        files = set()
+    for name in files:
+        if name.endswith(".tmp.npz"):
+            (out / "chunks" / name).unlink(missing_ok=True)  # a killed writer's partial file
     tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(manifest, indent=1) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
-    return [i for i in range(spec.chunks) if _chunk_path(out, i).exists()]
+    try:
+        tmp.write_text(json.dumps(_manifest(spec, ident), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise SweepError(str(path), f"cannot write the manifest: {exc.strerror or exc}") from None
+    done, discarded = [], []
+    for i in range(spec.chunks):
+        chunk = _chunk_path(out, i)
+        if chunk.name not in files:
+            continue
+        try:
+            _read_chunk(chunk, spec, ident, i)
+            done.append(i)
+        except SweepError:
+            chunk.unlink(missing_ok=True)
+            discarded.append(i)
+    return done, discarded
 
 
 def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0, chunk: int = DEFAULT_CHUNK,
-          log_events: int = 0, nodes: int = 16, out=None, overwrite: bool = False, scheduler=None,
+          log_events: int = 0, nodes: int = DEFAULT_NODES, out=None, overwrite: bool = False, scheduler=None,
           progress: bool = False, backend: str = "auto") -> SweepResult:
     """Run ``scene`` for every combination (or random sample) of the ``vary`` fields.
 
@@ -539,9 +1098,13 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
         See :func:`make_spec`.
     out : path, optional
         Folder for the manifest and chunk files; an existing sweep there is
-        resumed (only missing chunks run).  Without it the sweep stays in memory.
+        resumed (only missing chunks run; chunks that are truncated or carry
+        another sweep's identity are computed again).  Without it the sweep
+        stays in memory.  The folder is locked (:class:`WriterLock`) while the
+        sweep writes it.
     overwrite : bool
-        Replace a *different* sweep found in ``out`` instead of refusing.
+        Replace a *different* sweep (or an unreadable manifest) found in ``out``
+        instead of refusing.
     scheduler : str or dask.distributed.Client, optional
         Run the chunks on this Dask cluster (extra ``symvib[dask]``).
     progress : bool
@@ -551,12 +1114,32 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
     Returns
     -------
     SweepResult
+
+    Raises
+    ------
+    SceneError
+        A bad definition (naming the field or option); :class:`SweepError` for
+        an unusable folder, a folder another sweep writes, or a chunk that
+        cannot be written.
     """
     spec = make_spec(scene, vary, random=random, seed=seed, chunk=chunk, log_events=log_events, nodes=nodes)
     definition = spec.to_dict()
-    out = None if out is None else Path(out)
-    done = _prepare(out, spec, overwrite) if out is not None else []
-    todo = [i for i in range(spec.chunks) if i not in set(done)]
+    ident = sweep_id(definition)
+    if out is None:
+        return _run(spec, definition, ident, None, None, [], [], scheduler, progress, backend)
+    out = _check_out(out)
+    lock = WriterLock(out).acquire()
+    try:
+        done, discarded = _prepare(out, spec, ident, overwrite)
+        return _run(spec, definition, ident, out, lock, done, discarded, scheduler, progress, backend)
+    finally:
+        lock.release()
+
+
+def _run(spec, definition, ident, out, lock, done, discarded, scheduler, progress, backend) -> SweepResult:
+    """Compute the chunks not in ``done``: into ``out`` (under ``lock``), or in memory."""
+    finished = set(done)
+    todo = [i for i in range(spec.chunks) if i not in finished]
     store: dict = {}
     bar = Progress(spec.count, enabled=progress,
                    initial=sum(len(spec.rows(i)[0]) for i in done) if done else 0)
@@ -564,13 +1147,14 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
 
     def take(index, columns):
         if out is not None:
-            _write_chunk(out, index, columns)
+            lock.verify()
+            _write_chunk(out, index, columns, ident)
         else:
             store[index] = columns
         bar.update(len(columns["row"]))
 
     if scheduler is not None and todo:
-        _run_dask(scheduler, definition, todo, backend, take)
+        _run_dask(scheduler, definition, ident, todo, backend, take)
     else:
         for index in todo:
             take(index, run_chunk(definition, index, backend))
@@ -578,11 +1162,14 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
     seconds = time.perf_counter() - start
     if out is not None:
         result = load_sweep(out)
-        return SweepResult(result.spec, result.columns, tuple(todo), tuple(done), seconds, str(out))
+        if sweep_id(result.spec.to_dict()) != ident:
+            raise SweepError("out", f"{out} holds another sweep than the one just written")
+        return SweepResult(result.spec, result.columns, tuple(todo), tuple(done), seconds, str(out),
+                           tuple(discarded))
     return SweepResult(spec, _join(spec, [store[i] for i in range(spec.chunks)]), tuple(todo), (), seconds)
 
 
-def _run_dask(scheduler, definition, todo, backend, take) -> None:
+def _run_dask(scheduler, definition, ident, todo, backend, take) -> None:
     try:
         from dask.distributed import Client, as_completed
     except ImportError:
@@ -590,7 +1177,7 @@ def _run_dask(scheduler, definition, todo, backend, take) -> None:
                                       "pip install 'symvib[dask]'") from None
     client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
     try:
-        token = hashlib.sha256(json.dumps(definition, sort_keys=True).encode()).hexdigest()[:12]
+        token = ident[:12]
         workers = max(1, len(client.scheduler_info().get("workers", {})))
         pending = list(todo)
         running = as_completed()
@@ -626,24 +1213,23 @@ def _join(spec: SweepSpec, parts: list) -> dict:
 def load_sweep(out) -> SweepResult:
     """Read a sweep folder (manifest and chunks) into a :class:`SweepResult`.
 
-    Raises ``ValueError`` naming the missing chunks if the sweep is incomplete.
+    Every chunk is checked against the manifest (:func:`_read_chunk`: the
+    sweep's identity, column names, dtypes, shapes and rows).
+
+    Raises
+    ------
+    SweepError
+        One line naming the file: no or a bad manifest, missing chunks (the
+        sweep is incomplete), a truncated chunk or one of another sweep.
     """
     out = Path(out)
-    path = out / "manifest.json"
-    if not path.exists():
-        raise SceneError(str(out), "no sweep here (manifest.json missing)")
-    manifest = json.loads(path.read_text(encoding="utf-8"))
-    if manifest.get("format") != FORMAT:
-        raise SceneError(str(path), f"unknown format {manifest.get('format')!r}; expected {FORMAT}")
-    spec = SweepSpec.from_dict(manifest["definition"])
-    missing = [i for i in range(spec.chunks) if not _chunk_path(out, i).exists()]
+    _, spec, ident = _read_manifest(out)
+    files = _chunk_files(out)
+    missing = [i for i in range(spec.chunks) if _chunk_path(out, i).name not in files]
     if missing:
-        raise ValueError(f"sweep in {out} is incomplete: {len(missing)} of {spec.chunks} chunks missing "
-                         f"(first: {missing[0]}); run the same sweep again to resume")
-    parts = []
-    for i in range(spec.chunks):
-        with np.load(_chunk_path(out, i)) as data:
-            parts.append({name: data[name] for name in data.files})
+        raise SweepError(str(out), f"sweep is incomplete: {len(missing)} of {spec.chunks} chunks missing "
+                                   f"(first: {missing[0]}); run the same sweep again to resume")
+    parts = [_read_chunk(_chunk_path(out, i), spec, ident, i) for i in range(spec.chunks)]
     return SweepResult(spec, _join(spec, parts), out=str(out))
 
 
@@ -663,22 +1249,37 @@ def _resolve_scene(text: str) -> Scene:
 
 
 def _sweep_file(path: Path) -> dict:
-    try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise SceneError(str(path), "no such sweep file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(str(path), f"not valid TOML: {exc}") from None
+    """Read a sweep file as a scene file is read (:func:`symvib.paths.read_user_toml`:
+    size cap, no device or folder, no TOML bomb), then check its keys."""
+    from .paths import read_user_toml
+
+    data = read_user_toml(path, "sweep file")
     known = {"scene", "vary", "random", "seed", "chunk", "log_events", "nodes", "out"}
     for key in data:
         if key not in known:
             raise SceneError(f"{path.name}:{key}", f"unknown key; known: {', '.join(sorted(known))}")
+    _check_sweep_file(data, path)
     if "scene" in data:
         scene = Path(data["scene"])
         data["scene"] = str(scene if scene.is_absolute() or not (path.parent / scene).exists()
                             else path.parent / scene)
     return data
+
+
+#: Types of the keys of a sweep file (``vary`` is a table; integers are checked by :func:`make_spec`).
+_SWEEP_FILE_TYPES = {"scene": str, "out": str, "vary": dict, "random": int, "seed": int, "chunk": int,
+                     "log_events": int, "nodes": int}
+
+
+def _check_sweep_file(data: dict, path: Path) -> None:
+    """Refuse keys of the wrong type in a sweep file, naming the file and key."""
+    for key, kind in _SWEEP_FILE_TYPES.items():
+        if key in data and (not isinstance(data[key], kind) or isinstance(data[key], bool)):
+            raise SceneError(f"{path.name}:{key}", f"must be {'a table' if kind is dict else kind.__name__}, "
+                                                   f"got {type(data[key]).__name__}")
+    for key in ("scene", "out"):
+        if key in data and (not data[key] or "\0" in data[key]):
+            raise SceneError(f"{path.name}:{key}", "must be a non-empty path")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -708,7 +1309,7 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return _main(args)
-    except (SceneError, ValueError) as exc:
+    except (SceneError, ValueError, OSError) as exc:
         print(f"symvib sweep: error: {exc}", file=sys.stderr)
         return 2
 
@@ -740,12 +1341,8 @@ def _main(args) -> int:
     status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in core.STATUS_NAMES if np.any(names == s))
     events = int(np.sum(res["events"]))
     print(f"sweep of {res.count} scenes of {scene.name} into {out}: {len(res.computed)} chunk(s) computed, "
-          f"{len(res.reused)} reused")
+          f"{len(res.reused)} reused" + (f" ({len(res.discarded)} found truncated or foreign)" if res.discarded else ""))
     print(f"  status: {status}; {events} events; {np.mean(res['impacts']):.3g} impacts per scene on average")
-    failed = int(np.sum(np.isin(res["status"], core.ERROR_CODES)))
-    if failed:
-        print(f"  {failed} of {res.count} scenes failed (status "
-              f"{' or '.join(core.STATUS_NAMES[c] for c in core.ERROR_CODES)}): their numbers are not results")
     if res.computed and res.seconds > 0:
         n = sum(len(res.spec.rows(i)[0]) for i in res.computed)
         print(f"  {n / res.seconds:,.0f} scenes/s over {res.seconds:.3g} s")
@@ -754,4 +1351,10 @@ def _main(args) -> int:
 
         for path in sweep_maps(res, Path(out) / "maps"):
             print(f"wrote {path}")
+    failed = res.failed
+    if failed.any():
+        kinds = ", ".join(sorted(set(names[failed])))
+        print(f"symvib sweep: error: {int(failed.sum())} of {res.count} scenes failed ({kinds}; first: row "
+              f"{int(np.flatnonzero(failed)[0])}): their rows hold no result", file=sys.stderr)
+        return EXIT_FAILED_SCENES
     return 0

@@ -62,8 +62,8 @@ def _at_first(res, others):
     """Rows where every axis in ``others`` is at its first grid value (all rows if none)."""
     sel = np.ones(res.count, dtype=bool)
     for a in others:
-        if a.values is not None:
-            sel &= res[a.field] == a.values[0]
+        if a.grid:
+            sel &= res[a.field] == a.first
     return sel
 
 
@@ -71,11 +71,11 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
     """Write one PNG per quantity of :data:`MAPS` into ``out_dir``; returns the paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    spread = [a for a in res.spec.axes if a.values is None or len(a.values) > 1] or list(res.spec.axes)
+    spread = [a for a in res.spec.axes if not a.grid or a.size > 1] or list(res.spec.axes)
     shown = spread[:2]
     scene = res.spec.scene
     others = [a for a in res.spec.axes if a not in shown]
-    note = " at " + ", ".join(f"{a.field} = {a.values[0]:g}" for a in others) if others else ""
+    note = " at " + ", ".join(f"{a.field} = {a.first:g}" for a in others) if others else ""
     paths = []
     for name in names:
         label, unit = MAPS[name]

@@ -166,8 +166,8 @@ def test_cli_sweep_says_how_many_scenes_failed(tmp_path, capsys):
     # (a --vary text beyond 1e100 is refused as bad input; mu = 1e60 overflows the budget)
     code = main(["sweep", str(_write_scene(tmp_path / "s.toml", "7")), "--vary", "mu=0.05,1e60", "-o",
                  str(tmp_path / "out"), "--quiet"])
-    text = capsys.readouterr().out
-    assert code == 0 and "1 of 2 scenes failed" in text
+    err = capsys.readouterr().err
+    assert code == EXIT_RUN_FAILED and "1 of 2 scenes failed (" in err and err.count("\n") == 1
 
 
 # --- sweeps mark the same scenes ----------------------------------------------------------------
