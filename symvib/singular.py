@@ -54,6 +54,9 @@ SCAN_POINTS = 4097
 BISECT_STEPS = 60
 #: What a piece of a singular set is (its reason in messages).
 NOT_FINITE, NOT_REAL, CUSP = "not finite", "not finite and real", "zero (a cusp)"
+#: Distance, relative to q_scale (and to |q| beyond 1), kept between a run's domain end and a
+#: singular point, so that the kernels are finite at the end.
+EDGE_RTOL = 1e-12
 #: Relative imaginary part above which a value counts as not real.
 IMAG_RTOL = 1e-12
 #: A sign change is a pole when the function, bisected to adjacent doubles, exceeds its
@@ -323,3 +326,68 @@ def regular_interval(curve, values: dict, q0: float, domain: tuple, *, reach=())
         if q0 < a < right:
             right, hi_reason = a, reason
     return Regular(left, right, lo_reason, hi_reason)
+
+
+#: Narrowed shapes already built, by (shape source, narrowed domain): the same object each time,
+#: so the driver's per-shape engine cache holds.
+_NARROWED: dict = {}
+#: Regular intervals already found, by (shape source, parameter values, q0, limiters).
+_INTERVALS: dict = {}
+
+
+def _end_text(v: float) -> str:
+    """A domain end as the text a Shape holds (exact: the shortest repr of the double)."""
+    return ("oo" if v > 0 else "-oo") if math.isinf(v) else repr(float(v))
+
+
+def regular_shape(scene):
+    """The shape a run of ``scene`` uses: its own, or a copy with the domain narrowed
+    to the regular interval around ``initial.q`` (physics.md, "Events" 4).
+
+    A curve regular on its whole declared domain keeps its shape (and its kernel
+    module, so its events are unchanged).  Where a singular point lies inside the
+    declared domain, the run's domain ends there: the particle reaching it ends
+    the run with status ``left_domain``, and the numeric ``F_sigma`` is integrated
+    from a reference point inside the interval, never across the point.
+
+    Raises
+    ------
+    SceneError
+        ``initial.q`` when the initial position is itself singular;
+        ``limiters.left``/``limiters.right`` when a limiter lies beyond a singular
+        point (the particle cannot reach it).
+    """
+    import dataclasses
+    import json
+
+    from .scene import SceneError
+    from .scene import _domain as declared_domain
+
+    shape = scene.shape
+    source = json.dumps(shape.source(), sort_keys=True)
+    key = (source, tuple(scene.params), scene.q0, scene.left, scene.right)
+    lo, hi = declared_domain(scene)
+    if key not in _INTERVALS:
+        curve = shape.curve()
+        reach = [v for v in (scene.left, scene.right) if v is not None]
+        _INTERVALS[key] = regular_interval(curve, scene.param_dict, scene.q0, (lo, hi), reach=reach)
+    r = _INTERVALS[key]
+    q = shape.q
+    if r.at_start:
+        raise SceneError("initial.q", f"{scene.q0!r} is a singular point of curve '{shape.name}' "
+                                      f"({r.at_start} at {q} = {scene.q0!r}); start inside a regular interval")
+    for label, v, ok, end, reason in (("limiters.left", scene.left, lambda v: v > r.lo, r.lo, r.lo_reason),
+                                      ("limiters.right", scene.right, lambda v: v < r.hi, r.hi, r.hi_reason)):
+        if v is not None and not ok(v):
+            raise SceneError(label, f"{v!r} is beyond a singular point of curve '{shape.name}' at {q} = {end!r} "
+                                    f"({reason}): the particle cannot get there from {q} = {scene.q0!r}")
+    if (r.lo, r.hi) == (lo, hi):
+        return shape
+    # The run's ends stay EDGE_RTOL (of q_scale) inside the singular points, where the
+    # kernels are still finite (the engine evaluates them at the ends of its domain).
+    margin = EDGE_RTOL * float(shape.curve().q_scale.subs(
+        {p: v for p, v in zip(shape.curve().params, scene.param_values)}))
+    ends = (r.lo if r.lo == lo else r.lo + margin * max(1.0, abs(r.lo)),
+            r.hi if r.hi == hi else r.hi - margin * max(1.0, abs(r.hi)))
+    domain = (_end_text(ends[0]), _end_text(ends[1]))
+    return _NARROWED.setdefault((source, domain), dataclasses.replace(shape, domain=domain))
