@@ -57,6 +57,8 @@ NOT_FINITE, NOT_REAL, CUSP = "not finite", "not finite and real", "zero (a cusp)
 #: Distance, relative to q_scale (and to |q| beyond 1), kept between a run's domain end and a
 #: singular point, so that the kernels are finite at the end.
 EDGE_RTOL = 1e-12
+#: Smallest q_scale of a narrowed run, relative to the curve's (bounds the engine's work).
+MIN_SCALE_RATIO = 1 / 64
 #: Relative imaginary part above which a value counts as not real.
 IMAG_RTOL = 1e-12
 #: A sign change is a pole when the function, bisected to adjacent doubles, exceeds its
@@ -385,9 +387,17 @@ def regular_shape(scene):
         return shape
     # The run's ends stay EDGE_RTOL (of q_scale) inside the singular points, where the
     # kernels are still finite (the engine evaluates them at the ends of its domain).
-    margin = EDGE_RTOL * float(shape.curve().q_scale.subs(
-        {p: v for p, v in zip(shape.curve().params, scene.param_values)}))
+    curve = shape.curve()
+    scale = float(curve.q_scale.subs({p: v for p, v in zip(curve.params, scene.param_values)}))
+    margin = EDGE_RTOL * scale
     ends = (r.lo if r.lo == lo else r.lo + margin * max(1.0, abs(r.lo)),
             r.hi if r.hi == hi else r.hi - margin * max(1.0, abs(r.hi)))
+    # The engine's quadrature panels are q_scale wide: near a singular point they must be
+    # narrower, or Gauss-Legendre converges slowly there (times, friction work).
+    near = min([abs(scene.q0 - e) for e in (r.lo, r.hi) if math.isfinite(e) and e not in (lo, hi)] + [scale])
+    narrow_scale = max(near, MIN_SCALE_RATIO * scale)
     domain = (_end_text(ends[0]), _end_text(ends[1]))
-    return _NARROWED.setdefault((source, domain), dataclasses.replace(shape, domain=domain))
+    changes = dict(domain=domain)
+    if narrow_scale < scale:
+        changes["q_scale"] = repr(narrow_scale)
+    return _NARROWED.setdefault((source, domain, changes.get("q_scale")), dataclasses.replace(shape, **changes))
