@@ -64,8 +64,9 @@ IMAG_RTOL = 1e-12
 #: A sign change is a pole when the function, bisected to adjacent doubles, exceeds its
 #: values at the grid points around it this many times.
 POLE_RATIO = 1e6
-#: A local minimum of h below this fraction of h at the grid points around it is a cusp.
-CUSP_RTOL = 1e-9
+#: A local minimum of h below this fraction of h at the grid points around it is a cusp (h
+#: computed as sqrt of a difference has a floor near sqrt(eps) there, not 0).
+CUSP_RTOL = 1e-6
 #: Functions of the geometry searched symbolically (the others only numerically: SymPy is slow on them).
 SYMBOLIC_LABELS = ("x", "z", "x'", "z'")
 
