@@ -334,6 +334,8 @@ def regular_interval(curve, values: dict, q0: float, domain: tuple, *, reach=())
 #: Narrowed shapes already built, by (shape source, narrowed domain): the same object each time,
 #: so the driver's per-shape engine cache holds.
 _NARROWED: dict = {}
+#: Symbolic curves already built, by shape source.
+_CURVES: dict = {}
 #: Regular intervals already found, by (shape source, parameter values, q0, limiters).
 _INTERVALS: dict = {}
 
@@ -370,8 +372,8 @@ def regular_shape(scene):
     source = json.dumps(shape.source(), sort_keys=True)
     key = (source, tuple(scene.params), scene.q0, scene.left, scene.right)
     lo, hi = declared_domain(scene)
+    curve = _CURVES.get(source) or _CURVES.setdefault(source, shape.curve())
     if key not in _INTERVALS:
-        curve = shape.curve()
         reach = [v for v in (scene.left, scene.right) if v is not None]
         _INTERVALS[key] = regular_interval(curve, scene.param_dict, scene.q0, (lo, hi), reach=reach)
     r = _INTERVALS[key]
@@ -388,7 +390,6 @@ def regular_shape(scene):
         return shape
     # The run's ends stay EDGE_RTOL (of q_scale) inside the singular points, where the
     # kernels are still finite (the engine evaluates them at the ends of its domain).
-    curve = shape.curve()
     scale = float(curve.q_scale.subs({p: v for p, v in zip(curve.params, scene.param_values)}))
     margin = EDGE_RTOL * scale
     ends = (r.lo if r.lo == lo else r.lo + margin * max(1.0, abs(r.lo)),
