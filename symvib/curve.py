@@ -387,11 +387,18 @@ def _finish(name, kind, q, params, x, z, domain, h_hint, alpha_hint, q_scale, so
             if identity_holds(lhs - rhs, curve) is None:
                 raise CurveError(f"curve '{name}': hint alpha = {alpha} does not satisfy "
                                  f"h {label}(alpha) = {'z' if label == 'sin' else 'x'}'")
-    # h must be positive inside the domain (checked at sample points).
+    # h must be positive inside the domain (checked at sample points).  A point where h
+    # is not finite or not real is a singular point (a pole, the far side of a sqrt's
+    # branch point): the run's regular interval ends before it (symvib.singular).
     hf = sp.lambdify([q, *params], h, "mpmath")
     for qv in sample_points(curve, IDENTITY_CHECK_POINTS, seed=7):
-        value = hf(qv, *[1] * len(params))
-        if not (mpmath.isfinite(value) and value > 0):
+        try:
+            value = hf(qv, *[1] * len(params))
+        except (ZeroDivisionError, ValueError, OverflowError):
+            continue
+        if not mpmath.isfinite(value) or mpmath.im(value) != 0:
+            continue
+        if not value > 0:
             raise CurveError(f"curve '{name}': h = {h} is not positive at {q} = {float(qv):.6g} "
                              f"(parameters = 1); narrow the domain or fix the hint")
     return curve

@@ -238,11 +238,12 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     Result
         Status, events, samples and energy budget.
     """
-    entry = _BOUND.get((id(scene.shape), backend))
-    if entry is None or entry[0] is not scene.shape or backend == "auto" and os.environ.get(BACKEND_ENV):
-        mod = load(scene.shape)
-        entry = (scene.shape, mod, *engine(mod.__file__, _resolve(backend)))
-        _BOUND[(id(scene.shape), backend)] = entry
+    shape = _run_shape(scene)
+    entry = _BOUND.get((id(shape), backend))
+    if entry is None or entry[0] is not shape or backend == "auto" and os.environ.get(BACKEND_ENV):
+        mod = load(shape)
+        entry = (shape, mod, *engine(mod.__file__, _resolve(backend)))
+        _BOUND[(id(shape), backend)] = entry
     _, mod, sim, sample_fn, _ = entry
     R = _rule(nodes)
     cp = tuple(float(v) for v in scene.param_values)
@@ -376,6 +377,19 @@ def guarded_sweep(sweep_fn):
 
     guarded.__wrapped__ = sweep_fn
     return guarded
+
+
+def _run_shape(scene):
+    """The shape whose kernels run ``scene``: a catalogue shape as it is (regular on its
+    domain), a user curve with its domain narrowed to the regular interval around
+    ``initial.q`` when a singular point lies inside it (:func:`symvib.singular.regular_shape`)."""
+    from .shapes import CATALOGUE
+
+    if CATALOGUE.get(scene.shape.name) == scene.shape:
+        return scene.shape
+    from .singular import regular_shape
+
+    return regular_shape(scene)
 
 
 def plain_nodes(nodes: int) -> int:

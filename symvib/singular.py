@@ -1,0 +1,405 @@
+"""Singular points of a curve: where its geometry stops being finite and real.
+
+physics.md ("Assumptions", regular curve) asks for ``x``, ``z`` twice
+differentiable and ``h > 0`` on the open interval the particle uses, bounded
+by the singular points (poles, cusps, the ends of a ``sqrt``).  A run must
+never integrate ``F_sigma`` or the time across such a point, so the driver
+asks this module for the largest open interval around the initial position
+on which ``x, z, x', z', h, 1/h, alpha`` and ``kappa`` are all finite and
+real, *with the scene's parameter values* (a pole of ``1/(x - a)`` moves with
+``a``).
+
+Two searches are combined on a finite window of ``q`` (the declared domain,
+cut at :data:`SCAN_HALF_WIDTH` ``q_scale`` from the origin or the initial
+position where it is infinite):
+
+* symbolic: :func:`sympy.calculus.util.continuous_domain` of each function,
+  in a child process under :data:`SYMBOLIC_SECONDS` (:mod:`symvib.budget`);
+  it finds exact poles and branch points of elementary functions;
+* numeric: the functions evaluated (complex NumPy) on :data:`SCAN_POINTS`
+  points of the window; a point where one of them is not finite or not
+  real is singular, and the edge of such a region is located by bisection.
+
+This module is on the symbolic side (SymPy).
+
+Examples
+--------
+>>> from symvib.curve import graph
+>>> c = graph("x**2 + 1/(x - a)", params=["a"])
+>>> r = regular_interval(c, {"a": 0.3}, 0.5, (-float("inf"), float("inf")))
+>>> r.lo, r.hi, r.lo_reason
+(0.3, inf, 'z is not finite')
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import sympy as sp
+
+from . import budget
+
+__all__ = ["Regular", "regular_interval", "singular_pieces", "geometry"]
+
+#: Wall-clock budget (seconds) of the symbolic search (continuous_domain of every function).
+SYMBOLIC_SECONDS = 5.0
+#: Half width, in units of q_scale, of the searched window where the domain is infinite.
+SCAN_HALF_WIDTH = 64.0
+#: Points of the numeric scan over the window.
+SCAN_POINTS = 4097
+#: Bisection steps locating the edge of a region where the geometry is not finite and real.
+BISECT_STEPS = 60
+#: What a piece of a singular set is (its reason in messages).
+NOT_FINITE, NOT_REAL, CUSP = "not finite", "not finite and real", "zero (a cusp)"
+#: Distance, relative to q_scale (and to |q| beyond 1), kept between a run's domain end and a
+#: singular point, so that the kernels are finite at the end.
+EDGE_RTOL = 1e-12
+#: Smallest q_scale of a narrowed run, relative to the curve's (bounds the engine's work).
+MIN_SCALE_RATIO = 1 / 64
+#: Relative imaginary part above which a value counts as not real.
+IMAG_RTOL = 1e-12
+#: A sign change is a pole when the function, bisected to adjacent doubles, exceeds its
+#: values at the grid points around it this many times.
+POLE_RATIO = 1e6
+#: A local minimum of h below this fraction of h at the grid points around it is a cusp (h
+#: computed as sqrt of a difference has a floor near sqrt(eps) there, not 0).
+CUSP_RTOL = 1e-6
+#: Functions of the geometry searched symbolically (the others only numerically: SymPy is slow on them).
+SYMBOLIC_LABELS = ("x", "z", "x'", "z'")
+
+
+@dataclass(frozen=True)
+class Regular:
+    """The open interval ``(lo, hi)`` around a point on which the curve is regular.
+
+    ``lo_reason``/``hi_reason`` say which function fails at a singular end
+    (``""`` where the end is the declared domain's).  ``at_start`` is set
+    instead when the point itself is singular.
+    """
+
+    lo: float
+    hi: float
+    lo_reason: str = ""
+    hi_reason: str = ""
+    at_start: str = ""
+
+
+def geometry(curve) -> tuple:
+    """``(label, expression)`` of the functions that must be finite and real.
+
+    ``kappa`` is taken as ``alpha' / h`` unsimplified (the cheap form).
+    """
+    q = curve.q
+    xp, zp = sp.diff(curve.x, q), sp.diff(curve.z, q)
+    return (("x", curve.x), ("z", curve.z), ("x'", xp), ("z'", zp), ("h", curve.h),
+            ("1/h", 1 / curve.h), ("alpha", curve.alpha), ("kappa", sp.diff(curve.alpha, q) / curve.h))
+
+
+def _substituted(curve, values: dict) -> tuple:
+    """The geometry with parameter values substituted exactly (decimal text -> rational)."""
+    subs = {p: sp.Rational(repr(float(values[p.name]))) for p in curve.params}
+    return tuple((label, e.xreplace(subs)) for label, e in geometry(curve))
+
+
+def _domain_job(items: list, qname: str, lo: float, hi: float) -> list:
+    """Child job: the pieces ``(a, b, label, kind)`` of ``[lo, hi]`` where a function is not continuous.
+
+    A function whose domain SymPy cannot determine is left to the numeric scan.
+    """
+    from sympy.calculus.util import continuous_domain
+
+    window = sp.Interval(sp.Rational(repr(lo)), sp.Rational(repr(hi)))
+    pieces = []
+    for label, text in items:
+        e = sp.sympify(text)  # srepr made in the parent from a parsed curve, never user text
+        q = next((s for s in e.free_symbols if s.name == qname), sp.Symbol(qname, real=True))
+        try:
+            bad = window - continuous_domain(e, q, window)
+        except Exception:  # noqa: BLE001 - NotImplementedError and friends: the scan decides
+            continue
+        parts = bad.args if isinstance(bad, sp.Union) else (bad,)
+        for part in parts:
+            if isinstance(part, sp.FiniteSet):
+                pieces += [(float(p), float(p), label, NOT_FINITE) for p in part if p.is_real]
+            elif isinstance(part, sp.Interval):
+                pieces.append((float(part.inf), float(part.sup), label, NOT_REAL))
+            elif part is not sp.S.EmptySet:
+                return [("unknown", None, label, "")]
+    return pieces
+
+
+def _symbolic(items, qname, lo, hi) -> list:
+    outcome = budget.run(_domain_job, (items, qname, lo, hi), seconds=SYMBOLIC_SECONDS)
+    if outcome.status != "ok" or any(p[0] == "unknown" for p in outcome.value):
+        return []
+    return list(outcome.value)
+
+
+def _bad(fns, q: np.ndarray) -> np.ndarray:
+    """Label index (+1) of the first function not finite and real at each point, 0 where all are."""
+    out = np.zeros(q.shape, dtype=int)
+    z = q.astype(complex)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        for i, fn in enumerate(fns):
+            try:
+                v = np.broadcast_to(np.asarray(fn(z), dtype=complex), q.shape)
+            except Exception:  # noqa: BLE001 - a function NumPy cannot evaluate is not checked
+                continue
+            bad = ~np.isfinite(v) | (np.abs(v.imag) > IMAG_RTOL * (1.0 + np.abs(v.real)))
+            out = np.where((out == 0) & bad, i + 1, out)
+    return out
+
+
+def _numeric(labels, fns, lo, hi) -> list:
+    """Pieces ``(a, b, label, kind)`` where the scan finds a function not finite, not real, or a pole."""
+    grid = np.linspace(lo, hi, SCAN_POINTS)
+    flags = _bad(fns, grid)
+    pieces = []
+    i = 0
+    while i < grid.size:
+        if not flags[i]:
+            i += 1
+            continue
+        j = i
+        while j + 1 < grid.size and flags[j + 1]:
+            j += 1
+        a = grid[i] if i == 0 else _edge(fns, grid[i - 1], grid[i])
+        b = grid[j] if j == grid.size - 1 else _edge(fns, grid[j + 1], grid[j])
+        pieces.append((float(a), float(b), labels[flags[i] - 1], NOT_REAL))
+        i = j + 1
+    return pieces + _poles(labels, fns, grid, flags)
+
+
+def _edge(fns, good: float, bad: float) -> float:
+    """The boundary between a regular point and a singular one, by bisection (returns the singular side)."""
+    for _ in range(BISECT_STEPS):
+        mid = 0.5 * (good + bad)
+        if mid in (good, bad):
+            break
+        if _bad(fns, np.array([mid]))[0]:
+            bad = mid
+        else:
+            good = mid
+    return bad
+
+
+def _real(fn, q: np.ndarray) -> np.ndarray:
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        try:
+            return np.broadcast_to(np.asarray(fn(q.astype(complex)), dtype=complex), q.shape).real
+        except Exception:  # noqa: BLE001 - a function NumPy cannot evaluate is not checked
+            return np.full(q.shape, np.nan)
+
+
+def _poles(labels, fns, grid, flags) -> list:
+    """Poles between regular grid points: a sign change of a function that grows without bound.
+
+    A pole of ``z`` of any order is a pole of odd order of ``z`` or of ``z'``,
+    where the function changes sign; the change is bisected to adjacent
+    doubles, and it is a pole when the function there exceeds the grid's
+    values :data:`POLE_RATIO` times (at a zero it vanishes instead).  A cusp
+    (``h -> 0`` without changing sign) is a local minimum of ``h`` that
+    golden-section search drives below :data:`CUSP_RTOL` of ``h`` at the grid points around it.
+    """
+    pieces = []
+    ok = flags == 0
+    for label, fn in zip(labels, fns):
+        v = _real(fn, grid)
+        change = ok[:-1] & ok[1:] & (v[:-1] * v[1:] < 0.0)
+        for j in np.flatnonzero(change):
+            a, b, fa = grid[j], grid[j + 1], v[j]
+            for _ in range(BISECT_STEPS * 2):
+                mid = 0.5 * (a + b)
+                if mid in (a, b):
+                    break
+                fm = _real(fn, np.array([mid]))[0]
+                if not np.isfinite(fm) or fm == 0.0:
+                    a = b = mid
+                    break
+                if (fm < 0.0) == (fa < 0.0):
+                    a, fa = mid, fm
+                else:
+                    b = mid
+            ends = _real(fn, np.array([a, b]))
+            size = max(abs(v[j]), abs(v[j + 1]), np.finfo(float).tiny)
+            if not np.all(np.isfinite(ends)) or np.min(np.abs(ends)) > POLE_RATIO * size:
+                pieces.append((float(a), float(b), label, NOT_FINITE))
+        if label == "h":
+            pieces += _cusps(fn, grid, v, ok)
+    return pieces
+
+
+def _cusps(fn, grid, v, ok) -> list:
+    """Points where ``h`` has a local minimum that reaches 0 (cusps), by golden-section search."""
+    out = []
+    inside = ok[:-2] & ok[1:-1] & ok[2:] & (v[1:-1] <= v[:-2]) & (v[1:-1] <= v[2:])
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    for j in np.flatnonzero(inside) + 1:
+        a, b = grid[j - 1], grid[j + 1]
+        for _ in range(BISECT_STEPS * 2):
+            c, d = b - ratio * (b - a), a + ratio * (b - a)
+            if not a < c < d < b:
+                break
+            fc, fd = _real(fn, np.array([c, d]))
+            if fc <= fd:
+                b = d
+            else:
+                a = c
+        m = 0.5 * (a + b)
+        small = CUSP_RTOL * max(v[j - 1], v[j + 1])
+        if abs(_real(fn, np.array([m]))[0]) > small:
+            continue
+        # h is at rounding level on a small interval around the cusp: keep all of it.
+        edges = []
+        for far in (grid[j - 1], grid[j + 1]):
+            near = m
+            for _ in range(BISECT_STEPS * 2):
+                mid = 0.5 * (near + far)
+                if mid in (near, far):
+                    break
+                if abs(_real(fn, np.array([mid]))[0]) > small:
+                    far = mid
+                else:
+                    near = mid
+            edges.append(far)
+        out.append((float(edges[0]), float(edges[1]), "h", CUSP))
+    return out
+
+
+@lru_cache(maxsize=64)
+def singular_pieces(curve, values: tuple, lo: float, hi: float) -> tuple:
+    """Sorted pieces ``(a, b, label, kind)`` of ``[lo, hi]`` where the curve is not regular.
+
+    ``values`` is a tuple of ``(name, value)`` of the parameters.  A piece is
+    a closed interval holding the singular set: a pole or a cusp (``kind =
+    NOT_FINITE``, ``[a, b]`` the bracket of adjacent doubles around it, or
+    ``a == b`` when exact), or a region where a function is not real
+    (``NOT_REAL``).  ``label`` names the function (``"z"``, ``"h"``, ``"kappa"``).
+    """
+    items = _substituted(curve, dict(values))
+    labels = [label for label, _ in items]
+    symbolic = _symbolic([(label, sp.srepr(e)) for label, e in items if label in SYMBOLIC_LABELS],
+                         curve.q.name, lo, hi)
+    fns = [sp.lambdify([curve.q], e, "numpy") for _, e in items]
+    pieces = symbolic + _numeric(labels, fns, lo, hi)
+    order = {label: i for i, label in enumerate(labels)}
+    return tuple(sorted(pieces, key=lambda p: (p[0], p[1], order[p[2]], p[3])))
+
+
+def regular_interval(curve, values: dict, q0: float, domain: tuple, *, reach=()) -> Regular:
+    """The largest open interval around ``q0`` inside ``domain`` free of singular points.
+
+    Parameters
+    ----------
+    curve : Curve
+    values : dict of str -> float
+        The scene's parameter values.
+    q0 : float
+        The initial position.
+    domain : (float, float)
+        The declared domain, with the scene's values (ends may be infinite).
+    reach : iterable of float
+        Further points the window must cover (the limiters).
+
+    Returns
+    -------
+    Regular
+        ``at_start`` names the function that fails when ``q0`` itself is singular.
+    """
+    lo, hi = (float(v) for v in domain)
+    scale = float(curve.q_scale.subs({p: values[p.name] for p in curve.params}))
+    width = SCAN_HALF_WIDTH * scale
+    points = [q0, *reach]
+    wlo = lo if math.isfinite(lo) else min(-width, min(points) - width)
+    whi = hi if math.isfinite(hi) else max(width, max(points) + width)
+    key = tuple((p.name, float(values[p.name])) for p in curve.params)
+    pieces = singular_pieces(curve, key, wlo, whi)
+    left, right, lo_reason, hi_reason = lo, hi, "", ""
+    for a, b, label, kind in pieces:
+        reason = f"{label} is {kind}"
+        if a <= q0 <= b:
+            return Regular(q0, q0, at_start=reason)
+        if left < b < q0:
+            left, lo_reason = b, reason
+        if q0 < a < right:
+            right, hi_reason = a, reason
+    return Regular(left, right, lo_reason, hi_reason)
+
+
+#: Narrowed shapes already built, by (shape source, narrowed domain): the same object each time,
+#: so the driver's per-shape engine cache holds.
+_NARROWED: dict = {}
+#: Symbolic curves already built, by shape source.
+_CURVES: dict = {}
+#: Regular intervals already found, by (shape source, parameter values, q0, limiters).
+_INTERVALS: dict = {}
+
+
+def _end_text(v: float) -> str:
+    """A domain end as the text a Shape holds (exact: the shortest repr of the double)."""
+    return ("oo" if v > 0 else "-oo") if math.isinf(v) else repr(float(v))
+
+
+def regular_shape(scene):
+    """The shape a run of ``scene`` uses: its own, or a copy with the domain narrowed
+    to the regular interval around ``initial.q`` (physics.md, "Events" 4).
+
+    A curve regular on its whole declared domain keeps its shape (and its kernel
+    module, so its events are unchanged).  Where a singular point lies inside the
+    declared domain, the run's domain ends there: the particle reaching it ends
+    the run with status ``left_domain``, and the numeric ``F_sigma`` is integrated
+    from a reference point inside the interval, never across the point.
+
+    Raises
+    ------
+    SceneError
+        ``initial.q`` when the initial position is itself singular;
+        ``limiters.left``/``limiters.right`` when a limiter lies beyond a singular
+        point (the particle cannot reach it).
+    """
+    import dataclasses
+    import json
+
+    from .scene import SceneError
+    from .scene import _domain as declared_domain
+
+    shape = scene.shape
+    source = json.dumps(shape.source(), sort_keys=True)
+    key = (source, tuple(scene.params), scene.q0, scene.left, scene.right)
+    lo, hi = declared_domain(scene)
+    curve = _CURVES.get(source) or _CURVES.setdefault(source, shape.curve())
+    if key not in _INTERVALS:
+        reach = [v for v in (scene.left, scene.right) if v is not None]
+        _INTERVALS[key] = regular_interval(curve, scene.param_dict, scene.q0, (lo, hi), reach=reach)
+    r = _INTERVALS[key]
+    q = shape.q
+    if r.at_start:
+        raise SceneError("initial.q", f"{scene.q0!r} is a singular point of curve '{shape.name}' "
+                                      f"({r.at_start} at {q} = {scene.q0!r}); start inside a regular interval")
+    for label, v, ok, end, reason in (("limiters.left", scene.left, lambda v: v > r.lo, r.lo, r.lo_reason),
+                                      ("limiters.right", scene.right, lambda v: v < r.hi, r.hi, r.hi_reason)):
+        if v is not None and not ok(v):
+            raise SceneError(label, f"{v!r} is beyond a singular point of curve '{shape.name}' at {q} = {end!r} "
+                                    f"({reason}): the particle cannot get there from {q} = {scene.q0!r}")
+    if (r.lo, r.hi) == (lo, hi):
+        return shape
+    # The run's ends stay EDGE_RTOL (of q_scale) inside the singular points, where the
+    # kernels are still finite (the engine evaluates them at the ends of its domain).
+    scale = float(curve.q_scale.subs({p: v for p, v in zip(curve.params, scene.param_values)}))
+    margin = EDGE_RTOL * scale
+    ends = (r.lo if r.lo == lo else r.lo + margin * max(1.0, abs(r.lo)),
+            r.hi if r.hi == hi else r.hi - margin * max(1.0, abs(r.hi)))
+    # The engine's quadrature panels are q_scale wide: near a singular point they must be
+    # narrower, or Gauss-Legendre converges slowly there (times, friction work).
+    near = min([abs(scene.q0 - e) for e in (r.lo, r.hi) if math.isfinite(e) and e not in (lo, hi)] + [scale])
+    narrow_scale = max(near, MIN_SCALE_RATIO * scale)
+    domain = (_end_text(ends[0]), _end_text(ends[1]))
+    changes = dict(domain=domain)
+    if narrow_scale < scale:
+        changes["q_scale"] = repr(narrow_scale)
+    return _NARROWED.setdefault((source, domain, changes.get("q_scale")), dataclasses.replace(shape, **changes))

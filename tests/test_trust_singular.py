@@ -1,0 +1,211 @@
+"""Issue 13 (Trust), singular curves: poles, cusps and branch points are never integrated across.
+
+A run of a user curve uses the regular interval around ``initial.q``
+(:mod:`symvib.singular`); a singular ``initial.q`` or a limiter beyond a
+singular point is a one-line :class:`SceneError` naming the field.
+"""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from symvib.curve import graph, parametric
+from symvib.scene import SceneError, scene_from_dict
+from symvib.shapes import CATALOGUE
+from symvib.singular import regular_interval, regular_shape
+
+INF = math.inf
+#: Agreement of a located singular point with the exact one (bisection to adjacent doubles).
+POINT_TOL = 1e-7
+
+
+def _scene(z, q0, qdot=1.0, params=None, limiters=None, mu=0.1, t_max=20.0):
+    data = {"curve": {"z": z}, "physics": {"mu": mu, "restitution": 0.8},
+            "initial": {"q": q0, "qdot": qdot}, "run": {"t_max": t_max}}
+    if params:
+        data["curve"]["params"] = list(params)
+        data["parameters"] = dict(params)
+    if limiters:
+        data["limiters"] = limiters
+    return scene_from_dict(data)
+
+
+# (z, parameters, q0, expected regular interval); the hostile curves of the issue (classes 3 and 7) and more.
+INTERVALS = [
+    ("x**2 + 1/(x - 0.3)", {}, 0.5, (0.3, INF)),
+    ("x**2 + 1/(x - 0.3)", {}, 0.1, (-INF, 0.3)),
+    ("x**2 + 1/(x - a)", {"a": 0.3}, 0.5, (0.3, INF)),
+    ("x**2 + 1/(x - a)", {"a": 0.7}, 0.5, (-INF, 0.7)),
+    ("-1/x", {}, 0.5, (0.0, INF)),
+    ("-1/x", {}, -0.5, (-INF, 0.0)),
+    ("1/x**2", {}, 0.5, (0.0, INF)),
+    ("sqrt(x)", {}, 0.5, (0.0, INF)),
+    ("sqrt(1 - x**2)", {}, 0.5, (-1.0, 1.0)),
+    ("x**x", {}, 0.5, (0.0, INF)),
+    ("acosh(x)", {}, 1.5, (1.0, INF)),
+    ("log(x)", {}, 0.5, (0.0, INF)),
+    ("1/sin(x)", {}, 1.0, (0.0, math.pi)),
+    ("tan(x)", {}, 0.2, (-math.pi / 2, math.pi / 2)),
+    ("x**(2/3)", {}, 0.5, (0.0, INF)),
+    ("x**2/2", {}, 0.5, (-INF, INF)),
+    ("cosh(x)", {}, 0.5, (-INF, INF)),
+]
+
+
+def _close(got, want):
+    return got == want if math.isinf(want) else abs(got - want) <= POINT_TOL * max(1.0, abs(want))
+
+
+@pytest.mark.parametrize("z, params, q0, want", INTERVALS, ids=[f"{z}@{q0}" for z, _, q0, _ in INTERVALS])
+def test_regular_interval_of_hostile_curves(z, params, q0, want):
+    c = graph(z, params=list(params) or None)
+    r = regular_interval(c, params, q0, (-INF, INF))
+    assert not r.at_start
+    assert _close(r.lo, want[0]) and _close(r.hi, want[1]), (r, want)
+    # Conservative: the interval never reaches over the singular point.
+    assert want[0] <= r.lo and r.hi <= want[1]
+    if math.isfinite(want[0]):
+        assert r.lo_reason
+    if math.isfinite(want[1]):
+        assert r.hi_reason
+
+
+@pytest.mark.parametrize("x, z, q0, want", [
+    ("phi + sin(phi)", "1 - cos(phi)", 0.5, (-math.pi, math.pi)),          # cycloid: cusps at +-pi
+    ("cos(q)**3", "sin(q)**3", 0.5, (0.0, math.pi / 2)),                   # astroid: cusps at k pi/2
+    ("q**3", "q**2", 0.5, (0.0, INF)),                                     # semicubical cusp at 0
+])
+def test_cusps_of_parametric_curves_bound_the_interval(x, z, q0, want):
+    c = parametric(x, z, q="phi" if "phi" in x else "q")
+    r = regular_interval(c, {}, q0, (-INF, INF))
+    assert _close(r.lo, want[0]) and _close(r.hi, want[1]), r
+    assert want[0] <= r.lo and r.hi <= want[1]
+
+
+@pytest.mark.parametrize("z, q0, params", [
+    ("x**2 + 1/(x - 0.3)", 0.3, {}),
+    ("x**2 + 1/(x - a)", 0.7, {"a": 0.7}),
+    ("acosh(x)", 0.5, {}),          # z not real left of 1
+    ("sqrt(1 - x**2)", 1.5, {}),
+    ("log(x)", -1.0, {}),
+    ("-1/x", 0.0, {}),
+])
+def test_singular_initial_position_is_a_scene_error(z, q0, params):
+    scene = _scene(z, q0, params=params)
+    with pytest.raises(SceneError) as err:
+        regular_shape(scene)
+    assert err.value.field == "initial.q"
+    assert "singular point" in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("z, q0, limiters, field", [
+    ("x**2 + 1/(x - 0.3)", 0.5, {"left": 0.1}, "limiters.left"),
+    ("x**2 + 1/(x - 0.3)", 0.1, {"right": 0.5}, "limiters.right"),
+    ("x**2 + 1/(x - 0.3)", 0.1, {"right": 0.3}, "limiters.right"),  # on the pole itself
+    ("sqrt(1 - x**2)", 0.5, {"left": -0.5, "right": 1.2}, "limiters.right"),
+    ("log(x)", 0.5, {"left": -0.1}, "limiters.left"),
+])
+def test_limiter_beyond_a_singular_point_is_a_scene_error(z, q0, limiters, field):
+    scene = _scene(z, q0, limiters=limiters)
+    with pytest.raises(SceneError) as err:
+        regular_shape(scene)
+    assert err.value.field == field
+    assert "beyond a singular point" in str(err.value)
+
+
+def test_limiters_inside_the_regular_interval_are_accepted():
+    scene = _scene("x**2 + 1/(x - 0.3)", 0.5, limiters={"left": 0.35, "right": 2.0})
+    shape = regular_shape(scene)
+    assert float(shape.domain[0]) > 0.3 and shape.domain[1] == "oo"
+
+
+def test_regular_user_curve_keeps_its_shape():
+    """No singular point in the domain: the run uses the scene's own shape (same module, same events)."""
+    scene = _scene("x**2/(2*p)", 0.5, params={"p": 1.0})
+    assert regular_shape(scene) is scene.shape
+
+
+def test_narrowed_domain_stays_inside_the_pole():
+    shape = regular_shape(_scene("x**2 + 1/(x - a)", 0.5, params={"a": 0.3}))
+    lo = float(shape.domain[0])
+    assert 0.3 < lo < 0.3 + 1e-9
+    assert float(shape.q_scale) <= 0.2 + 1e-12  # panels no wider than the distance to the pole
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(CATALOGUE))
+def test_catalogue_shapes_are_regular_on_their_domains(name):
+    """The driver skips the search for catalogue shapes: each is regular on its declared domain."""
+    sh = CATALOGUE[name]
+    c = sh.curve()
+    values = dict(sh.defaults)
+    lo, hi = (float(e.subs({p: values[p.name] for p in c.params})) for e in c.domain)
+    q0 = 0.0 if lo < 0.0 < hi else 0.5 * (lo + hi)
+    r = regular_interval(c, values, q0, (lo, hi))
+    assert (r.lo, r.hi) == (lo, hi), r
+
+
+def _reference_reversals(a, mu, g, x0, xd0, n):
+    """Turning points of paper eq. 1 on z = x^2 + 1/(x - a), by scipy's solve_ivp (independent of symvib)."""
+    from scipy.integrate import solve_ivp
+
+    def zp(x):
+        return 2 * x - 1 / (x - a) ** 2
+
+    def rhs(sigma):
+        def f(t, y):
+            x, xd = y
+            d1, d2 = zp(x), 2 + 2 / (x - a) ** 3
+            h = math.sqrt(1 + d1 * d1)
+            normal = d2 / h**3 * (h * xd) ** 2 + g / h
+            dv = -g * d1 / h - mu * sigma * abs(normal)
+            return [xd, (dv - d1 * d2 / h * xd * xd) / h]
+        return f
+
+    t, out, sigma = 0.0, [], 1 if xd0 > 0 else -1
+    while len(out) < n:
+        def turn(t, y):
+            return y[1]
+        turn.terminal, turn.direction = True, -sigma
+        sol = solve_ivp(rhs(sigma), (t, t + 50), [x0, xd0], events=turn, rtol=1e-12, atol=1e-12, method="DOP853")
+        t, x0, xd0 = sol.t_events[0][0], sol.y_events[0][0][0], 0.0
+        out.append((t, x0))
+        if abs(zp(x0)) <= mu:
+            break
+        sigma = -1 if zp(x0) > 0 else 1
+    return out
+
+
+@pytest.mark.slow
+def test_pole_example_gives_the_reversals_of_an_independent_integration():
+    """Issue 13, class 3: z = x^2 + 1/(x - 0.3) ran to t_max with 0 events; it has reversals."""
+    from symvib.driver import simulate
+
+    scene = _scene("x**2 + 1/(x - 0.3)", 0.5, qdot=1.0, mu=0.1)
+    result = simulate(scene, samples=False)
+    assert result.status.value == "arrested"
+    assert result.energy_budget.relative_residual < 1e-9
+    ref = _reference_reversals(0.3, 0.1, 9.81, 0.5, 1.0, len(result.events))
+    assert len(ref) == len(result.events) >= 10
+    for event, (t, x) in zip(result.events, ref):
+        assert event.kind.value in ("reversal", "arrest")
+        assert abs(event.q - x) < 1e-9
+        assert abs(event.t - t) < 1e-8 * max(1.0, t)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("z, q0", [("-1/x", 0.5), ("sqrt(x)", 0.5), ("sqrt(1 - x**2)", 0.5), ("x**x", 0.5),
+                                   ("acosh(x)", 1.5), ("log(x)", 0.5)])
+def test_crashing_curves_run_without_a_traceback(z, q0):
+    """Issue 13, class 7: each crashed (ZeroDivisionError, complex ordering); now it runs in its
+    regular interval and, when it reaches a singular point, ends there with status left_domain."""
+    from symvib.driver import simulate
+
+    scene = _scene(z, q0)
+    shape = regular_shape(scene)
+    result = simulate(scene, samples=False)
+    lo, hi = (float(e) if e.strip("-") != "oo" else float(e.replace("oo", "inf")) for e in shape.domain)
+    assert lo < result.q_final < hi or result.q_final in (lo, hi)
+    assert result.status.value in ("left_domain", "arrested", "t_max")
+    assert math.isfinite(result.t_final)
