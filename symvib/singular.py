@@ -352,7 +352,8 @@ def regular_shape(scene):
     A curve regular on its whole declared domain keeps its shape (and its kernel
     module, so its events are unchanged).  Where a singular point lies inside the
     declared domain, the run's domain ends there: the particle reaching it ends
-    the run with status ``left_domain``, and the numeric ``F_sigma`` is integrated
+    the run with status ``left_domain`` (or ``energy_budget_mismatch`` when the steps
+    into the point lose the energy budget), and the numeric ``F_sigma`` is integrated
     from a reference point inside the interval, never across the point.
 
     Raises
