@@ -1083,6 +1083,30 @@ def _prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool) -> tuple:
     return done, discarded
 
 
+def _refuse_singular_domain(scene: Scene) -> None:
+    """Refuse a user curve with a singular point inside its declared domain.
+
+    :func:`symvib.driver.simulate` narrows such a run's domain to the regular
+    interval around ``initial.q`` (:func:`symvib.singular.regular_shape`); a sweep
+    runs one kernel module for all its rows, so it asks for that domain to be
+    declared instead of integrating across the point.  A catalogue shape is
+    regular on its domain.  Rows that vary the curve's parameters are not
+    re-checked one by one; their energy budget is (``energy_budget_mismatch``).
+    """
+    from .shapes import CATALOGUE
+
+    if CATALOGUE.get(scene.shape.name) == scene.shape:
+        return
+    from .singular import regular_shape
+
+    narrowed = regular_shape(scene)
+    if narrowed is not scene.shape:
+        lo, hi = narrowed.domain
+        raise SceneError("curve.domain", f"curve '{scene.shape.name}' has a singular point inside its domain; "
+                                         f"a sweep needs a regular one: declare domain = [\"{lo}\", \"{hi}\"] "
+                                         f"(the regular interval around initial.q) or narrower")
+
+
 def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0, chunk: int = DEFAULT_CHUNK,
           log_events: int = 0, nodes: int = DEFAULT_NODES, out=None, overwrite: bool = False, scheduler=None,
           progress: bool = False, backend: str = "auto") -> SweepResult:
@@ -1122,6 +1146,7 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
         an unusable folder, a folder another sweep writes, or a chunk that
         cannot be written.
     """
+    _refuse_singular_domain(scene)
     spec = make_spec(scene, vary, random=random, seed=seed, chunk=chunk, log_events=log_events, nodes=nodes)
     definition = spec.to_dict()
     ident = sweep_id(definition)

@@ -213,3 +213,23 @@ def test_crashing_curves_run_without_a_traceback(z, q0):
     assert math.isfinite(result.t_final)
     if result.success:
         assert result.energy_budget.relative_residual < 1e-9
+
+
+def test_a_sweep_refuses_a_user_curve_with_a_singular_point_in_its_domain(tmp_path):
+    """A sweep runs one kernel module for all rows: it names the regular domain to declare
+    instead of integrating across the pole (simulate narrows; a sweep once bypassed that)."""
+    from symvib.sweep import sweep
+
+    scene = _scene("x**2 + 1/(x - 0.3)", 0.5)
+    with pytest.raises(SceneError, match=r"curve\.domain.*singular point.*declare domain = \[\"0\.3") as info:
+        sweep(scene, {"qdot": [1.0, 2.0]}, out=tmp_path / "out")
+    assert "\n" not in str(info.value)
+    assert not (tmp_path / "out").exists()
+    import dataclasses
+    import re
+
+    from symvib.sweep import _refuse_singular_domain
+
+    lo, hi = re.search(r'domain = \["([^"]+)", "([^"]+)"\]', str(info.value)).groups()
+    assert 0.3 < float(lo) < 0.3 + 1e-9 and hi == "oo"
+    _refuse_singular_domain(scene.replace(shape=dataclasses.replace(scene.shape, domain=(lo, hi))))  # accepted
