@@ -288,13 +288,8 @@ BAD_CHUNKS = {
 }
 
 
-@pytest.mark.parametrize("how", sorted(BAD_CHUNKS))
-def test_a_bad_chunk_is_refused_on_load_and_recomputed_on_resume(tmp_path, how):
-    mem = sweep(parabola(), VARY, chunk=CHUNK)
-    out = _written(tmp_path)
-    other = _written(tmp_path, "other", vary={"qdot": "3:12:4", "mu": "0.01:0.3:3"})
-    spoil, says = BAD_CHUNKS[how]
-    spoil(_chunk(out, 1), _chunk(other, 1))
+def _refused_load(out):
+    """The SweepError of ``load_sweep(out)`` and the peak memory it took to refuse."""
     tracemalloc.start()
     try:
         with pytest.raises(SweepError) as info:
@@ -302,6 +297,17 @@ def test_a_bad_chunk_is_refused_on_load_and_recomputed_on_resume(tmp_path, how):
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
+    return info, peak
+
+
+@pytest.mark.parametrize("how", sorted(BAD_CHUNKS))
+def test_a_bad_chunk_is_refused_on_load_and_recomputed_on_resume(tmp_path, how):
+    mem = sweep(parabola(), VARY, chunk=CHUNK)
+    out = _written(tmp_path)
+    other = _written(tmp_path, "other", vary={"qdot": "3:12:4", "mu": "0.01:0.3:3"})
+    spoil, says = BAD_CHUNKS[how]
+    spoil(_chunk(out, 1), _chunk(other, 1))
+    info, peak = _refused_load(out)
     assert info.value.field == str(_chunk(out, 1)) and says in info.value.reason and peak < SMALL
     assert "\n" not in str(info.value)
     if how == "a directory":
@@ -371,13 +377,7 @@ def _spoil_manifest(out, how):
 def test_a_bad_manifest_is_a_one_line_error_and_overwrite_replaces_it(tmp_path, how, capsys):
     out = _written(tmp_path)
     _spoil_manifest(out, how)
-    tracemalloc.start()
-    try:
-        with pytest.raises(SweepError) as info:
-            load_sweep(out)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    info, peak = _refused_load(out)
     assert "manifest.json" in info.value.field and BAD_MANIFESTS[how][1] in str(info.value)
     assert "\n" not in str(info.value) and peak < 50 * SMALL
     with pytest.raises(SweepError, match="--overwrite"):
