@@ -22,6 +22,7 @@ atan(x/p)
 """
 from __future__ import annotations
 
+import keyword
 import random
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -263,10 +264,18 @@ def numeric_zero(expr: sp.Expr, curve: Curve, *, extra=None, points: int = IDENT
 
 
 # --- construction -------------------------------------------------------------------
+def _check_name(what: str, name) -> None:
+    """A coordinate or parameter name is a plain identifier: not a Python keyword and not
+    starting with ``_`` (``__class__``, ``_Q``: the generated modules' own names start so)."""
+    if not isinstance(name, str) or not name.isidentifier():
+        raise CurveError(f"{what} name {name!r} is not a valid identifier")
+    if keyword.iskeyword(name) or name.startswith("_"):
+        raise CurveError(f"{what} name {name!r} is a Python keyword or starts with '_'; use a plain name")
+
+
 def _symbol_table(coordinate: str, params) -> tuple:
     """Coordinate and parameter symbols, validated against the expressions."""
-    if not coordinate.isidentifier():
-        raise CurveError(f"coordinate name {coordinate!r} is not a valid identifier")
+    _check_name("coordinate", coordinate)
     if coordinate in RESERVED:
         raise CurveError(f"coordinate name '{coordinate}' is reserved ({', '.join(sorted(RESERVED))} are)")
     q = sp.Symbol(coordinate, real=True)
@@ -283,8 +292,7 @@ def _symbol_table(coordinate: str, params) -> tuple:
     else:
         declared = {name: ASSUMPTIONS["positive"] for name in params}
     for name in declared or ():
-        if not name.isidentifier():
-            raise CurveError(f"parameter name {name!r} is not a valid identifier")
+        _check_name("parameter", name)
         if name in RESERVED:
             raise CurveError(f"parameter name '{name}' is reserved for the physics "
                              f"({', '.join(sorted(RESERVED))} are); rename it")

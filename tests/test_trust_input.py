@@ -670,3 +670,15 @@ def test_dots_in_strings_and_numbers_are_not_keys(tmp_path):
     text = 'description = "' + "." * 5000 + '"\n# ' + "." * 5000 + "\nv = 1.5\n"
     assert read_user_file(_write(tmp_path / "ok.toml", text.encode())) == text
     assert paths.read_user_toml(tmp_path / "ok.toml")["v"] == 1.5
+
+
+@pytest.mark.parametrize("name", ["__class__", "_Q", "lambda", "None", "class"])
+def test_coordinate_and_parameter_names_are_plain(name):
+    """``symvib derive --q __class__`` was accepted (harmless in SymPy; the code generator
+    refused it later): the curve refuses it at construction, for the coordinate and parameters."""
+    from symvib.curve import CurveError, graph, parametric
+
+    with pytest.raises(CurveError, match=r"keyword or starts with '_'"):
+        parametric("cos(t)", "sin(t)", q=name)
+    with pytest.raises(CurveError, match=r"keyword or starts with '_'"):
+        graph("a*x**2", params={"a": "positive", name: "positive"})
