@@ -149,9 +149,9 @@ def _inside(path, folder):
 
 
 def _cmd_run(args) -> int:
-    from .driver import simulate
     from pathlib import Path
 
+    from .driver import simulate
     from .paths import UserPathError, check_output_dir, check_output_file
     from .scene import load_scene
 

@@ -383,9 +383,7 @@ def _run_shape(scene):
     """The shape whose kernels run ``scene``: a catalogue shape as it is (regular on its
     domain), a user curve with its domain narrowed to the regular interval around
     ``initial.q`` when a singular point lies inside it (:func:`symvib.singular.regular_shape`)."""
-    from .shapes import CATALOGUE
-
-    if CATALOGUE.get(scene.shape.name) == scene.shape:
+    if scene.shape.in_catalogue:
         return scene.shape
     from .singular import regular_shape
 

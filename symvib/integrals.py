@@ -38,13 +38,11 @@ Examples
 """
 from __future__ import annotations
 
-import dataclasses
 import random
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mpmath
-
 import sympy as sp
 
 from . import budget
@@ -323,8 +321,8 @@ def _with_q_ref(result: "Antiderivative", q_ref: sp.Expr, q: sp.Symbol) -> "Anti
         return result
     if result.route == "numeric":
         u = result.expr.limits[0][0]
-        return dataclasses.replace(result, q_ref=q_ref, expr=sp.Integral(result.expr.function, (u, q_ref, q)))
-    return dataclasses.replace(result, q_ref=q_ref)
+        return replace(result, q_ref=q_ref, expr=sp.Integral(result.expr.function, (u, q_ref, q)))
+    return replace(result, q_ref=q_ref)
 
 
 def _tidy(F: sp.Expr) -> sp.Expr:

@@ -312,7 +312,7 @@ _LOADED: dict = {}
 def _load(curve: Shape, check: bool):
     source = curve.source()
     want = provenance.input_hash(source)
-    if CATALOGUE.get(curve.name) == curve:
+    if curve.in_catalogue:
         module = load_generated(_module_name(curve.module))
         path = module.__file__
         if check and module.INPUT_HASH != want:

@@ -106,7 +106,7 @@ _CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params
 
 def _curve_dict(sh: Shape) -> dict:
     """The ``[curve]`` table of a shape: its catalogue name, or its expressions."""
-    if CATALOGUE.get(sh.name) == sh:
+    if sh.in_catalogue:
         return {"shape": sh.name}
     source = sh.source()
     return {k: source[k] for k in _CURVE_KEYS if source.get(k) is not None}
@@ -208,9 +208,7 @@ class Scene:
                "physics": {"g": self.g, "m": self.m, **_friction_dict(self), "restitution": self.k},
                "initial": {"q": self.q0, "qdot": self.qdot0},
                "run": {"t_max": self.t_max, "max_events": self.max_events}}
-        contact = getattr(self, "contact", None)  # physics.contact, where the driver's Scene has it
-        if contact is not None:
-            out["physics"]["contact"] = contact
+        out["physics"]["contact"] = self.contact
         limiters = {k: v for k, v in (("left", self.left), ("right", self.right)) if v is not None}
         if limiters:
             out["limiters"] = limiters

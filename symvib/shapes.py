@@ -70,6 +70,12 @@ class Shape:
         return self.q_unit or ("m" if self.kind == "graph" else "rad")
 
     @property
+    def in_catalogue(self) -> bool:
+        """Whether this is a catalogue shape as shipped: regular on its domain, its
+        kernels committed in ``generated/`` (a user curve of the same name is not)."""
+        return CATALOGUE.get(self.name) == self
+
+    @property
     def module(self) -> str:
         """Name of the generated kernel module."""
         return self.name.replace("-", "_")

@@ -1093,9 +1093,7 @@ def _refuse_singular_domain(scene: Scene) -> None:
     regular on its domain.  Rows that vary the curve's parameters are not
     re-checked one by one; their energy budget is (``energy_budget_mismatch``).
     """
-    from .shapes import CATALOGUE
-
-    if CATALOGUE.get(scene.shape.name) == scene.shape:
+    if scene.shape.in_catalogue:
         return
     from .singular import regular_shape
 
