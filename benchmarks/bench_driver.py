@@ -9,11 +9,11 @@ For every paper scene with k = 1 and k = 0.8, one run measures:
 * the wall time of ``simulate(scene, samples=False)`` (best of ``--repeat``,
   after a warm-up call that compiles it; the compile time is shown apart) on
   each available backend;
-* the wall time of :func:`symvib.peers.solve_ivp_events` with DOP853,
+* the wall time of :func:`symvib.checks.peers.solve_ivp_events` with DOP853,
   ``rtol = 1e-10``, ``atol = 1e-12``, terminal events, branch fixed per segment,
   restarted at every event, on the same generated kernels (best of 3);
 * both methods' largest event-time and event-position errors against the
-  30-digit reference :func:`symvib.reference.phase_reference`, and whether
+  30-digit reference :func:`symvib.checks.reference.phase_reference`, and whether
   they found the reference's event sequence.
 
 The ratio is solve_ivp's time over symvib's, measured in the same run.
@@ -29,10 +29,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from symvib import driver  # noqa: E402
-from symvib.peers import event_errors, solve_ivp_events  # noqa: E402
-from symvib.reference import phase_reference  # noqa: E402
-from symvib.scene import load_scene  # noqa: E402
+from symvib.numeric import driver  # noqa: E402
+from symvib.checks.peers import event_errors, solve_ivp_events  # noqa: E402
+from symvib.checks.reference import phase_reference  # noqa: E402
+from symvib.numeric.scene import load_scene  # noqa: E402
 
 SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
 

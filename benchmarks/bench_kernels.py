@@ -28,7 +28,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from symvib import kernels  # noqa: E402
+from symvib.numeric import kernels  # noqa: E402
 
 
 def best(fn, repeat):
@@ -58,10 +58,10 @@ def main(argv=None):
 
     import sympy as sp
 
-    from symvib.codegen import _kernel_exprs
-    from symvib.derive import derive
-    from symvib.integrals import ROUTES
-    from symvib.symbols import C, g, mu
+    from symvib.codegen.generate import _kernel_exprs
+    from symvib.symbolic.derive import derive
+    from symvib.symbolic.integrals import ROUTES
+    from symvib.symbolic.symbols import C, g, mu
 
     print(f"# symvib kernel benchmark: n = {args.n}, best of {args.repeat}; numpy {np.__version__}, "
           f"sympy {sp.__version__}")
@@ -112,7 +112,7 @@ def main(argv=None):
     # Import times.
     empty = interpreter_seconds("pass", args.repeat)
     t_kern = interpreter_seconds(
-        "from symvib.kernels import load; load('parabola').w_p(0.3, 60.0, 9.81, 0.05, 1.0)", args.repeat) - empty
+        "from symvib.numeric.kernels import load; load('parabola').w_p(0.3, 60.0, 9.81, 0.05, 1.0)", args.repeat) - empty
     t_numpy = interpreter_seconds("import numpy", args.repeat) - empty
     t_sympy = interpreter_seconds("import sympy", args.repeat) - empty
     print(f"import (median of {args.repeat}, minus an empty interpreter): generated module + numpy "

@@ -23,9 +23,9 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from symvib import driver  # noqa: E402
-from symvib.kernels import load  # noqa: E402
-from symvib.sweep import _resolve_scene  # noqa: E402
+from symvib.numeric import driver  # noqa: E402
+from symvib.numeric.kernels import load  # noqa: E402
+from symvib.numeric.sweep import _resolve_scene  # noqa: E402
 
 
 def main(argv=None) -> int:

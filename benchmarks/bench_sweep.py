@@ -9,14 +9,14 @@ The sweep: the paper's parabola (``p = 1``, limiters at ``-pi/6`` and
 ``[3, 12]`` rad/s and ``mu`` over ``[0.01, 0.2]``, ``k = 0.8``, every scene run
 to arrest.  The script reports
 
-* symvib's sweep (:func:`symvib.sweep.sweep`, in memory and into chunk files),
+* symvib's sweep (:func:`symvib.numeric.sweep.sweep`, in memory and into chunk files),
   scenes per second and events per second, best of ``--repeat`` after a warm-up
   call that compiles it (compile time shown apart), on all threads numba uses
   and on one;
-* a loop of :func:`symvib.peers.solve_ivp_events` (DOP853, ``rtol = 1e-10``,
+* a loop of :func:`symvib.checks.peers.solve_ivp_events` (DOP853, ``rtol = 1e-10``,
   ``atol = 1e-12``) over a random subsample of ``--sample`` scenes of the grid;
 * on that subsample, both methods' event sequences and largest event-time
-  error against the 30-digit reference :func:`symvib.reference.phase_reference`
+  error against the 30-digit reference :func:`symvib.checks.reference.phase_reference`
   (mpmath; it does not share the driver's code path).
 
 The ratio is the sweep's scenes per second over the solve_ivp loop's.
@@ -36,11 +36,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from symvib import driver  # noqa: E402
-from symvib.peers import solve_ivp_events  # noqa: E402
-from symvib.reference import phase_reference  # noqa: E402
-from symvib.scene import load_scene  # noqa: E402
-from symvib.sweep import sweep  # noqa: E402
+from symvib.numeric import driver  # noqa: E402
+from symvib.checks.peers import solve_ivp_events  # noqa: E402
+from symvib.checks.reference import phase_reference  # noqa: E402
+from symvib.numeric.scene import load_scene  # noqa: E402
+from symvib.numeric.sweep import sweep  # noqa: E402
 
 QDOT = (3.0, 12.0)
 MU = (0.01, 0.2)

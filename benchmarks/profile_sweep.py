@@ -75,10 +75,10 @@ def main(argv=None):
     os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="symvib-profile-")
     import numba
 
-    from symvib import driver
-    from symvib.kernels import load
-    from symvib.scene import load_scene
-    from symvib.sweep import sweep
+    from symvib.numeric import driver
+    from symvib.numeric.kernels import load
+    from symvib.numeric.scene import load_scene
+    from symvib.numeric.sweep import sweep
 
     numba.set_num_threads(args.threads)
     base = load_scene(ROOT / "symvib" / "scenes" / "paper-parabola.toml").replace(k=0.8, mu=0.05)

@@ -1,6 +1,6 @@
-# symvib generated Gauss-Legendre rules; body sha256: f638a0d80767156c827d90d77e2bb950adc4282eb82466a87cfa2092278532d3
+# symvib generated Gauss-Legendre rules; body sha256: 9b53d80102dfe24a6101acc1bdc56e3bec4f1757cb5c9fff0901516246f1b91a
 """Gauss-Legendre rules and integration matrices, correctly rounded
-(written by ``symvib generate`` from :func:`symvib.gauss.rule_mp`; do not edit).
+(written by ``symvib generate`` from :func:`symvib.codegen.gauss.rule_mp`; do not edit).
 """
 DPS = 40
 RULES = {}

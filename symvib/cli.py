@@ -24,7 +24,7 @@ __all__ = ["main", "one_line"]
 #: Exit status for bad input.
 EXIT_BAD_INPUT = 2
 #: Exit status of a run that ended with an error status (non_finite, energy_budget_mismatch),
-#: and of a sweep with such rows (``symvib.sweep.EXIT_FAILED_SCENES``).
+#: and of a sweep with such rows (``symvib.numeric.sweep.EXIT_FAILED_SCENES``).
 EXIT_RUN_FAILED = 3
 #: Longest error message printed, in characters (a message may quote a long user text).
 MAX_MESSAGE_LENGTH = 500
@@ -43,15 +43,15 @@ def one_line(message) -> str:
 
 def _user_errors() -> tuple:
     """The exception classes a user's input can cause, reported as one line."""
-    from .kernels import KernelError
+    from symvib.numeric.kernels import KernelError
 
     return (ValueError, KeyError, OSError, KernelError, RecursionError, MemoryError)
 
 
 def _cmd_derive(args) -> int:
-    from . import curve as _curve
-    from .derive import derive
-    from .shapes import shape
+    from symvib.symbolic import curve as _curve
+    from symvib.symbolic.derive import derive
+    from symvib.shapes import shape
 
     if args.z is not None:
         if args.x is not None:
@@ -81,8 +81,8 @@ def _cmd_derive(args) -> int:
 
 
 def _cmd_audit(args) -> int:
-    from .audit import audit, errata_markdown
-    from .paths import check_output_file
+    from symvib.symbolic.audit import audit, errata_markdown
+    from symvib.paths import check_output_file
 
     if args.write:
         check_output_file(args.write, "--write file")
@@ -97,14 +97,14 @@ def _cmd_audit(args) -> int:
 
 
 def _cmd_generate(args) -> int:
-    from . import codegen
-    from .kernels import _module_name, generated_dir
-    from .paths import check_output_dir
+    from symvib.codegen import generate as codegen
+    from symvib.numeric.kernels import _module_name, generated_dir
+    from symvib.paths import check_output_dir
 
     if args.out:
         check_output_dir(args.out, "--out folder")
     if args.scene is not None:
-        from .scene import load_scene
+        from symvib.numeric.scene import load_scene
 
         if not args.out:
             raise ValueError("--scene: the curve of a scene file is written where --out says")
@@ -118,7 +118,7 @@ def _cmd_generate(args) -> int:
             raise ValueError("--x needs --z too (a parametric curve is x(q), z(q))")
         if not args.out:
             raise ValueError("a curve from expressions is written where --out says")
-        from .shapes import Shape
+        from symvib.shapes import Shape
 
         kind = "parametric" if args.x is not None else "graph"
         user = Shape(name=args.name or "user", kind=kind, q=args.q or ("q" if args.x else "x"), z=args.z,
@@ -141,7 +141,7 @@ def _cmd_generate(args) -> int:
 
 def _inside(path, folder):
     """``path``, after checking that it lies inside ``folder`` (what the user named)."""
-    from .paths import UserPathError, inside
+    from symvib.paths import UserPathError, inside
 
     if not inside(path, folder):  # pragma: no cover - file names come from safe stems
         raise UserPathError(path, f"would be written outside {folder}")
@@ -151,9 +151,9 @@ def _inside(path, folder):
 def _cmd_run(args) -> int:
     from pathlib import Path
 
-    from .driver import simulate
-    from .paths import UserPathError, check_output_dir, check_output_file
-    from .scene import load_scene
+    from symvib.numeric.driver import simulate
+    from symvib.paths import UserPathError, check_output_dir, check_output_file
+    from symvib.numeric.scene import load_scene
 
     # Every path first: no simulation is spent on a run whose output cannot be written.
     scene = load_scene(args.scene)
@@ -181,7 +181,7 @@ def _cmd_run(args) -> int:
         Path(args.json).write_text(result.to_json(samples=args.samples) + "\n", encoding="utf-8")
         print(f"wrote {args.json}")
     if args.plot and result.samples is not None:  # a non_finite run has no samples to draw
-        from .plots import save_run_figures
+        from symvib.numeric.figures import save_run_figures
 
         for path in save_run_figures(result, args.plot):
             print(f"wrote {path}")
@@ -194,8 +194,8 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_paper(args) -> int:
-    from .paper import main as paper_main
-    from .paths import check_output_dir
+    from symvib.paper import main as paper_main
+    from symvib.paths import check_output_dir
 
     check_output_dir(args.out, "--out folder")
     if not 0.0 <= args.restitution < 1.0:
@@ -257,8 +257,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 FORWARDED = {
-    "bench": ("symvib.bench", "work-precision charts and the stability suite"),
-    "sweep": ("symvib.sweep", "parameter sweeps over many scenes"),
+    "bench": ("symvib.checks.bench", "work-precision charts and the stability suite"),
+    "sweep": ("symvib.numeric.sweep", "parameter sweeps over many scenes"),
 }
 
 

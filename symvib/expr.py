@@ -6,7 +6,7 @@ through :func:`parse`.  It never calls :func:`eval`: the text is parsed by
 the declared symbols, ``+ - * / **``, unary minus and calls of a fixed set of
 mathematical functions).  The result is a small immutable tree of tuples that
 the numeric wing evaluates with :mod:`math` (:func:`evaluate`, :func:`number`)
-and the symbolic wing converts to SymPy (``symvib.curve.to_sympy``).
+and the symbolic wing converts to SymPy (``symvib.symbolic.curve.to_sympy``).
 
 This module imports neither SymPy nor NumPy.
 

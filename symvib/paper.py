@@ -5,7 +5,7 @@ one folder:
 
 * ``report.md`` (and ``report.html``): per curve the derived double equations
   of motion and phase trajectories in LaTeX beside the paper's printed forms
-  and the verdicts of :mod:`symvib.audit`, the scene parameters, the event
+  and the verdicts of :mod:`symvib.symbolic.audit`, the scene parameters, the event
   table and the energy budget of each run;
 * PNG figures of every scene with ``k = 1`` (the paper's conclusions): the
   phase portrait, ``F_N``, ``P_mu``, ``Ek``, ``Ep`` and ``E`` against the
@@ -71,7 +71,7 @@ class Run:
 
 
 def _scene(name):
-    from .scene import load_scene
+    from symvib.numeric.scene import load_scene
 
     with resources.as_file(resources.files("symvib") / "scenes" / f"{name}.toml") as path:
         return load_scene(path)
@@ -140,7 +140,7 @@ def _scene_table(scene) -> list:
 
 
 def _equations(shape_name, verdicts) -> list:
-    from .audit import _derivation
+    from symvib.symbolic.audit import _derivation
 
     d = _derivation(shape_name)
     tex = d.latex()
@@ -181,15 +181,15 @@ def _flat(tex: str) -> str:
 
 def _figures(result, out: Path, key: str, every: bool) -> tuple:
     """The run's figures: all seven, or the phase portrait and E(t) only."""
-    from .plots import save_run_figures
+    from symvib.numeric.figures import save_run_figures
 
     which = None if every else ("phase", "energy-time")
     return tuple(p.name for p in save_run_figures(result, out / "figures", prefix=key, only=which))
 
 
 def _alpha0_section(out_lines):
-    from .driver import simulate
-    from .scene import SceneError
+    from symvib.numeric.driver import simulate
+    from symvib.numeric.scene import SceneError
 
     base = _scene("paper-circle-3.8")
     out_lines += [
@@ -202,7 +202,7 @@ def _alpha0_section(out_lines):
         "| reading | $\\mu$ | events | impacts | reversals |",
         "| --- | ---: | --- | ---: | ---: |",
     ]
-    from .scene import scene_from_dict
+    from symvib.numeric.scene import scene_from_dict
 
     data = base.to_dict()
     for label, phys in ALPHA0_READINGS:
@@ -237,7 +237,7 @@ SYMBOLIC_JOBS = (None, "parabola", "cycloid", "circle")
 
 def _symbolic(shape_name):
     """One symbolic job: ``(verdicts, equation lines)`` of a curve, or the general verdicts."""
-    from .audit import audit
+    from symvib.symbolic.audit import audit
 
     if shape_name is None:
         return audit(shapes=()), []
@@ -249,7 +249,7 @@ def _start_symbolic():
     """Start the symbolic jobs on up to two worker processes, while the caller simulates."""
     import os
 
-    from .budget import worker_pool
+    from symvib.symbolic.budget import worker_pool
 
     pool = worker_pool(min(2, os.cpu_count() or 1))
     return pool, {name: pool.submit(_symbolic, name) for name in SYMBOLIC_JOBS}
@@ -257,8 +257,8 @@ def _start_symbolic():
 
 def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = True, progress=None) -> dict:
     """Write the report, figures and results into ``out_dir``; returns what was written."""
-    from .audit import errata_markdown
-    from .driver import simulate
+    from symvib.symbolic.audit import errata_markdown
+    from symvib.numeric.driver import simulate
 
     say = progress or (lambda msg: None)
     out = Path(out_dir)

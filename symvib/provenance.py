@@ -22,7 +22,8 @@ __all__ = ["GENERATOR_VERSION", "GENERATOR_SOURCES", "generator_digest", "input_
 #: Bumped by hand when the kernel format changes in a way the sources do not show.
 GENERATOR_VERSION = "1"
 #: Modules whose code decides what a generated kernel module contains.
-GENERATOR_SOURCES = ("symbols.py", "expr.py", "curve.py", "integrals.py", "derive.py", "codegen.py")
+GENERATOR_SOURCES = ("symbolic/symbols.py", "expr.py", "symbolic/curve.py", "symbolic/integrals.py",
+                     "symbolic/derive.py", "codegen/generate.py")
 
 
 @lru_cache(maxsize=None)

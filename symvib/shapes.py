@@ -81,8 +81,8 @@ class Shape:
         return self.name.replace("-", "_")
 
     def curve(self):
-        """The symbolic :class:`~symvib.curve.Curve` (imports SymPy)."""
-        from . import curve as _curve
+        """The symbolic :class:`~symvib.symbolic.curve.Curve` (imports SymPy)."""
+        from symvib.symbolic import curve as _curve
 
         common = dict(params=self.params, name=self.name, domain=self.domain, h=self.h,
                       alpha=self.alpha, q_scale=self.q_scale)

@@ -3,7 +3,7 @@ from pathlib import Path
 
 import pytest
 
-from symvib.audit import audit, errata_markdown
+from symvib.symbolic.audit import audit, errata_markdown
 
 #: Verdicts established by hand (see docs/errata.md for the evidence).
 EXPECTED = {
@@ -40,7 +40,7 @@ def test_evidence_says_what_is_wrong(verdicts):
 def test_errata_document_is_current(verdicts):
     path = Path(__file__).resolve().parents[1] / "docs" / "errata.md"
     assert path.read_text(encoding="utf-8").strip() == errata_markdown(verdicts).strip(), \
-        "docs/errata.md is stale: run `python -m symvib.audit docs/errata.md`"
+        "docs/errata.md is stale: run `python -m symvib.symbolic.audit docs/errata.md`"
 
 
 def test_errata_table_rows_keep_their_four_cells(verdicts):

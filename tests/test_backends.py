@@ -3,8 +3,8 @@ from pathlib import Path
 
 import pytest
 
-from symvib.driver import backend_available, simulate
-from symvib.scene import load_scene, scene_from_dict
+from symvib.numeric.driver import backend_available, simulate
+from symvib.numeric.scene import load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "symvib" / "scenes"
 

@@ -3,8 +3,8 @@ import csv
 
 import pytest
 
-from symvib import bench
-from symvib.peers import solve_ivp_events
+from symvib.checks import bench
+from symvib.checks.peers import solve_ivp_events
 
 
 def test_bad_options_exit_2_with_one_line(capsys):
@@ -63,7 +63,7 @@ def test_quick_stability_run(tmp_path):
 
 def test_peers_cross_a_normal_force_zero_once():
     """A restarted peer takes the other sign of N after an N = 0 event (not the same event again)."""
-    from symvib import stability as st
+    from symvib.checks import stability as st
 
     c = st.case("normal-sign")
     run = solve_ivp_events(c.scene, "RK45", 1e-8)

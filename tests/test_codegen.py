@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from symvib import codegen, kernels
-from symvib.derive import derive
-from symvib.integrals import ROUTES
+from symvib.codegen import generate as codegen
+from symvib.numeric import kernels
+from symvib.symbolic.derive import derive
+from symvib.symbolic.integrals import ROUTES
 from symvib.shapes import CATALOGUE, shape
-from symvib.symbols import C, g, m, mu
+from symvib.symbolic.symbols import C, g, m, mu
 
 ROOT = Path(__file__).resolve().parents[1]
 GENERATED = ROOT / "generated"
@@ -133,7 +134,7 @@ def test_kernels_broadcast_over_scenes():
 def test_numeric_layer_imports_no_sympy():
     code = (
         "import sys, numpy as np\n"
-        "from symvib.kernels import load\n"
+        "from symvib.numeric.kernels import load\n"
         "for name in ('parabola', 'catenary'):\n"
         "    k = load(name)\n"
         "    k.w_p(np.linspace(-0.5, 0.5, 5), 50.0, 9.81, 0.05, 1.0)\n"
@@ -190,7 +191,7 @@ def test_user_curve_generated_once_and_cached(tmp_path, monkeypatch):
 
 
 def test_reserved_parameter_names():
-    from symvib.curve import CurveError, graph
+    from symvib.symbolic.curve import CurveError, graph
 
     with pytest.raises(CurveError, match="reserved in kernel modules"):
         codegen.module_text(derive(graph("x**2/numpy")), {"name": "bad"})

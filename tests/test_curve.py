@@ -3,7 +3,7 @@ import mpmath
 import pytest
 import sympy as sp
 
-from symvib import curve as cv
+from symvib.symbolic import curve as cv
 from symvib.shapes import CATALOGUE, shape
 
 

@@ -2,9 +2,9 @@
 import pytest
 import sympy as sp
 
-from symvib import curve as dv
-from symvib.derive import derive
-from symvib.symbols import C, g, m, mu
+from symvib.symbolic import curve as dv
+from symvib.symbolic.derive import derive
+from symvib.symbolic.symbols import C, g, m, mu
 
 
 def test_paper_equations_of_motion_by_hand():

@@ -8,8 +8,9 @@ import pytest
 import symvib
 
 #: Modules whose examples take long (the audit derives and compares every printed equation).
-SLOW = {"audit"}
-MODULES = sorted(m.name for m in pkgutil.iter_modules(symvib.__path__))
+SLOW = {"symbolic.audit"}
+MODULES = sorted(m.name.removeprefix("symvib.") for m in pkgutil.walk_packages(symvib.__path__, "symvib.")
+                 if not m.name.startswith("symvib.generated"))
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in MODULES])

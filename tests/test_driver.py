@@ -5,10 +5,10 @@ from pathlib import Path
 import mpmath
 import pytest
 
-from symvib.driver import simulate
-from symvib.events import EventKind, Status
-from symvib.reference import phase_reference
-from symvib.scene import load_scene, scene_from_dict
+from symvib.numeric.driver import simulate
+from symvib.numeric.events import EventKind, Status
+from symvib.checks.reference import phase_reference
+from symvib.numeric.scene import load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "symvib" / "scenes"
 #: Required agreement of event times and positions with the 30-digit reference.

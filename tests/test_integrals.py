@@ -6,10 +6,11 @@ import mpmath
 import pytest
 import sympy as sp
 
-from symvib import budget, integrals
-from symvib.integrals import antiderivative, frictionless_gap, regularize
+from symvib.symbolic import budget
+from symvib.symbolic import integrals
+from symvib.symbolic.integrals import antiderivative, frictionless_gap, regularize
 from symvib.shapes import shape
-from symvib.symbols import mu
+from symvib.symbolic.symbols import mu
 
 CLOSED = ["parabola", "parabola-x", "cycloid", "circle"]
 
@@ -107,7 +108,7 @@ def test_bad_branch_and_route():
 def test_one_integrand_on_two_half_infinite_domains_keeps_each_reference_point(routes):
     """The cache shares symbolic work between curves, never the domain's reference point
     (CI once saw Q_REF = 1.3 for a domain (-oo, -0.3) after a run on (0.3, oo))."""
-    from symvib.curve import graph
+    from symvib.symbolic.curve import graph
 
     right = graph("x**2", domain=("3/10", "oo"))
     left = graph("x**2", domain=("-oo", "-3/10"))

@@ -17,23 +17,17 @@ def test_import_symvib_loads_neither_sympy_nor_numpy():
     """) == "False False"
 
 
-def test_derive_and_audit_stay_functions_after_their_modules_are_imported():
-    # Importing symvib.derive / symvib.audit binds the submodule on the package;
-    # the top-level names must still be the functions, in either order.
+def test_top_level_derive_and_audit_are_the_functions_and_the_modules_live_in_their_wing():
+    # The modules live in symvib.symbolic; the package's names are the functions, in
+    # whatever order things are imported.
     assert _run("""
         import types
-        import symvib.audit, symvib.derive
+        import symvib.symbolic.audit, symvib.symbolic.derive
         from symvib import derive, audit
         import symvib
-        from symvib.derive import Derivation
         print(isinstance(derive, types.FunctionType), isinstance(audit, types.FunctionType),
-              symvib.derive is derive, Derivation.__module__)
-    """) == "True True True symvib.derive"
-    assert _run("""
-        from symvib import derive
-        import symvib.derive, symvib
-        print(symvib.derive is derive, callable(symvib.derive))
-    """) == "True True"
+              symvib.derive is symvib.symbolic.derive.derive, derive.__module__)
+    """) == "True True True symvib.symbolic.derive"
 
 
 def test_unknown_attribute_names_itself():
@@ -51,13 +45,13 @@ def test_figures_leave_the_callers_matplotlib_backend_alone(tmp_path):
     assert _run(f"""
         import matplotlib
         matplotlib.use("svg")
-        import symvib.plots, symvib.sweepmaps
-        from symvib.driver import simulate
-        from symvib.scene import load_scene
+        import symvib.numeric.figures, symvib.numeric.sweepmaps
+        from symvib.numeric.driver import simulate
+        from symvib.numeric.scene import load_scene
         import symvib
         from pathlib import Path
         scene = load_scene(Path(symvib.__file__).parent / "scenes" / "paper-parabola.toml")
         result = simulate(scene, backend="python")
-        paths = symvib.plots.save_run_figures(result, {str(tmp_path)!r}, only=["phase"])
+        paths = symvib.numeric.figures.save_run_figures(result, {str(tmp_path)!r}, only=["phase"])
         print(matplotlib.get_backend(), [p.suffix for p in paths])
     """) == "svg ['.png']"

@@ -7,8 +7,8 @@ import sys
 import pytest
 
 from symvib import paper
-from symvib.driver import simulate
-from symvib.events import EventKind
+from symvib.numeric.driver import simulate
+from symvib.numeric.events import EventKind
 
 #: Smallest plausible size of a figure file, bytes, and the pixel sizes allowed.
 MIN_PNG_BYTES = 10_000

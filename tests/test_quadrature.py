@@ -5,11 +5,11 @@ import mpmath
 import numpy as np
 import pytest
 
-from symvib import gauss
-from symvib.driver import simulate
-from symvib.quadrature import MAX_NODES, rule
-from symvib.reference import phase_reference
-from symvib.scene import load_scene
+from symvib.codegen import gauss
+from symvib.numeric.driver import simulate
+from symvib.numeric.quadrature import MAX_NODES, rule
+from symvib.checks.reference import phase_reference
+from symvib.numeric.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -5,10 +5,10 @@ import math
 import mpmath
 import pytest
 
-from symvib import bench
-from symvib.reference import phase_reference
-from symvib.reference_time import TimeReferenceBudget, time_reference
-from symvib.scene import scene_from_dict
+from symvib.checks import bench
+from symvib.checks.reference import phase_reference
+from symvib.checks.reference_time import TimeReferenceBudget, time_reference
+from symvib.numeric.scene import scene_from_dict
 
 
 def incline(k=0.0):

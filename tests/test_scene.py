@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from symvib.scene import Scene, SceneError, load_scene, scene_from_dict
+from symvib.numeric.scene import Scene, SceneError, load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "symvib" / "scenes"
 

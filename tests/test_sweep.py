@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symvib.driver import simulate
-from symvib.scene import SceneError, scene_from_dict
-from symvib.sweep import (FORMAT, Progress, load_sweep, make_spec, main, run_chunk, sweep, _resolve_scene)
+from symvib.numeric.driver import simulate
+from symvib.numeric.scene import SceneError, scene_from_dict
+from symvib.numeric.sweep import (FORMAT, Progress, load_sweep, make_spec, main, run_chunk, sweep, _resolve_scene)
 
 PARABOLA = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
             "physics": {"g": 9.81, "m": 0.2, "mu": 0.05, "restitution": 0.8},
@@ -244,7 +244,7 @@ def test_progress_bar_reports_rate_and_time_left():
 
 
 def test_maps_are_png_files(tmp_path):
-    from symvib.sweepmaps import MAPS, sweep_maps
+    from symvib.numeric.sweepmaps import MAPS, sweep_maps
 
     grid = sweep(base(), {"qdot": "3:12:4", "mu": "0.01:0.2:3", "k": "0.8,1"})
     rand = sweep(base(), {"qdot": "3:12", "mu": "0.01:0.2"}, random=20)

@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symvib import codegen, kernels
-from symvib.curve import CurveError
+from symvib.codegen import generate as codegen
+from symvib.numeric import kernels
+from symvib.symbolic.curve import CurveError
 from symvib.expr import ExpressionError
 
 #: What a hostile name's payload writes when it runs (the tests assert it never appears).
@@ -47,7 +48,7 @@ def cache(tmp_path, monkeypatch):
 @pytest.fixture(scope="module")
 def bowl():
     """The derivation of BOWL (done once: SymPy takes about a second) and its source."""
-    from symvib.derive import derive
+    from symvib.symbolic.derive import derive
     from symvib.shapes import Shape
 
     shape = Shape(name="bowl", **BOWL)
@@ -252,7 +253,7 @@ def test_tampered_committed_module_is_refused(label, tmp_path, monkeypatch):
 
 
 def test_engine_checks_the_text_it_compiles(tmp_path):
-    from symvib import driver
+    from symvib.numeric import driver
 
     marker = tmp_path / MARKER_NAME
     path = tmp_path / "kernel_for_engine.py"
@@ -295,7 +296,7 @@ def test_numbers_beyond_float_are_refused():
 
 
 def _scene(z, backend_curve_name):
-    from symvib.scene import scene_from_dict
+    from symvib.numeric.scene import scene_from_dict
 
     return scene_from_dict({"curve": {"z": z, "name": backend_curve_name},
                             "physics": {"g": 9.81, "m": 0.2, "alpha0": 0.05, "restitution": 0.8},
@@ -308,7 +309,7 @@ BIG_INT_CURVES = {"x*10**30": None, "x**2*(10**30 + 1)/10**30": "x**2"}
 
 @pytest.mark.parametrize("z", sorted(BIG_INT_CURVES))
 def test_big_integer_curve_simulates_on_python(z, cache):
-    from symvib.driver import simulate
+    from symvib.numeric.driver import simulate
 
     result = simulate(_scene(z, "big"), backend="python")
     assert result.events or result.status.value == "t_max"
@@ -322,10 +323,10 @@ def test_big_integer_curve_simulates_on_python(z, cache):
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not __import__("symvib.driver").driver.backend_available("numba"), reason="no numba")
+@pytest.mark.skipif(not __import__("symvib.numeric.driver").numeric.driver.backend_available("numba"), reason="no numba")
 @pytest.mark.parametrize("z", sorted(BIG_INT_CURVES))
 def test_big_integer_curve_simulates_on_numba(z, cache):
-    from symvib.driver import simulate
+    from symvib.numeric.driver import simulate
 
     a = simulate(_scene(z, "big"), backend="python")
     b = simulate(_scene(z, "big"), backend="numba")
@@ -335,10 +336,10 @@ def test_big_integer_curve_simulates_on_numba(z, cache):
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not __import__("symvib.driver").driver.backend_available("numba"), reason="no numba")
+@pytest.mark.skipif(not __import__("symvib.numeric.driver").numeric.driver.backend_available("numba"), reason="no numba")
 def test_tampered_numba_engine_file_is_rewritten_before_it_runs(cache, tmp_path, monkeypatch):
-    from symvib import driver
-    from symvib.scene import scene_from_dict
+    from symvib.numeric import driver
+    from symvib.numeric.scene import scene_from_dict
 
     marker = tmp_path / MARKER_NAME
     scene = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
@@ -381,8 +382,8 @@ HALF_INFINITE = [("sqrt(x)", ["0.3", "oo"], 1.0, {"left": 0.5}), ("x**4", ["0.3"
 def test_half_infinite_domain_gives_a_working_module(z, domain, q0, limiters, cache):
     import mpmath
 
-    from symvib.driver import simulate
-    from symvib.scene import scene_from_dict
+    from symvib.numeric.driver import simulate
+    from symvib.numeric.scene import scene_from_dict
 
     module = kernels.load({"name": "half", "kind": "graph", "q": "x", "z": z, "domain": domain})
     assert "numeric" in module.F_ROUTES.values()  # the route that integrates from Q_REF

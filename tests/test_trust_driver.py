@@ -11,11 +11,12 @@ import math
 import numpy as np
 import pytest
 
-from symvib import core, driver
+from symvib.numeric import engine as core
+from symvib.numeric import driver
 from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
-from symvib.events import ERROR_STATUSES, EventKind, Status, json_safe
-from symvib.scene import CONTACTS, MAX_EVENTS, SceneError, scene_from_dict
-from symvib.sweep import _resolve_scene, _sweep_function, make_spec, sweep
+from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe
+from symvib.numeric.scene import CONTACTS, MAX_EVENTS, SceneError, scene_from_dict
+from symvib.numeric.sweep import _resolve_scene, _sweep_function, make_spec, sweep
 
 #: The README's parabola scene (paper figs. 5-11, k = 0.8).
 BASE = {"curve": {"shape": "parabola"}, "parameters": {"p": 1},
@@ -229,7 +230,7 @@ def test_circle_rows_that_left_the_budget_open_now_close_it(mu, qdot):
 
 def test_samples_are_bitwise_those_of_the_quadratic_code():
     sc = _resolve_scene("paper-parabola").replace(mu=0.0, k=1.0, max_events=300)
-    from symvib.kernels import load
+    from symvib.numeric.kernels import load
 
     mod = load(sc.shape)
     sim, sample_fn, _ = driver.engine(mod.__file__, "python")

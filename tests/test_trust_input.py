@@ -295,7 +295,7 @@ def test_constants_are_folded_in_floats_not_integers():
 
 import copy  # noqa: E402
 
-from symvib.scene import MAX_NAME_LENGTH, SceneError, load_scene, scene_from_dict  # noqa: E402
+from symvib.numeric.scene import MAX_NAME_LENGTH, SceneError, load_scene, scene_from_dict  # noqa: E402
 
 BIG = 10 ** 400  # a 401-digit TOML integer
 
@@ -463,7 +463,7 @@ def test_bad_scene_files_name_the_file(kind, tmp_path):
 @pytest.mark.parametrize("kind", sorted(BAD_SCENE_FILES))
 def test_bad_sweep_files_are_one_line_errors(kind, tmp_path, capsys):
     """``symvib sweep --file`` reads through the same guard as a scene file (it once used tomllib directly)."""
-    from symvib import sweep
+    from symvib.numeric import sweep
 
     make, message = BAD_SCENE_FILES[kind]
     path = make(tmp_path)
@@ -541,8 +541,8 @@ HOSTILE_SCENE_NAMES = ["../../x", "/abs/path", "..", "$", "a$b$$c", "$\\frac{", 
 
 @pytest.mark.parametrize("name", HOSTILE_SCENE_NAMES, ids=range(len(HOSTILE_SCENE_NAMES)))
 def test_figures_of_hostile_names_stay_in_their_folder(name, tmp_path):
-    from symvib.driver import simulate
-    from symvib.plots import save_run_figures
+    from symvib.numeric.driver import simulate
+    from symvib.numeric.figures import save_run_figures
 
     work = tmp_path / "work"
     work.mkdir()
@@ -584,7 +584,7 @@ def test_one_line(message, expected):
 
 
 def test_module_names_of_hostile_curve_names_are_short_identifiers():
-    from symvib.kernels import _module_name
+    from symvib.numeric.kernels import _module_name
 
     assert _module_name("parabola_x") == "parabola_x"
     for name in HOSTILE_STEMS:
@@ -676,7 +676,7 @@ def test_dots_in_strings_and_numbers_are_not_keys(tmp_path):
 def test_coordinate_and_parameter_names_are_plain(name):
     """``symvib derive --q __class__`` was accepted (harmless in SymPy; the code generator
     refused it later): the curve refuses it at construction, for the coordinate and parameters."""
-    from symvib.curve import CurveError, graph, parametric
+    from symvib.symbolic.curve import CurveError, graph, parametric
 
     with pytest.raises(CurveError, match=r"keyword or starts with '_'"):
         parametric("cos(t)", "sin(t)", q=name)

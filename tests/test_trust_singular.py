@@ -1,7 +1,7 @@
 """Issue 13 (Trust), singular curves: poles, cusps and branch points are never integrated across.
 
 A run of a user curve uses the regular interval around ``initial.q``
-(:mod:`symvib.singular`); a singular ``initial.q`` or a limiter beyond a
+(:mod:`symvib.symbolic.singular`); a singular ``initial.q`` or a limiter beyond a
 singular point is a one-line :class:`SceneError` naming the field.
 """
 from __future__ import annotations
@@ -10,10 +10,10 @@ import math
 
 import pytest
 
-from symvib.curve import graph, parametric
-from symvib.scene import SceneError, scene_from_dict
+from symvib.symbolic.curve import graph, parametric
+from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.shapes import CATALOGUE
-from symvib.singular import regular_interval, regular_shape
+from symvib.symbolic.singular import regular_interval, regular_shape
 
 INF = math.inf
 #: Agreement of a located singular point with the exact one (bisection to adjacent doubles).
@@ -180,7 +180,7 @@ def _reference_reversals(a, mu, g, x0, xd0, n):
 @pytest.mark.slow
 def test_pole_example_gives_the_reversals_of_an_independent_integration():
     """Issue 13, class 3: z = x^2 + 1/(x - 0.3) ran to t_max with 0 events; it has reversals."""
-    from symvib.driver import simulate
+    from symvib.numeric.driver import simulate
 
     scene = _scene("x**2 + 1/(x - 0.3)", 0.5, qdot=1.0, mu=0.1)
     result = simulate(scene, samples=False)
@@ -202,7 +202,7 @@ def test_crashing_curves_run_without_a_traceback(z, q0):
     regular interval and, when it reaches a singular point, ends there: with status left_domain
     when its energy budget closes there, else energy_budget_mismatch (an error status: the
     steps into a vertical tangent or a pole lose the budget), never a success that does not close."""
-    from symvib.driver import simulate
+    from symvib.numeric.driver import simulate
 
     scene = _scene(z, q0)
     shape = regular_shape(scene)
@@ -218,7 +218,7 @@ def test_crashing_curves_run_without_a_traceback(z, q0):
 def test_a_sweep_refuses_a_user_curve_with_a_singular_point_in_its_domain(tmp_path):
     """A sweep runs one kernel module for all rows: it names the regular domain to declare
     instead of integrating across the pole (simulate narrows; a sweep once bypassed that)."""
-    from symvib.sweep import sweep
+    from symvib.numeric.sweep import sweep
 
     scene = _scene("x**2 + 1/(x - 0.3)", 0.5)
     with pytest.raises(SceneError, match=r"curve\.domain.*singular point.*declare domain = \[\"0\.3") as info:
@@ -228,7 +228,7 @@ def test_a_sweep_refuses_a_user_curve_with_a_singular_point_in_its_domain(tmp_pa
     import dataclasses
     import re
 
-    from symvib.sweep import _refuse_singular_domain
+    from symvib.numeric.sweep import _refuse_singular_domain
 
     lo, hi = re.search(r'domain = \["([^"]+)", "([^"]+)"\]', str(info.value)).groups()
     assert 0.3 < float(lo) < 0.3 + 1e-9 and hi == "oo"

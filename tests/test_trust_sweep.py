@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from symvib.driver import simulate
-from symvib.scene import SceneError, scene_from_dict
+from symvib.numeric.driver import simulate
+from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.shapes import CATALOGUE
 from symvib.cli import EXIT_RUN_FAILED
-from symvib.sweep import main, sweep
+from symvib.numeric.sweep import main, sweep
 
 #: The README's own user curve (a graph z = f(x)).
 BOWL = {
@@ -118,8 +118,8 @@ import time  # noqa: E402
 import tracemalloc  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from symvib import sweep as sweep_mod  # noqa: E402
-from symvib.sweep import (FORMAT, MAX_LIST_VALUES, SweepError, WriterLock, load_sweep, make_spec,  # noqa: E402
+from symvib.numeric import sweep as sweep_mod  # noqa: E402
+from symvib.numeric.sweep import (FORMAT, MAX_LIST_VALUES, SweepError, WriterLock, load_sweep, make_spec,  # noqa: E402
                           sweep_id, _linspace_at)
 
 PARABOLA = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
@@ -566,7 +566,7 @@ def test_the_issues_race_two_processes_one_folder(tmp_path, capsys):
     first = ["paper-parabola", "--vary", "qdot=3:12:12", "--vary", "mu=0.01:0.2:25", "--chunk", "4",
              "-o", str(out), "--backend", "python", "--quiet"]
     env = dict(os.environ, SYMVIB_BACKEND="python")
-    slow_writer = ("import sys, time\nimport symvib.sweep as s\nreal = s.run_chunk\n"
+    slow_writer = ("import sys, time\nimport symvib.numeric.sweep as s\nreal = s.run_chunk\n"
                    "s.run_chunk = lambda *a, **k: (time.sleep(SLOW_CHUNK), real(*a, **k))[1]\n"
                    "sys.exit(s.main(sys.argv[1:]))\n").replace("SLOW_CHUNK", repr(SLOW_CHUNK))
     proc = subprocess.Popen([sys.executable, "-c", slow_writer, *first], env=env,
@@ -624,7 +624,7 @@ def test_a_directory_as_sweep_file_is_a_one_line_error(tmp_path, capsys):
 def test_cli_exits_nonzero_when_scenes_failed(tmp_path, capsys, monkeypatch):
     """Rows of an error status (the driver's ERROR_CODES) make the sweep exit 3 (as `symvib run`) in one line; here the
     'arrested' code stands in for one, so the test does not depend on which inputs overflow."""
-    from symvib import core
+    from symvib.numeric import engine as core
 
     args = ["paper-parabola", "--vary", "qdot=3:12:3", "-o", str(tmp_path / "o"), "--quiet"]
     assert main(args) == 0

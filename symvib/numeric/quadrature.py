@@ -31,9 +31,9 @@ from numpy.polynomial import legendre as _leg
 
 __all__ = ["ChebRule", "rule", "MAX_NODES"]
 
-#: Name of the table module in the generated folder (as :data:`symvib.gauss.TABLE_MODULE`).
+#: Name of the table module in the generated folder (as :data:`symvib.codegen.gauss.TABLE_MODULE`).
 TABLE_MODULE = "gauss_rules"
-#: Largest node count of a rule (as :data:`symvib.gauss.MAX_NODES`).
+#: Largest node count of a rule (as :data:`symvib.codegen.gauss.MAX_NODES`).
 MAX_NODES = 64
 
 
@@ -54,18 +54,18 @@ def rule(n: int) -> ChebRule:
     """The :class:`ChebRule` with ``n`` nodes (cached; arrays read-only).
 
     Nodes, weights and both integration matrices are correctly rounded (see
-    :mod:`symvib.gauss` for why the last ulp matters): read from the generated
+    :mod:`symvib.codegen.gauss` for why the last ulp matters): read from the generated
     table ``symvib.generated.gauss_rules`` for the tabulated ``n``, computed
     with mpmath on first use otherwise.
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_NODES:
         raise ValueError(f"nodes: must be an integer in [1, {MAX_NODES}], got {n!r}")
     n = int(n)
-    from .kernels import load_generated
+    from symvib.numeric.kernels import load_generated
 
     data = load_generated(TABLE_MODULE).RULES.get(n)
     if data is None:
-        from .gauss import rule_mp
+        from symvib.codegen.gauss import rule_mp
 
         data = rule_mp(n)
     x, weights, cumulative, weighted = (np.array(a, dtype=float) for a in data)

@@ -21,8 +21,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from .events import EventKind
-from .paths import UserPathError, check_output_dir, inside, safe_stem
+from symvib.numeric.events import EventKind
+from symvib.paths import UserPathError, check_output_dir, inside, safe_stem
 
 __all__ = ["phase_portrait", "energy_vs_q", "energy_vs_t", "save_run_figures", "QUANTITIES"]
 
@@ -151,7 +151,7 @@ def energy_vs_t(result, ax=None):
 
 
 def _h(result, q):
-    from .kernels import load
+    from symvib.numeric.kernels import load
 
     return float(load(result.scene.shape).h_scalar(q, *result.scene.param_values))
 

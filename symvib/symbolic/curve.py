@@ -30,8 +30,8 @@ from functools import cached_property
 import mpmath
 import sympy as sp
 
-from . import expr as _expr
-from .symbols import RESERVED
+from symvib import expr as _expr
+from symvib.symbolic.symbols import RESERVED
 
 __all__ = ["Curve", "CurveError", "graph", "parametric", "to_sympy", "sample_points"]
 
@@ -397,7 +397,7 @@ def _finish(name, kind, q, params, x, z, domain, h_hint, alpha_hint, q_scale, so
                                  f"h {label}(alpha) = {'z' if label == 'sin' else 'x'}'")
     # h must be positive inside the domain (checked at sample points).  A point where h
     # is not finite or not real is a singular point (a pole, the far side of a sqrt's
-    # branch point): the run's regular interval ends before it (symvib.singular).
+    # branch point): the run's regular interval ends before it (symvib.symbolic.singular).
     hf = sp.lambdify([q, *params], h, "mpmath")
     for qv in sample_points(curve, IDENTITY_CHECK_POINTS, seed=7):
         try:

@@ -1,6 +1,6 @@
 """Parameter sweeps: many scenes of one curve through the driver's core at once.
 
-A sweep takes a base :class:`~symvib.scene.Scene` and varies some of its
+A sweep takes a base :class:`~symvib.numeric.scene.Scene` and varies some of its
 fields, named with the scene file's own keys (``qdot``, ``q``, ``mu``,
 ``alpha0``, ``restitution``, ``g``, ``m``, ``left``, ``right``, ``t_max``,
 ``max_events``, a curve parameter such as ``p``, or the dotted form
@@ -12,10 +12,10 @@ fields, named with the scene file's own keys (``qdot``, ``q``, ``mu``,
   from ``numpy.random.default_rng([seed, chunk])`` so a chunk's rows never
   depend on which process draws them.
 
-Every scene runs the same compiled loop as :func:`symvib.driver.simulate`
-(:func:`symvib.core.sweep`, parallel over scenes on the numba backend), so a
+Every scene runs the same compiled loop as :func:`symvib.numeric.driver.simulate`
+(:func:`symvib.numeric.engine.sweep`, parallel over scenes on the numba backend), so a
 sweep's event sequences are the single-scene driver's.  Per scene it keeps the
-columns :data:`symvib.core.SUMMARY` (status, event counts, final time and
+columns :data:`symvib.numeric.engine.SUMMARY` (status, event counts, final time and
 position, friction work, impact loss, energies) and, with ``log_events=L``,
 the first ``L`` events.
 
@@ -30,7 +30,7 @@ with the same definition computes exactly the chunks that are missing.  Given
 
 Examples
 --------
->>> from symvib.scene import scene_from_dict
+>>> from symvib.numeric.scene import scene_from_dict
 >>> base = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
 ...     "physics": {"g": 9.81, "m": 0.2, "mu": 0.05, "restitution": 0.8},
 ...     "limiters": {"left": "-pi/6", "right": "pi/4"}, "initial": {"q": 0, "qdot": 7}})
@@ -58,9 +58,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import core
-from . import expr as _expr
-from .scene import MAX_EVENTS, Scene, SceneError, load_scene, scene_from_dict
+from symvib.numeric import engine as core
+from symvib import expr as _expr
+from symvib.numeric.scene import MAX_EVENTS, Scene, SceneError, load_scene, scene_from_dict
 
 __all__ = ["SweepSpec", "SweepResult", "SweepError", "WriterLock", "make_spec", "sweep", "load_sweep",
            "run_chunk", "sweep_id", "main", "FORMAT", "DEFAULT_CHUNK", "MAX_SCENES", "MAX_CHUNKS",
@@ -73,9 +73,9 @@ FORMAT = "symvib-sweep/2"
 OLD_FORMATS = ("symvib-sweep/1",)
 #: Scenes per chunk: the unit of writing, resuming and distribution.
 DEFAULT_CHUNK = 4096
-#: Default Gauss-Legendre nodes per quadrature panel (as :func:`symvib.driver.simulate`).
+#: Default Gauss-Legendre nodes per quadrature panel (as :func:`symvib.numeric.driver.simulate`).
 DEFAULT_NODES = 16
-#: Allowed Gauss-Legendre nodes per panel, inclusive (``symvib.gauss`` tabulates rules up to this size).
+#: Allowed Gauss-Legendre nodes per panel, inclusive (``symvib.codegen.gauss`` tabulates rules up to this size).
 NODES_RANGE = (2, 64)
 #: Largest number of scenes a sweep may declare: its joined columns (about 130 bytes a
 #: scene with two varied fields) are held in memory by :func:`load_sweep`.
@@ -305,21 +305,21 @@ def _axis(scene: Scene, key: str, spec, random: bool) -> Axis:
             raise SceneError(label, f"count must be at least 1, got {count}")
         if count > MAX_SCENES:
             raise SceneError(label, f"count {count} is more scenes than a sweep may hold ({MAX_SCENES}, "
-                                    f"symvib.sweep.MAX_SCENES)")
+                                    f"symvib.numeric.sweep.MAX_SCENES)")
         start, stop = num(parts[0]), num(parts[1])
         return Axis(key, fld, start=start, stop=stop, count=count)
     if random:
         raise SceneError(label, "a random sweep takes a range start:stop, not a list of values")
     if isinstance(spec, str):
         if spec.count(",") >= MAX_LIST_VALUES:
-            raise SceneError(label, f"more than {MAX_LIST_VALUES} listed values (symvib.sweep.MAX_LIST_VALUES); "
+            raise SceneError(label, f"more than {MAX_LIST_VALUES} listed values (symvib.numeric.sweep.MAX_LIST_VALUES); "
                                     f"use start:stop:count")
         items = spec.split(",")
     else:
         items = np.atleast_1d(spec)
         if items.ndim != 1 or items.size > MAX_LIST_VALUES:
             raise SceneError(label, f"must be a flat list of at most {MAX_LIST_VALUES} values "
-                                    f"(symvib.sweep.MAX_LIST_VALUES); use start:stop:count")
+                                    f"(symvib.numeric.sweep.MAX_LIST_VALUES); use start:stop:count")
         items = list(items)
     if not len(items) or items == [""]:
         raise SceneError(label, "no values given")
@@ -420,9 +420,9 @@ class SweepSpec:
         return min(self.chunk, self.count) * per_row
 
     def scalars(self, values) -> tuple:
-        """Rows of :data:`symvib.core.SCALARS` and of curve parameters for varied ``values``.
+        """Rows of :data:`symvib.numeric.engine.SCALARS` and of curve parameters for varied ``values``.
 
-        Every row is validated as :class:`~symvib.scene.Scene` validates one
+        Every row is validated as :class:`~symvib.numeric.scene.Scene` validates one
         scene; a bad row raises :class:`SceneError` naming the field and the row.
         """
         s = self.scene
@@ -458,7 +458,7 @@ def _require(values, ok, fld, reason):
 
 
 def _check_rows(spec: SweepSpec, scal, cp, names) -> None:
-    """Vectorized :func:`symvib.scene._validate` over the rows of one chunk."""
+    """Vectorized :func:`symvib.numeric.scene._validate` over the rows of one chunk."""
     g, m, mu, k, hl, left, hr, right, q0, qdot0, t_max, max_events, _unilateral = scal.T
     for label, v in zip(_SCALAR_FIELDS, scal.T):
         _require(v, np.isfinite(v), label, "must be finite")
@@ -497,7 +497,7 @@ def _check_rows(spec: SweepSpec, scal, cp, names) -> None:
 
 
 def _domain(scene: Scene, values) -> tuple:
-    from .scene import _domain as scene_domain
+    from symvib.numeric.scene import _domain as scene_domain
 
     return scene_domain(scene.replace(params=dict(zip((n for n, _ in scene.params), (float(v) for v in values)))))
 
@@ -518,7 +518,7 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
     seed, chunk, log_events : int
         Random seed, scenes per chunk, events kept per scene.
     nodes : int
-        Gauss-Legendre nodes per quadrature panel (as :func:`symvib.driver.simulate`),
+        Gauss-Legendre nodes per quadrature panel (as :func:`symvib.numeric.driver.simulate`),
         in :data:`NODES_RANGE`.
 
     Raises
@@ -575,23 +575,23 @@ def _check_sizes(spec: SweepSpec, prefix: str = "") -> None:
         sizes = " x ".join(f"{a.key} {a.size}" for a in spec.axes) if spec.mode == "grid" else "--random"
         raise SceneError(prefix + ("vary" if spec.mode == "grid" else "random"),
                          f"{spec.count} scenes ({sizes}) is more than a sweep may hold ({MAX_SCENES}, "
-                         f"symvib.sweep.MAX_SCENES)")
+                         f"symvib.numeric.sweep.MAX_SCENES)")
     if spec.chunks > MAX_CHUNKS:
         raise SceneError(prefix + "chunk", f"{spec.chunk} scenes per chunk makes {spec.chunks} chunk files, more "
-                                           f"than {MAX_CHUNKS} (symvib.sweep.MAX_CHUNKS): choose a larger --chunk")
+                                           f"than {MAX_CHUNKS} (symvib.numeric.sweep.MAX_CHUNKS): choose a larger --chunk")
     if spec.log_events > MAX_LOG_EVENTS:
         raise SceneError(prefix + "log_events", f"{spec.log_events} events per scene is more than "
-                                                f"{MAX_LOG_EVENTS} (symvib.sweep.MAX_LOG_EVENTS)")
+                                                f"{MAX_LOG_EVENTS} (symvib.numeric.sweep.MAX_LOG_EVENTS)")
     if spec.chunk_bytes() > MAX_CHUNK_BYTES:
         raise SceneError(prefix + "chunk", f"a chunk of {min(spec.chunk, spec.count)} scenes with --log-events "
                                            f"{spec.log_events} takes {spec.chunk_bytes()} bytes, more than "
-                                           f"{MAX_CHUNK_BYTES} (symvib.sweep.MAX_CHUNK_BYTES): choose a smaller "
+                                           f"{MAX_CHUNK_BYTES} (symvib.numeric.sweep.MAX_CHUNK_BYTES): choose a smaller "
                                            f"--chunk or --log-events")
     log_bytes = spec.count * spec.log_events * _EVENT_WIDTH * _ITEM
     if log_bytes > MAX_EVENT_LOG_BYTES:
         raise SceneError(prefix + "log_events", f"{spec.count} scenes x {spec.log_events} logged events take "
                                                 f"{log_bytes} bytes, more than {MAX_EVENT_LOG_BYTES} "
-                                                f"(symvib.sweep.MAX_EVENT_LOG_BYTES): log fewer events")
+                                                f"(symvib.numeric.sweep.MAX_EVENT_LOG_BYTES): log fewer events")
 
 
 def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
@@ -599,7 +599,7 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
 
     A pure function of its arguments (it runs on Dask workers): returns the
     chunk's columns as a dict of arrays (``row``, the varied fields, the
-    :data:`symvib.core.SUMMARY` columns, and ``event_log`` when asked).
+    :data:`symvib.numeric.engine.SUMMARY` columns, and ``event_log`` when asked).
     """
     spec = SweepSpec.from_dict(definition)
     if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < spec.chunks:
@@ -607,7 +607,7 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
     rows, values = spec.rows(int(index))
     scal, cp = spec.scalars(values)
     fn = _sweep_function(spec.scene, backend)
-    from .driver import _rule
+    from symvib.numeric.driver import _rule
 
     summary, logs = fn(scal, cp, _rule(spec.nodes), spec.log_events)
     out = {"row": rows}
@@ -625,8 +625,8 @@ _INTEGER_COLUMNS = ("status", "events", "impacts", "reversals", "normal_sign_cha
 
 
 def _sweep_function(scene: Scene, backend: str):
-    from . import driver
-    from .kernels import load
+    from symvib.numeric import driver
+    from symvib.numeric.kernels import load
 
     mod = load(scene.shape)
     return driver.guarded_sweep(driver.engine(mod.__file__, driver._resolve(backend))[2])
@@ -640,7 +640,7 @@ class SweepResult:
     ----------
     spec : SweepSpec
     columns : dict of str -> ndarray
-        ``row``, each varied field, the :data:`symvib.core.SUMMARY` columns,
+        ``row``, each varied field, the :data:`symvib.numeric.engine.SUMMARY` columns,
         ``event_log`` (shape ``(count, log_events, 6)``: kind, t, q,
         qdot_before, qdot_after, energy) when events were logged.
     computed, reused : tuple of int
@@ -688,7 +688,7 @@ class SweepResult:
 
     @property
     def failed(self) -> np.ndarray:
-        """Rows whose run failed (a status of ``symvib.core.ERROR_CODES``: non-finite state, energy
+        """Rows whose run failed (a status of ``symvib.numeric.engine.ERROR_CODES``: non-finite state, energy
         budget not closing): their numbers are not a result."""
         return np.isin(self.columns["status"], core.ERROR_CODES)
 
@@ -745,7 +745,7 @@ def sweep_id(definition: dict) -> str:
 
 
 def _manifest(spec: SweepSpec, ident: str) -> dict:
-    from . import __version__
+    from symvib import __version__
 
     return {"format": FORMAT, "sweep_id": ident, "definition": spec.to_dict(), "chunks": spec.chunks,
             "columns": _column_names(spec),
@@ -1086,8 +1086,8 @@ def _prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool) -> tuple:
 def _refuse_singular_domain(scene: Scene) -> None:
     """Refuse a user curve with a singular point inside its declared domain.
 
-    :func:`symvib.driver.simulate` narrows such a run's domain to the regular
-    interval around ``initial.q`` (:func:`symvib.singular.regular_shape`); a sweep
+    :func:`symvib.numeric.driver.simulate` narrows such a run's domain to the regular
+    interval around ``initial.q`` (:func:`symvib.symbolic.singular.regular_shape`); a sweep
     runs one kernel module for all its rows, so it asks for that domain to be
     declared instead of integrating across the point.  A catalogue shape is
     regular on its domain.  Rows that vary the curve's parameters are not
@@ -1095,7 +1095,7 @@ def _refuse_singular_domain(scene: Scene) -> None:
     """
     if scene.shape.in_catalogue:
         return
-    from .singular import regular_shape
+    from symvib.symbolic.singular import regular_shape
 
     narrowed = regular_shape(scene)
     if narrowed is not scene.shape:
@@ -1274,7 +1274,7 @@ def _resolve_scene(text: str) -> Scene:
 def _sweep_file(path: Path) -> dict:
     """Read a sweep file as a scene file is read (:func:`symvib.paths.read_user_toml`:
     size cap, no device or folder, no TOML bomb), then check its keys."""
-    from .paths import read_user_toml
+    from symvib.paths import read_user_toml
 
     data = read_user_toml(path, "sweep file")
     known = {"scene", "vary", "random", "seed", "chunk", "log_events", "nodes", "out"}
@@ -1370,7 +1370,7 @@ def _main(args) -> int:
         n = sum(len(res.spec.rows(i)[0]) for i in res.computed)
         print(f"  {n / res.seconds:,.0f} scenes/s over {res.seconds:.3g} s")
     if args.plot:
-        from .sweepmaps import sweep_maps
+        from symvib.numeric.sweepmaps import sweep_maps
 
         for path in sweep_maps(res, Path(out) / "maps"):
             print(f"wrote {path}")

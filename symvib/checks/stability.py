@@ -2,7 +2,7 @@
 
 Each :class:`Case` is a scene plus how its right outcome was derived,
 independently of the driver: a closed form where the mechanics gives one, an
-mpmath computation otherwise (:func:`symvib.reference.phase_reference`, or
+mpmath computation otherwise (:func:`symvib.checks.reference.phase_reference`, or
 the frictionless event generator :func:`frictionless_events`, which uses
 energy conservation ``w = 2 (e - g z)`` and tanh-sinh quadratures of
 ``h / sqrt(w)``).  :func:`expected` computes it (cached per process) as an
@@ -46,7 +46,7 @@ import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 
-from .scene import scene_from_dict
+from symvib.numeric.scene import scene_from_dict
 
 __all__ = ["Case", "Expected", "OUTCOMES", "CORRECT", "INACCURATE", "MISSED_IMPACT", "WRONG_ARREST",
            "WRONG_SEQUENCE", "NAN", "DID_NOT_FINISH", "cases", "case", "expected", "classify", "labels",
@@ -82,7 +82,7 @@ class Expected:
         The event sequence (see :func:`labels`); for a Zeno case, the events
         before the bounces start plus the final ``rest_on_limiter``.
     status : str
-        The run's final status (a :class:`symvib.events.Status` value).
+        The run's final status (a :class:`symvib.numeric.events.Status` value).
     times, positions : tuple of float
         Times and positions of the first ``len(times)`` events.
     tol : float
@@ -137,7 +137,7 @@ def classify(exp: Expected, status: str, events, message: str = "") -> str:
     status : str
         The run's status (``"failed"`` for a peer whose solver failed or ran out of budget).
     events : sequence
-        ``(kind, t, q, qdot_before, ...)`` tuples (peers) or :class:`symvib.events.Event` records.
+        ``(kind, t, q, qdot_before, ...)`` tuples (peers) or :class:`symvib.numeric.events.Event` records.
     message : str
         The method's failure message, if any.
     """
@@ -191,7 +191,7 @@ def _accurate(exp: Expected, rows) -> bool:
 
 # --- the truths ----------------------------------------------------------------------------------
 def _from_reference(scene, status, tol=EVENT_TOL, max_events=None):
-    from .reference import phase_reference
+    from symvib.checks.reference import phase_reference
 
     ref = phase_reference(scene, dps=TRUTH_DPS, max_events=max_events)
     rows = [(e.kind, float(e.t), float(e.q), float(e.qdot_before)) for e in ref]

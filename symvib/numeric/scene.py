@@ -44,7 +44,7 @@ Examples
 ...                  "physics": {"restitution": 1.5}, "initial": {"q": 0, "qdot": 1}})
 Traceback (most recent call last):
 ...
-symvib.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5
+symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5
 """
 from __future__ import annotations
 
@@ -54,9 +54,9 @@ import numbers
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import expr as _expr
-from .paths import UserPathError, read_user_toml, safe_stem
-from .shapes import CATALOGUE, Shape
+from symvib import expr as _expr
+from symvib.paths import UserPathError, read_user_toml, safe_stem
+from symvib.shapes import CATALOGUE, Shape
 
 __all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS"]
 

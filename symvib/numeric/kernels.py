@@ -36,8 +36,8 @@ import sys
 import warnings
 from pathlib import Path
 
-from . import provenance
-from .shapes import CATALOGUE, Shape
+from symvib import provenance
+from symvib.shapes import CATALOGUE, Shape
 
 __all__ = ["load", "load_generated", "generated_dir", "cache_dir", "check_text", "verify_text", "KernelError",
            "DIGEST_PREFIX"]
@@ -51,7 +51,7 @@ class KernelError(RuntimeError):
 
 
 #: First line of every generated module up to its body's SHA-256 (kernel modules; the
-#: Gauss-Legendre table has its own prefix, :data:`symvib.gauss.TABLE_PREFIX`).
+#: Gauss-Legendre table has its own prefix, :data:`symvib.codegen.gauss.TABLE_PREFIX`).
 DIGEST_PREFIX = "# symvib generated kernel module; body sha256: "
 _DIGEST_LINE = re.compile(r"# symvib generated [^\n]*; body sha256: ([0-9a-f]{64})")
 _INPUT_HASH_LINE = re.compile(r"^INPUT_HASH = '([0-9a-f]{64})'$", re.M)
@@ -200,8 +200,9 @@ def _attribute_allowed(node, numpy) -> bool:
 
 def generated_dir() -> Path:
     """The folder of the catalogue's generated modules (installed or in the checkout)."""
-    here = Path(__file__).resolve().parent
-    for candidate in (here / "generated", here.parent / "generated"):
+    spec = importlib.util.find_spec("symvib.generated")
+    for location in (spec.submodule_search_locations or []) if spec is not None else []:
+        candidate = Path(location)
         if (candidate / "__init__.py").exists():
             return candidate
     raise KernelError("no generated/ folder found next to the symvib package; run `symvib generate`")
@@ -219,7 +220,7 @@ def _module_name(name: str) -> str:
     name inside the cache folder, and distinct names stay distinct)."""
     import re
 
-    from .paths import safe_stem
+    from symvib.paths import safe_stem
 
     out = re.sub(r"[^A-Za-z0-9_]", "_", safe_stem(name))
     return out if out[:1].isalpha() else "c_" + out
@@ -340,7 +341,7 @@ def _generate(curve: Shape, source: dict, want: str, path: Path, name: str):
     """Generate a user curve's module atomically: into a temporary file, checked and
     imported from the text written, and only then renamed into the cache; any
     failure leaves nothing in the cache."""
-    from . import codegen  # the bridge: imports SymPy, only for a curve not generated yet
+    from symvib.codegen import generate as codegen  # the bridge: imports SymPy, only for a curve not generated yet
 
     tmp = None
     stem = f"{name}.{os.getpid()}.tmp"

@@ -2,13 +2,13 @@
 
 :func:`time_reference` shares no numerics with the driver (no closed-form
 phase trajectory, no quadrature in ``q``) nor with
-:func:`symvib.reference.phase_reference`: it integrates the equation of
+:func:`symvib.checks.reference.phase_reference`: it integrates the equation of
 motion (paper eq. 1) on the branch ``s = sigma * sign(N)`` fixed per segment,
 
     qddot = -A_s(q) qdot**2 - B_s(q),
     A_s = h'/h + s mu alpha',   B_s = g (z' + s mu x') / h**2,
 
-with ``A_s``, ``B_s`` from the SymPy derivation (:func:`symvib.derive.coefficients`)
+with ``A_s``, ``B_s`` from the SymPy derivation (:func:`symvib.symbolic.derive.coefficients`)
 evaluated by ``lambdify(..., "mpmath")`` at ``dps`` digits.  The integrator is
 Gragg-Bulirsch-Stoer extrapolation (modified midpoint rule, step numbers
 ``2, 4, 6, ...``, Aitken-Neville in ``H**2``): its order grows until the
@@ -29,11 +29,11 @@ downhill).
 
 It is slow (about 10 ms per step at 30 digits); results used by the
 benchmarks are cached in ``docs/benchmarks/time_reference.json`` (see
-:mod:`symvib.bench`, ``symvib bench reference``).
+:mod:`symvib.checks.bench`, ``symvib bench reference``).
 
 Examples
 --------
->>> from symvib.scene import scene_from_dict
+>>> from symvib.numeric.scene import scene_from_dict
 >>> s = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
 ...     "physics": {"mu": 3, "restitution": 1}, "limiters": {"right": "pi/4"},
 ...     "initial": {"q": "pi/12", "qdot": 3.8}})
@@ -47,11 +47,11 @@ import time
 import mpmath
 import sympy as sp
 
-from .derive import coefficients
-from .reference import RefEvent
-from .symbols import g as g_sym
-from .symbols import mu as mu_sym
-from .symbols import sigma as sigma_sym
+from symvib.symbolic.derive import coefficients
+from symvib.checks.reference import RefEvent
+from symvib.symbolic.symbols import g as g_sym
+from symvib.symbolic.symbols import mu as mu_sym
+from symvib.symbolic.symbols import sigma as sigma_sym
 
 __all__ = ["time_reference", "TimeReferenceBudget", "GUARD_DIGITS"]
 

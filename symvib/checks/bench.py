@@ -9,7 +9,7 @@ Subcommands (``symvib bench SUBCOMMAND --help``)::
 ``work-precision``
     For the paper scenes (``k = 1`` and ``0.8``) every method and setting
     runs every scene; its error is the largest event-time or event-position
-    error against the 30-digit time reference (:mod:`symvib.reference_time`,
+    error against the 30-digit time reference (:mod:`symvib.checks.reference_time`,
     cached in ``docs/benchmarks/time_reference.json``), its cost the CPU time
     per trajectory (:func:`time.process_time`, one thread, the cheapest of
     ``TIMING_BLOCKS`` blocks of repeated calls, ``MIN_TIMING`` s in all).  A
@@ -28,12 +28,12 @@ Subcommands (``symvib bench SUBCOMMAND --help``)::
 
     (settings with a wrong sequence on any paper scene excluded).  It also
     counts wrong event sequences over random parabola/circle scenes (random
-    ``qdot0``, ``mu``, ``k``, limiters; truth :func:`symvib.reference.phase_reference`
+    ``qdot0``, ``mu``, ``k``, limiters; truth :func:`symvib.checks.reference.phase_reference`
     at 20 digits, cached; scenes needing more than ``RANDOM_MAX_EVENTS`` events
     are left out).
 
 ``stability``
-    Every method runs every case of :mod:`symvib.stability` under a CPU-time
+    Every method runs every case of :mod:`symvib.checks.stability` under a CPU-time
     budget; the outcomes go to ``stability.csv`` and ``stability.md``.
 
 ``reference``
@@ -68,7 +68,7 @@ RESTITUTIONS = (1.0, 0.8)
 #: Gauss nodes per panel of symvib's driver (its accuracy knob).
 SYMVIB_NODES = (1, 2, 3, 4, 6, 8, 12, 16, 24)
 IVP_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
-#: solve_ivp relative tolerances (atol = rtol / 100, as in symvib.peers).
+#: solve_ivp relative tolerances (atol = rtol / 100, as in symvib.checks.peers).
 RTOLS = tuple(10.0 ** -e for e in range(3, 13))
 #: RK4 fixed steps, seconds.
 RK4_STEPS = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
@@ -96,7 +96,7 @@ ERROR_FLOOR = 1e-16
 STABILITY_SETTINGS = (("symvib", 16), ("RK45", 1e-6), ("DOP853", 1e-10), ("Radau", 1e-8), ("LSODA", 1e-8),
                       ("RK4", 1e-3))
 
-_DATA = Path(__file__).resolve().parents[1] / "docs" / "benchmarks"
+_DATA = Path(__file__).resolve().parents[2] / "docs" / "benchmarks"  # moved by the checks brief
 #: Cached 30-digit time references of the paper scenes (regenerate: ``symvib bench reference --write``).
 REFERENCE_FILE = _DATA / "time_reference.json"
 #: Cached phase-reference event sequences of the random scenes.
@@ -126,11 +126,11 @@ class Setting:
 def run_setting(setting: Setting, scene, *, budget: float = PEER_BUDGET, backend: str = "auto"):
     """Run one method on one scene: ``(status, events, message)``, events as ``(kind, t, q, qdot_before)``."""
     if setting.method == "symvib":
-        from .driver import simulate
+        from symvib.numeric.driver import simulate
 
         r = simulate(scene, nodes=int(setting.value), samples=False, backend=backend)
         return r.status.value, [(e.kind.value, e.t, e.q, e.qdot_before) for e in r.events], ""
-    from .peers import rk4_events, solve_ivp_events
+    from symvib.checks.peers import rk4_events, solve_ivp_events
 
     if setting.method == "RK4":
         p = rk4_events(scene, setting.value, budget=budget)
@@ -162,7 +162,7 @@ def paper_scenes(quick: bool = False) -> list:
     """``(label, scene)`` of the paper scenes with k = 1 and 0.8 (quick: two of them)."""
     from importlib.resources import files
 
-    from .scene import load_scene
+    from symvib.numeric.scene import load_scene
 
     out = []
     for name in PAPER_SCENES:
@@ -197,13 +197,13 @@ def reference_events(scene, *, label: str = "", cache: Path | None = REFERENCE_F
         return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in data[key]["events"]]
     import mpmath
 
-    from .reference_time import time_reference
+    from symvib.checks.reference_time import time_reference
 
     ref = time_reference(scene, dps=30)
     rows = [(e.kind, mpmath.nstr(e.t, 25), mpmath.nstr(e.q, 25), mpmath.nstr(e.qdot_before, 25)) for e in ref]
     if write and cache is not None:
         data = _load_json(cache)
-        data[key] = {"scene": label or scene.name, "dps": 30, "method": "symvib.reference_time.time_reference",
+        data[key] = {"scene": label or scene.name, "dps": 30, "method": "symvib.checks.reference_time.time_reference",
                      "events": rows}
         cache.parent.mkdir(parents=True, exist_ok=True)
         cache.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
@@ -212,7 +212,7 @@ def reference_events(scene, *, label: str = "", cache: Path | None = REFERENCE_F
 
 def random_scenes(n: int, seed: int = RANDOM_SEED) -> list:
     """``n`` random paper-parabola / circle scenes (random ``qdot0``, ``mu``, ``k``, limiters), capped events."""
-    from .scene import scene_from_dict
+    from symvib.numeric.scene import scene_from_dict
 
     rng = random.Random(seed)
     out = []
@@ -236,8 +236,8 @@ def random_scenes(n: int, seed: int = RANDOM_SEED) -> list:
 
 def _random_truth(scene):
     """Sequence labels of a random scene by the phase reference, or None (too many events, or it failed)."""
-    from .reference import phase_reference
-    from .stability import labels
+    from symvib.checks.reference import phase_reference
+    from symvib.checks.stability import labels
 
     try:
         with _shared_derivations():
@@ -277,7 +277,7 @@ def cpu_per_run(fn, min_total: float = MIN_TIMING, blocks: int = TIMING_BLOCKS) 
 
 
 def _errors(events, ref) -> tuple:
-    from .stability import labels
+    from symvib.checks.stability import labels
 
     same = labels(events) == labels(ref)
     n = min(len(events), len(ref))
@@ -304,7 +304,7 @@ def ratio_at_equal_accuracy(rows, target: float):
 def _sequence_task(args):
     """One random scene through every sequence setting (runs in a worker)."""
     scene, truth, settings, budget, backend = args
-    from .stability import labels
+    from symvib.checks.stability import labels
 
     out = []
     for st in settings:
@@ -322,12 +322,12 @@ def _sequence_task(args):
 def _map(fn, items, workers):
     """``[fn(x) for x in items]``, over ``workers`` processes when more than one.
 
-    The workers are not daemonic (:func:`symvib.budget.worker_pool`), so the
+    The workers are not daemonic (:func:`symvib.symbolic.budget.worker_pool`), so the
     symbolic derivation may start its budgeted child processes there.
     """
     if workers <= 1:
         return [fn(x) for x in items]
-    from .budget import worker_pool
+    from symvib.symbolic.budget import worker_pool
 
     with worker_pool(workers) as ex:
         return list(ex.map(fn, items, chunksize=1))
@@ -340,12 +340,12 @@ _DERIVATIONS: dict = {}
 def _shared_derivations():
     """Within the block, derive each catalogue curve once per process for the phase reference.
 
-    :func:`symvib.reference.phase_reference` derives the scene's curve on every
+    :func:`symvib.checks.reference.phase_reference` derives the scene's curve on every
     call (a second or so, in budgeted child processes); the random scenes use
     two curves, so the derivation is memoized by the curve's expressions
     (``_DERIVATIONS``, kept between blocks).  The module is restored on exit.
     """
-    from . import reference
+    from symvib.checks import reference
 
     original = reference.derive
 
@@ -363,14 +363,14 @@ def _shared_derivations():
 
 
 def _backend():
-    from .driver import _resolve
+    from symvib.numeric.driver import _resolve
 
     return _resolve("auto")
 
 
 def _warm_up(scenes, backend) -> dict:
     """Compile (or load) the driver for each curve once: CPU seconds of each first call."""
-    from .driver import simulate
+    from symvib.numeric.driver import simulate
 
     out = {}
     for _, scene in scenes:
@@ -538,7 +538,7 @@ def _summary_markdown(summary, ratios, seq, backend, warm, scenes) -> str:
 # --- stability --------------------------------------------------------------------------------------
 def _stability_task(args):
     name, exp, settings, budget, backend = args
-    from .stability import case, classify
+    from symvib.checks.stability import case, classify
 
     scene = case(name).scene
     out = []
@@ -558,7 +558,7 @@ def _stability_task(args):
 
 def stability(out: Path, *, quick: bool = False, workers: int = 1, budget: float = PEER_BUDGET, log=print) -> list:
     """Run every method on every stability case; write ``stability.csv`` and ``stability.md``."""
-    from .stability import case, cases, expected
+    from symvib.checks.stability import case, cases, expected
 
     out.mkdir(parents=True, exist_ok=True)
     backend = _backend()
@@ -584,7 +584,7 @@ def stability(out: Path, *, quick: bool = False, workers: int = 1, budget: float
 
 def stability_markdown(rows, names, methods) -> str:
     """The stability table: one row per case, one column per method."""
-    from .stability import case
+    from symvib.checks.stability import case
 
     cell = {(r["case"], r["method"]): r["outcome"] for r in rows}
     lines = ["| case | " + " | ".join(methods) + " |", "| --- |" + " --- |" * len(methods)]

@@ -2,12 +2,12 @@
 
 Every function here uses only floats, small NumPy arrays and the generated
 ``*_scalar`` kernels, which it calls by their names (``F_p_scalar``,
-``node_p_scalar``, ...).  :func:`symvib.driver.engine` appends this source to a
+``node_p_scalar``, ...).  :func:`symvib.numeric.driver.engine` appends this source to a
 curve's generated kernel module, so the names resolve there, and runs the
 whole as plain Python or, when the optional ``numba`` package is installed
 (extra ``fast``), compiled by ``numba.njit(cache=True)`` (the combined file
 lives in the kernel cache folder, so the compilation is reused by later
-processes).  The algorithm is documented in :mod:`symvib.driver`; the numbers
+processes).  The algorithm is documented in :mod:`symvib.numeric.driver`; the numbers
 of this module are its knobs.
 
 Codes (integers, so that compiled code can return them):
@@ -16,7 +16,7 @@ Codes (integers, so that compiled code can return them):
 * status: ``RUNNING, ARRESTED, RESTING, T_MAX, MAX_EVENTS, LEFT_DOMAIN, NON_FINITE,
   BUDGET_MISMATCH, LEFT_CURVE``.  The engine itself ends a run with ``NON_FINITE`` as soon
   as its state stops being finite; ``BUDGET_MISMATCH`` is set after the run by
-  :func:`symvib.driver.checked_status` (the codes :data:`ERROR_CODES` are failures).
+  :func:`symvib.numeric.driver.checked_status` (the codes :data:`ERROR_CODES` are failures).
 """
 import math
 
@@ -469,7 +469,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, g, mu, scale, cp, R, work, keep, out, o):
     """Time and friction work (per unit mass) of one interval; node samples into out[o:].
 
     R = (x, w, S^T, SW^T) of the rule for panels that start on a root (weighted),
-    then (x, w, S^T) of the rule for every other panel (see :func:`symvib.driver.plain_nodes`).
+    then (x, w, S^T) of the rule for every other panel (see :func:`symvib.numeric.driver.plain_nodes`).
     """
     Xw, Ww, Sw, SWw, Xp, Wtp, Sp = R
     g2 = 2.0 * g
@@ -620,7 +620,7 @@ def rest(q, side, mu, cp):
 
 @jit
 def run(P, R, q0, qdot0, t_max, max_events, keep_intervals, unilateral):
-    """Simulate one scene.  Returns a tuple; see :func:`symvib.driver.simulate` for its use.
+    """Simulate one scene.  Returns a tuple; see :func:`symvib.numeric.driver.simulate` for its use.
 
     ``unilateral``: the curve only pushes along its normal, so where N reaches 0 (or is
     negative at the start of an interval) the run ends with LEFT_CURVE (physics.md, "Events").

@@ -10,7 +10,7 @@ milliseconds per event) and meant for tests and benchmarks.
 
 Examples
 --------
->>> from symvib.scene import scene_from_dict
+>>> from symvib.numeric.scene import scene_from_dict
 >>> s = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
 ...     "physics": {"mu": 3, "restitution": 1}, "limiters": {"right": "pi/4"},
 ...     "initial": {"q": "pi/12", "qdot": 3.8}})
@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from .derive import derive
-from .symbols import g as g_sym
-from .symbols import mu as mu_sym
+from symvib.symbolic.derive import derive
+from symvib.symbolic.symbols import g as g_sym
+from symvib.symbolic.symbols import mu as mu_sym
 
 __all__ = ["RefEvent", "phase_reference"]
 

@@ -1,6 +1,6 @@
 """The one bridge: derivation -> plain NumPy kernel module.
 
-:func:`module_text` turns a :class:`~symvib.derive.Derivation` into the source
+:func:`module_text` turns a :class:`~symvib.symbolic.derive.Derivation` into the source
 of a Python module that needs only NumPy (and :mod:`math` for the scalar
 path): one function per kernel and per branch, common subexpressions
 eliminated (:func:`sympy.cse`), no ``Piecewise``, no ``select``, no
@@ -32,7 +32,7 @@ gives the same bytes; the header records the inputs' hash
 
 Examples
 --------
->>> from symvib.derive import derive
+>>> from symvib.symbolic.derive import derive
 >>> text = module_text(derive("circle"), {"name": "circle"})
 >>> "def F_p(q, mu, R):" in text and "import sympy" not in text
 True
@@ -54,11 +54,12 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-from . import gauss, provenance
-from .curve import CurveError
-from .derive import Derivation, derive
-from .kernels import DIGEST_PREFIX, verify_text
-from .symbols import C, g, m, mu
+from symvib.codegen import gauss
+from symvib import provenance
+from symvib.symbolic.curve import CurveError
+from symvib.symbolic.derive import Derivation, derive
+from symvib.numeric.kernels import DIGEST_PREFIX, verify_text
+from symvib.symbolic.symbols import C, g, m, mu
 
 __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
            "DIGEST_PREFIX"]
@@ -485,10 +486,10 @@ def generate(curve, out_dir, *, name: str | None = None, source: dict | None = N
     """Derive ``curve`` and write its kernel module into ``out_dir``; returns the path.
 
     ``curve`` is a catalogue name, a :class:`~symvib.shapes.Shape` or a
-    :class:`~symvib.curve.Curve` (then give ``source``, its defining data).
+    :class:`~symvib.symbolic.curve.Curve` (then give ``source``, its defining data).
     """
-    from .integrals import ROUTE_SECONDS
-    from .shapes import Shape, shape
+    from symvib.symbolic.integrals import ROUTE_SECONDS
+    from symvib.shapes import Shape, shape
 
     if isinstance(curve, str):
         curve = shape(curve)
@@ -526,12 +527,12 @@ def generate_catalogue(out_dir, *, names=None, processes: int | None = None) -> 
     """Write the kernel module of every catalogue shape (in parallel processes).
 
     With the whole catalogue, the driver's Gauss-Legendre table
-    (:mod:`symvib.gauss`) is rewritten too.
+    (:mod:`symvib.codegen.gauss`) is rewritten too.
     """
     import multiprocessing as mproc
 
-    from .budget import worker_pool
-    from .shapes import CATALOGUE
+    from symvib.symbolic.budget import worker_pool
+    from symvib.shapes import CATALOGUE
 
     names = sorted(CATALOGUE) if names is None else list(names)
     jobs = [(n, str(out_dir)) for n in names]
@@ -550,7 +551,7 @@ def stale(out_dir, *, names=None) -> list:
     not match its recorded digest (edited by hand).  No derivation is run.  With
     the whole catalogue, the Gauss-Legendre table is recomputed and compared.
     """
-    from .shapes import CATALOGUE
+    from symvib.shapes import CATALOGUE
 
     out = Path(out_dir)
     names = sorted(CATALOGUE) if names is None else list(names)

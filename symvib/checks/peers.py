@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .kernels import load
+from symvib.numeric.kernels import load
 
 __all__ = ["PeerRun", "PeerBudget", "solve_ivp_events", "rk4_events"]
 

@@ -43,13 +43,13 @@ in ``stats["error"]``), and a run whose energy budget misses by more than
 :data:`BUDGET_RTOL` ends ``energy_budget_mismatch``; ``Result.success`` is then
 False and ``symvib run`` exits with status 3.
 
-The loop itself is :mod:`symvib.core`, run compiled by numba when it is
+The loop itself is :mod:`symvib.numeric.engine`, run compiled by numba when it is
 installed (``pip install symvib[fast]``) and as plain Python otherwise; both
 give the same events.
 
 Examples
 --------
->>> from symvib.scene import scene_from_dict
+>>> from symvib.numeric.scene import scene_from_dict
 >>> scene = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
 ...     "physics": {"g": 9.81, "m": 0.2, "alpha0": 0.05, "restitution": 0.8},
 ...     "limiters": {"left": "-pi/6", "right": "pi/4"}, "initial": {"q": 0, "qdot": 7}})
@@ -69,10 +69,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import core
-from .events import EnergyBudget, Event, EventKind, Result, Samples, Status, ZenoInfo
-from .kernels import cache_dir, check_text, load
-from .quadrature import rule
+from symvib.numeric import engine as core
+from symvib.numeric.events import EnergyBudget, Event, EventKind, Result, Samples, Status, ZenoInfo
+from symvib.numeric.kernels import cache_dir, check_text, load
+from symvib.numeric.quadrature import rule
 
 __all__ = ["simulate", "NODES", "backend_available", "engine", "checked_status", "guarded_sweep", "BUDGET_RTOL"]
 
@@ -130,12 +130,12 @@ def _resolve(backend: str) -> str:
 def engine(module_file: str, backend: str):
     """``(simulate, samples, sweep)`` of the core bound to one kernel module, on a backend (cached).
 
-    The core's source (:mod:`symvib.core`) is appended to the kernel module's
+    The core's source (:mod:`symvib.numeric.engine`) is appended to the kernel module's
     source; on the numba backend every ``*_scalar`` kernel and every core
     function is compiled with ``numba.njit(cache=True)`` from a file in the
     kernel cache folder, so later processes load the compiled code.
 
-    The kernel module's text is read once and checked (:func:`symvib.kernels.check_text`:
+    The kernel module's text is read once and checked (:func:`symvib.numeric.kernels.check_text`:
     digest and whitelist) before it is compiled; an engine file already in the cache
     is used only when it holds exactly the text built here, and what is executed is
     that text, not a second read of a file.
@@ -319,7 +319,7 @@ def checked_status(status, t_final, q_final, qdot_final, E0, E_final, friction_w
     Returns
     -------
     int or ndarray of int
-        Codes of :mod:`symvib.core` (``core.STATUS_NAMES`` names them).
+        Codes of :mod:`symvib.numeric.engine` (``core.STATUS_NAMES`` names them).
 
     Examples
     --------
@@ -382,10 +382,10 @@ def guarded_sweep(sweep_fn):
 def _run_shape(scene):
     """The shape whose kernels run ``scene``: a catalogue shape as it is (regular on its
     domain), a user curve with its domain narrowed to the regular interval around
-    ``initial.q`` when a singular point lies inside it (:func:`symvib.singular.regular_shape`)."""
+    ``initial.q`` when a singular point lies inside it (:func:`symvib.symbolic.singular.regular_shape`)."""
     if scene.shape.in_catalogue:
         return scene.shape
-    from .singular import regular_shape
+    from symvib.symbolic.singular import regular_shape
 
     return regular_shape(scene)
 
@@ -414,7 +414,7 @@ def plain_nodes(nodes: int) -> int:
 
 @lru_cache(maxsize=8)
 def _rule(nodes):
-    """The rules as the core takes them (see :func:`symvib.core.quad`).
+    """The rules as the core takes them (see :func:`symvib.numeric.engine.quad`).
 
     For panels that start on a root: nodes, weights and both integration
     matrices, transposed; for the others: nodes, weights and the matrix of the

@@ -1,6 +1,6 @@
 """Maps of a sweep over two of its varied fields.
 
-For each scene of a :class:`~symvib.sweep.SweepResult`: the number of
+For each scene of a :class:`~symvib.numeric.sweep.SweepResult`: the number of
 impacts, the arrest (or rest) time and position, and the share of the lost
 energy that went into impacts, ``W_impacts / (W_friction + W_impacts)``,
 drawn over the first two varied fields that take more than one value: as an
@@ -13,8 +13,8 @@ screen needed, the caller's backend untouched).
 
 Examples
 --------
->>> from symvib.scene import scene_from_dict
->>> from symvib.sweep import sweep
+>>> from symvib.numeric.scene import scene_from_dict
+>>> from symvib.numeric.sweep import sweep
 >>> import tempfile
 >>> base = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
 ...     "physics": {"mu": 0.05, "restitution": 0.8}, "limiters": {"left": -0.5, "right": 0.7},

@@ -8,7 +8,7 @@ On a branch ``s = sigma * sign(N)`` the squared speed is
 Whether SymPy finds ``F_s`` depends on the curve and on how the integrand is
 written, it can take minutes, and it has returned wrong antiderivatives.  So
 :func:`antiderivative` tries a chain of routes, each in a child process under
-a time budget (:mod:`symvib.budget`), and accepts a closed form only after it
+a time budget (:mod:`symvib.symbolic.budget`), and accepts a closed form only after it
 is differentiated back and checked:
 
 ``sympy``
@@ -45,9 +45,9 @@ from dataclasses import dataclass, replace
 import mpmath
 import sympy as sp
 
-from . import budget
-from .curve import CHECK_DIGITS, CHECK_TOLERANCE, Curve, identity_holds, numeric_zero, sample_points
-from .symbols import mu
+from symvib.symbolic import budget
+from symvib.symbolic.curve import CHECK_DIGITS, CHECK_TOLERANCE, Curve, identity_holds, numeric_zero, sample_points
+from symvib.symbolic.symbols import mu
 
 __all__ = ["Attempt", "Antiderivative", "antiderivative", "integrand", "ROUTES", "ROUTE_SECONDS",
            "VERIFY_SECONDS"]

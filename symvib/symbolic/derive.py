@@ -10,7 +10,7 @@ curvature ``kappa = alpha'/h``, on the branch ``s = sigma * sign(N)``
 
     qdot**2 = w / h**2,  w = exp(-2 s mu alpha) [C - 2 g F_s(q)],   (eq. 2)
 
-with ``F_s`` from :mod:`symvib.integrals`.  The paper's "double" equation is
+with ``F_s`` from :mod:`symvib.symbolic.integrals`.  The paper's "double" equation is
 the pair ``s = +1`` (upper signs, ``v > 0``) and ``s = -1``, written for a
 positive normal force; where ``N < 0`` the branch with ``s = -sigma`` applies.
 
@@ -33,9 +33,9 @@ from functools import cached_property
 
 import sympy as sp
 
-from .curve import Curve, identity_holds
-from .integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivative
-from .symbols import LATEX_NAMES, C, g, m, mu, sigma
+from symvib.symbolic.curve import Curve, identity_holds
+from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivative
+from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
 
 __all__ = ["Branch", "Derivation", "derive", "coefficients"]
 
@@ -257,7 +257,7 @@ def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES) -> Derivatio
     curve : Curve, Shape or str
         A curve, or the name of a catalogue shape.
     seconds : float
-        Budget of each symbolic integration route (see :mod:`symvib.integrals`).
+        Budget of each symbolic integration route (see :mod:`symvib.symbolic.integrals`).
     routes : sequence of str
         Closed-form routes to try for ``F_sigma``.
 
@@ -266,7 +266,7 @@ def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES) -> Derivatio
     Derivation
     """
     if isinstance(curve, str):
-        from .shapes import shape
+        from symvib.shapes import shape
 
         curve = shape(curve).curve()
     elif not isinstance(curve, Curve) and hasattr(curve, "curve"):

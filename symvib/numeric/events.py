@@ -171,7 +171,7 @@ class Samples:
 
 @dataclass(frozen=True)
 class Result:
-    """The outcome of :func:`symvib.driver.simulate` (immutable)."""
+    """The outcome of :func:`symvib.numeric.driver.simulate` (immutable)."""
 
     scene: object
     status: Status

@@ -1,7 +1,7 @@
 """Gauss-Legendre rules and their integration matrices at high precision (mpmath).
 
 The driver rebuilds ``G = C - 2 g F`` at the Gauss nodes of a panel by
-cumulative integration (:mod:`symvib.quadrature`). Next to a turning point the
+cumulative integration (:mod:`symvib.numeric.quadrature`). Next to a turning point the
 panel is weighted, ``G(x_j) = Integral_{-1}^{x_j} (x + 1) G'(x) dx``, and the
 first rows of that matrix are small (about ``(x_1 + 1)^2 / 2``, 1e-5 for 16
 nodes) while their entries alternate in sign. A matrix computed in double
@@ -46,7 +46,7 @@ __all__ = ["rule_mp", "table_text", "write_table", "table_problems", "TABULATED"
 
 #: Node counts written to ``generated/gauss_rules.py`` (the driver's default
 #: 16, the benchmark's settings, the 3/4 of them that panels off a root take
-#: (:func:`symvib.driver.plain_nodes`), and a few more).
+#: (:func:`symvib.numeric.driver.plain_nodes`), and a few more).
 TABULATED = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 15, 16, 18, 20, 24, 32)
 #: Largest node count a rule may have (64 takes about 5 s to compute).
 MAX_NODES = 64
@@ -125,7 +125,7 @@ def rule_mp(n: int) -> tuple:
 def table_text() -> str:
     """Source of ``generated/gauss_rules.py``: ``RULES[n] = (x, w, S, SW)`` as exact literals."""
     lines = ['"""Gauss-Legendre rules and integration matrices, correctly rounded',
-             "(written by ``symvib generate`` from :func:`symvib.gauss.rule_mp`; do not edit).",
+             "(written by ``symvib generate`` from :func:`symvib.codegen.gauss.rule_mp`; do not edit).",
              '"""', "", f"DPS = {DPS}", "RULES = {}"]
     for n in TABULATED:
         x, w, S, SW = rule_mp(n)

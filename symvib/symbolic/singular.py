@@ -14,7 +14,7 @@ cut at :data:`SCAN_HALF_WIDTH` ``q_scale`` from the origin or the initial
 position where it is infinite):
 
 * symbolic: :func:`sympy.calculus.util.continuous_domain` of each function,
-  in a child process under :data:`SYMBOLIC_SECONDS` (:mod:`symvib.budget`);
+  in a child process under :data:`SYMBOLIC_SECONDS` (:mod:`symvib.symbolic.budget`);
   it finds exact poles and branch points of elementary functions;
 * numeric: the functions evaluated (complex NumPy) on :data:`SCAN_POINTS`
   points of the window; a point where one of them is not finite or not
@@ -24,7 +24,7 @@ This module is on the symbolic side (SymPy).
 
 Examples
 --------
->>> from symvib.curve import graph
+>>> from symvib.symbolic.curve import graph
 >>> c = graph("x**2 + 1/(x - a)", params=["a"])
 >>> r = regular_interval(c, {"a": 0.3}, 0.5, (-float("inf"), float("inf")))
 >>> r.lo, r.hi, r.lo_reason
@@ -40,7 +40,7 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 
-from . import budget
+from symvib.symbolic import budget
 
 __all__ = ["Regular", "regular_interval", "singular_pieces", "geometry"]
 
@@ -366,8 +366,8 @@ def regular_shape(scene):
     import dataclasses
     import json
 
-    from .scene import SceneError
-    from .scene import _domain as declared_domain
+    from symvib.numeric.scene import SceneError
+    from symvib.numeric.scene import _domain as declared_domain
 
     shape = scene.shape
     source = json.dumps(shape.source(), sort_keys=True)

@@ -1,0 +1,3 @@
+"""Checks beside the product: independent references, peer integrators, the
+stability suite and the benchmarks (their shipped data in ``symvib/checks/data``).
+"""
