@@ -16,7 +16,7 @@ from symvib.numeric import driver
 from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
 from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe
 from symvib.numeric.scene import CONTACTS, MAX_EVENTS, SceneError, scene_from_dict
-from symvib.numeric.sweep import _resolve_scene, _sweep_function, make_spec, sweep
+from symvib.numeric.sweep import _resolve_scene, make_spec, sweep
 
 #: The README's parabola scene (paper figs. 5-11, k = 0.8).
 BASE = {"curve": {"shape": "parabola"}, "parameters": {"p": 1},
@@ -344,7 +344,7 @@ def test_unilateral_reaches_the_engine_in_sweep_rows():
     spec = make_spec(circle("unilateral"), {"qdot": [1.0, PHIDOT0]})
     scal, cp = spec.scalars(spec.rows(0)[1])
     assert list(scal[:, core.SCALARS.index("unilateral")]) == [1.0, 1.0]
-    out, _ = _sweep_function(spec.scene, "python")(scal, cp, driver._rule(16), 0)
+    out, _ = driver.sweep_function(spec.scene, "python")(scal, cp, 16, 0)
     assert [core.STATUS_NAMES[int(c)] for c in out[:, 0]] == ["arrested", "left_curve"]
 
 

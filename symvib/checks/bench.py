@@ -363,9 +363,9 @@ def _shared_derivations():
 
 
 def _backend():
-    from symvib.numeric.driver import _resolve
+    from symvib.numeric.driver import resolve_backend
 
-    return _resolve("auto")
+    return resolve_backend("auto")
 
 
 def _warm_up(scenes, backend) -> dict:

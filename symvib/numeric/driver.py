@@ -72,9 +72,11 @@ import numpy as np
 from symvib.numeric import engine as core
 from symvib.numeric.events import EnergyBudget, Event, EventKind, Result, Samples, Status, ZenoInfo
 from symvib.numeric.kernels import cache_dir, check_text, load
+from symvib.numeric.layout import SceneRow
 from symvib.numeric.quadrature import rule
 
-__all__ = ["simulate", "NODES", "backend_available", "engine", "checked_status", "guarded_sweep", "BUDGET_RTOL"]
+__all__ = ["simulate", "NODES", "backend_available", "resolve_backend", "engine", "checked_status", "guarded_sweep",
+           "BUDGET_RTOL", "scene_row", "sweep_function"]
 
 #: Gauss-Legendre nodes per quadrature panel (the accuracy knob of the times).
 NODES = 16
@@ -117,7 +119,9 @@ def backend_available(name: str) -> bool:
     raise ValueError(f"unknown backend {name!r}; use 'numba', 'python' or 'auto'")
 
 
-def _resolve(backend: str) -> str:
+def resolve_backend(backend: str) -> str:
+    """The backend a run uses: ``"numba"`` or ``"python"`` (``"auto"``: numba when installed,
+    unless ``$SYMVIB_BACKEND`` says otherwise)."""
     backend = os.environ.get(BACKEND_ENV, backend) if backend == "auto" else backend
     if backend == "auto":
         return "numba" if backend_available("numba") else "python"
@@ -242,15 +246,12 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     entry = _BOUND.get((id(shape), backend))
     if entry is None or entry[0] is not shape or backend == "auto" and os.environ.get(BACKEND_ENV):
         mod = load(shape)
-        entry = (shape, mod, *engine(mod.__file__, _resolve(backend)))
+        entry = (shape, mod, *engine(mod.__file__, resolve_backend(backend)))
         _BOUND[(id(shape), backend)] = entry
     _, mod, sim, sample_fn, _ = entry
     R = _rule(nodes)
     cp = tuple(float(v) for v in scene.param_values)
-    scal = np.array([scene.g, scene.m, scene.mu, scene.k, scene.left is not None,
-                     0.0 if scene.left is None else scene.left, scene.right is not None,
-                     0.0 if scene.right is None else scene.right, scene.q0, scene.qdot0, scene.t_max,
-                     scene.max_events, scene.contact == "unilateral"], dtype=float)
+    scal = scene_row(scene)
     try:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
             (status, ne, ev, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale) = sim(
@@ -377,6 +378,51 @@ def guarded_sweep(sweep_fn):
 
     guarded.__wrapped__ = sweep_fn
     return guarded
+
+
+def scene_row(scene) -> np.ndarray:
+    """``scene`` as the engine's row of floats (columns :class:`symvib.numeric.layout.SceneRow`).
+
+    Examples
+    --------
+    >>> from symvib.numeric.scene import scene_from_dict
+    >>> s = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
+    ...     "physics": {"mu": 0.1, "restitution": 0.8}, "limiters": {"right": 0.5}, "initial": {"q": 0, "qdot": 2}})
+    >>> row = scene_row(s)
+    >>> row[SceneRow.mu].item(), row[SceneRow.has_left].item(), row[SceneRow.right].item()
+    (0.1, 0.0, 0.5)
+    """
+    row = np.zeros(len(SceneRow))
+    row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k] = scene.g, scene.m, scene.mu, scene.k
+    row[SceneRow.has_left] = scene.left is not None
+    row[SceneRow.left] = 0.0 if scene.left is None else scene.left
+    row[SceneRow.has_right] = scene.right is not None
+    row[SceneRow.right] = 0.0 if scene.right is None else scene.right
+    row[SceneRow.q0], row[SceneRow.qdot0] = scene.q0, scene.qdot0
+    row[SceneRow.t_max], row[SceneRow.max_events] = scene.t_max, scene.max_events
+    row[SceneRow.unilateral] = scene.contact == "unilateral"
+    return row
+
+
+def sweep_function(scene, backend: str = "auto"):
+    """The engine's checked sweep for the curve of ``scene``: a function
+    ``(scene_rows, param_rows, nodes, max_log) -> (summary, logs)``.
+
+    ``scene_rows`` holds one :func:`scene_row` per scene, ``param_rows`` the
+    curve's parameter values per scene; ``summary`` has the columns
+    :class:`symvib.numeric.layout.Summary`, ``logs`` the first ``max_log`` events
+    of each scene (columns :class:`symvib.numeric.layout.EventColumn`).  Statuses
+    are checked as :func:`simulate` checks them (:func:`checked_status`).
+    """
+    from symvib.numeric.kernels import load
+
+    mod = load(scene.shape)
+    fn = guarded_sweep(engine(mod.__file__, resolve_backend(backend))[2])
+
+    def run(scene_rows, param_rows, nodes, max_log):
+        return fn(scene_rows, param_rows, _rule(nodes), max_log)
+
+    return run
 
 
 def _run_shape(scene):

@@ -606,10 +606,9 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
         raise SweepError("chunk", f"index must be an integer in [0, {spec.chunks}), got {index!r}")
     rows, values = spec.rows(int(index))
     scal, cp = spec.scalars(values)
-    fn = _sweep_function(spec.scene, backend)
-    from symvib.numeric.driver import _rule
+    from symvib.numeric.driver import sweep_function
 
-    summary, logs = fn(scal, cp, _rule(spec.nodes), spec.log_events)
+    summary, logs = sweep_function(spec.scene, backend)(scal, cp, spec.nodes, spec.log_events)
     out = {"row": rows}
     for axis, v in zip(spec.axes, values):
         out[axis.field] = np.asarray(v, dtype=float)
@@ -622,14 +621,6 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
 
 
 _INTEGER_COLUMNS = ("status", "events", "impacts", "reversals", "normal_sign_changes")
-
-
-def _sweep_function(scene: Scene, backend: str):
-    from symvib.numeric import driver
-    from symvib.numeric.kernels import load
-
-    mod = load(scene.shape)
-    return driver.guarded_sweep(driver.engine(mod.__file__, driver._resolve(backend))[2])
 
 
 @dataclass(frozen=True)
