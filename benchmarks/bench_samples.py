@@ -24,6 +24,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from symvib.numeric import driver  # noqa: E402
+from symvib.numeric.engine import bind  # noqa: E402
 from symvib.numeric.kernels import load  # noqa: E402
 from symvib.numeric.sweep import _resolve_scene  # noqa: E402
 
@@ -35,23 +36,22 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     base = _resolve_scene("paper-parabola").replace(mu=0.0, k=1.0, t_max=1e9)
     mod = load(base.shape)
-    sim, sample_fn, _ = driver.engine(mod.__file__, driver._resolve("auto"))
-    R = driver._rule(driver.NODES)
+    eng = bind(mod, driver.resolve_backend("auto"))
+    R = driver.rules(driver.NODES)
     cp = tuple(float(v) for v in base.param_values)
     print(f"{'events':>8} {'new [s]':>10} {'old [s]':>10} {'old/new':>8}")
     n = 1000
     while n <= args.max_events:
         sc = base.replace(max_events=n)
-        scal = np.array([sc.g, sc.m, sc.mu, sc.k, 1.0, sc.left, 1.0, sc.right, sc.q0, sc.qdot0, sc.t_max,
-                         sc.max_events], dtype=float)
-        out = sim(scal, cp, R, True)
-        ni, ivs, scale = out[3], out[4], out[13]
+        row = driver.scene_row(sc)
+        out = eng.simulate(cp, row, R, True)
+        ni, ivs = out.n_intervals, out.intervals
         start = time.perf_counter()
-        new = driver._samples(sample_fn, ivs, ni, scale, R, sc, mod)
+        new = driver._samples(eng, cp, row, ivs, ni, R, sc, mod)
         t_new = time.perf_counter() - start
         if n <= args.skip_old_above:
             start = time.perf_counter()
-            old = driver._samples_quadratic(sample_fn, ivs, ni, scale, R, sc, mod)
+            old = driver._samples_quadratic(eng, cp, row, ivs, ni, R, sc, mod)
             t_old = time.perf_counter() - start
             for name in new.__dataclass_fields__:
                 if getattr(new, name).tobytes() != getattr(old, name).tobytes():

@@ -11,8 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from symvib.numeric import engine as core
+from symvib.numeric.layout import ERROR_CODES, STATUSES, SceneRow, StatusCode, Summary
+from symvib.numeric.events import kind_of, status_of
 from symvib.numeric import driver
+from symvib.numeric.engine import bind
 from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
 from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe
 from symvib.numeric.scene import CONTACTS, MAX_EVENTS, SceneError, scene_from_dict
@@ -48,12 +50,12 @@ def strict_json(text):
 # --- statuses: three tables in step -----------------------------------------------------------
 
 def test_status_codes_enums_and_names_are_in_step():
-    assert [driver._STATUS[c].value for c in range(1, len(core.STATUS_NAMES))] == list(core.STATUS_NAMES[1:])
-    assert [k.value for k in driver._KINDS] == list(core.EVENT_NAMES)
-    assert {Status(core.STATUS_NAMES[c]) for c in core.ERROR_CODES} == set(ERROR_STATUSES)
-    assert Status.NON_FINITE.is_error and Status.BUDGET_MISMATCH.is_error
+    assert [status_of(c).value for c in range(1, len(STATUSES))] == list(STATUSES[1:])
+    assert [kind_of(c).value for c in range(len(EventKind))] == [k.value for k in EventKind]
+    assert {status_of(c) for c in ERROR_CODES} == set(ERROR_STATUSES)
+    assert Status.NON_FINITE.is_error and Status.ENERGY_BUDGET_MISMATCH.is_error
     assert not any(s.is_error for s in Status if s not in ERROR_STATUSES)
-    assert core.SCALARS[-1] == "unilateral" and core.SCALARS.index("max_events") == 11
+    assert SceneRow.unilateral == len(SceneRow) - 1 and SceneRow.max_events == 11
 
 
 # --- overflow and non-finite states -----------------------------------------------------------
@@ -101,7 +103,7 @@ def test_extreme_numbers_end_in_a_checked_result(changes, status):
 
 @pytest.mark.slow
 @pytest.mark.skipif(not driver.backend_available("numba"), reason="needs numba")
-@pytest.mark.parametrize("mu, status", [(1e60, Status.BUDGET_MISMATCH), (1e65, Status.NON_FINITE),
+@pytest.mark.parametrize("mu, status", [(1e60, Status.ENERGY_BUDGET_MISMATCH), (1e65, Status.NON_FINITE),
                                         (0.05, Status.ARRESTED)])
 def test_compiled_engine_flags_overflow_by_budget_or_finiteness(mu, status):
     # numba returns inf where Python raises: mu = 1e60 ran to t_max with a 51 % residual.
@@ -125,14 +127,14 @@ def test_a_good_run_succeeds_and_its_budget_closes():
 
 
 @pytest.mark.parametrize("args, expected", [
-    ((core.ARRESTED, 1.0, 0.0, 0.0, 4.9, 0.1, 2.8, 2.0), core.ARRESTED),
-    ((core.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 9.9, 0.0), core.BUDGET_MISMATCH),
-    ((core.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 4.9 * (1 + 2e-9), 0.0), core.BUDGET_MISMATCH),
-    ((core.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 4.9 * (1 + 1e-12), 0.0), core.T_MAX),
-    ((core.ARRESTED, math.nan, 0.0, 0.0, 4.9, 0.0, 4.9, 0.0), core.NON_FINITE),
-    ((core.MAX_EVENTS, 0.0, 0.0, math.inf, 4.9, 0.0, 4.9, 0.0), core.NON_FINITE),
-    ((core.ARRESTED, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), core.ARRESTED),  # nothing moves, nothing lost
-    ((core.NON_FINITE, 1.0, 0.0, 0.0, 4.9, 0.0, 1.0, 0.0), core.NON_FINITE),
+    ((StatusCode.ARRESTED, 1.0, 0.0, 0.0, 4.9, 0.1, 2.8, 2.0), StatusCode.ARRESTED),
+    ((StatusCode.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 9.9, 0.0), StatusCode.ENERGY_BUDGET_MISMATCH),
+    ((StatusCode.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 4.9 * (1 + 2e-9), 0.0), StatusCode.ENERGY_BUDGET_MISMATCH),
+    ((StatusCode.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 4.9 * (1 + 1e-12), 0.0), StatusCode.T_MAX),
+    ((StatusCode.ARRESTED, math.nan, 0.0, 0.0, 4.9, 0.0, 4.9, 0.0), StatusCode.NON_FINITE),
+    ((StatusCode.MAX_EVENTS, 0.0, 0.0, math.inf, 4.9, 0.0, 4.9, 0.0), StatusCode.NON_FINITE),
+    ((StatusCode.ARRESTED, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), StatusCode.ARRESTED),  # nothing moves, nothing lost
+    ((StatusCode.NON_FINITE, 1.0, 0.0, 0.0, 4.9, 0.0, 1.0, 0.0), StatusCode.NON_FINITE),
 ])
 def test_checked_status(args, expected):
     assert driver.checked_status(*args) == expected
@@ -180,20 +182,20 @@ def test_cli_sweep_says_how_many_scenes_failed(tmp_path, capsys):
 def test_sweep_marks_failed_scenes_like_simulate(vary, names):
     res = sweep(scene(), vary, backend="python")
     assert list(res.status_names()) == names
-    ok = res["status"] == core.ARRESTED
+    ok = res["status"] == StatusCode.ARRESTED
     assert np.all(np.isfinite(res["E_final"][ok]))
 
 
 def test_guarded_sweep_checks_the_budget():
     def fake(scal, cp, R, max_log):
-        out = np.zeros((2, len(core.SUMMARY)))
-        out[:, 0] = core.T_MAX
-        out[:, core.SUMMARY.index("E0")] = 4.9
-        out[:, core.SUMMARY.index("friction_work")] = [4.9, 9.9]
+        out = np.zeros((2, len(Summary)))
+        out[:, Summary.status] = StatusCode.T_MAX
+        out[:, Summary.E0] = 4.9
+        out[:, Summary.friction_work] = [4.9, 9.9]
         return out, np.zeros((2, 1, 6))
 
     out, _ = driver.guarded_sweep(fake)(np.zeros((2, 13)), np.zeros((2, 1)), None, 0)
-    assert list(out[:, 0]) == [core.T_MAX, core.BUDGET_MISMATCH]
+    assert list(out[:, 0]) == [StatusCode.T_MAX, StatusCode.ENERGY_BUDGET_MISMATCH]
 
 
 def test_catalogue_scenes_end_as_before_with_the_budget_closed():
@@ -211,7 +213,7 @@ def test_normal_force_zeros_after_the_last_scan_node_are_found(name):
     # Before the end-of-interval check these rows ended with residuals up to 1e-5:
     # N changed sign between the last Gauss node and a turning point.
     res = sweep(_resolve_scene(name), {"mu": "0:0.5:20", "qdot": "-10:10:21"}, backend="auto")
-    assert not np.any(np.isin(res["status"], core.ERROR_CODES))
+    assert not np.any(np.isin(res["status"], ERROR_CODES))
     total = res["friction_work"] + res["impact_loss"]
     resid = np.abs(res["E0"] - res["E_final"] - total) / np.maximum(np.abs(res["E0"]), total)
     assert resid.max() < 1e-12
@@ -233,15 +235,14 @@ def test_samples_are_bitwise_those_of_the_quadratic_code():
     from symvib.numeric.kernels import load
 
     mod = load(sc.shape)
-    sim, sample_fn, _ = driver.engine(mod.__file__, "python")
-    R = driver._rule(driver.NODES)
-    scal = np.array([sc.g, sc.m, sc.mu, sc.k, 1, sc.left, 1, sc.right, sc.q0, sc.qdot0, sc.t_max,
-                     sc.max_events, 0], dtype=float)
-    out = sim(scal, tuple(sc.param_values), R, True)
-    ni, ivs, scale = out[3], out[4], out[13]
+    eng = bind(mod, "python")
+    R = driver.rules(driver.NODES)
+    row, cp = driver.scene_row(sc), tuple(sc.param_values)
+    out = eng.simulate(cp, row, R, True)
+    ni, ivs = out.n_intervals, out.intervals
     assert ni >= 300
-    new = driver._samples(sample_fn, ivs, ni, scale, R, sc, mod)
-    old = driver._samples_quadratic(sample_fn, ivs, ni, scale, R, sc, mod)
+    new = driver._samples(eng, cp, row, ivs, ni, R, sc, mod)
+    old = driver._samples_quadratic(eng, cp, row, ivs, ni, R, sc, mod)
     for name in new.__dataclass_fields__:
         a, b = getattr(new, name), getattr(old, name)
         assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), name
@@ -343,9 +344,9 @@ def test_unilateral_bowl_scenes_are_unchanged():
 def test_unilateral_reaches_the_engine_in_sweep_rows():
     spec = make_spec(circle("unilateral"), {"qdot": [1.0, PHIDOT0]})
     scal, cp = spec.scalars(spec.rows(0)[1])
-    assert list(scal[:, core.SCALARS.index("unilateral")]) == [1.0, 1.0]
+    assert list(scal[:, SceneRow.unilateral]) == [1.0, 1.0]
     out, _ = driver.sweep_function(spec.scene, "python")(scal, cp, 16, 0)
-    assert [core.STATUS_NAMES[int(c)] for c in out[:, 0]] == ["arrested", "left_curve"]
+    assert [STATUSES[int(c)] for c in out[:, Summary.status]] == ["arrested", "left_curve"]
 
 
 def _first_normal_zero(qdot, mu):

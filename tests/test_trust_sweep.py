@@ -624,11 +624,11 @@ def test_a_directory_as_sweep_file_is_a_one_line_error(tmp_path, capsys):
 def test_cli_exits_nonzero_when_scenes_failed(tmp_path, capsys, monkeypatch):
     """Rows of an error status (the driver's ERROR_CODES) make the sweep exit 3 (as `symvib run`) in one line; here the
     'arrested' code stands in for one, so the test does not depend on which inputs overflow."""
-    from symvib.numeric import engine as core
+    from symvib.numeric import layout as core
 
     args = ["paper-parabola", "--vary", "qdot=3:12:3", "-o", str(tmp_path / "o"), "--quiet"]
     assert main(args) == 0
-    monkeypatch.setattr(core, "ERROR_CODES", (core.STATUS_NAMES.index("arrested"),), raising=False)
+    monkeypatch.setattr(core, "ERROR_CODES", (core.STATUSES.index("arrested"),), raising=False)
     capsys.readouterr()
     assert main(args) == sweep_mod.EXIT_FAILED_SCENES == EXIT_RUN_FAILED
     err = capsys.readouterr().err

@@ -69,19 +69,18 @@ from pathlib import Path
 
 import numpy as np
 
-from symvib.numeric import engine as core
-from symvib.numeric.events import EnergyBudget, Event, EventKind, Result, Samples, Status, ZenoInfo
-from symvib.numeric.kernels import cache_dir, check_text, load
-from symvib.numeric.layout import SceneRow
+from symvib.numeric.engine import bind
+from symvib.numeric.engine.state import Rules
+from symvib.numeric.events import EnergyBudget, Event, Result, Samples, Status, ZenoInfo, kind_of, status_of
+from symvib.numeric.kernels import load
+from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, IntervalColumn, SceneRow, StatusCode, Summary
 from symvib.numeric.quadrature import rule
 
-__all__ = ["simulate", "NODES", "backend_available", "resolve_backend", "engine", "checked_status", "guarded_sweep",
-           "BUDGET_RTOL", "scene_row", "sweep_function"]
+__all__ = ["simulate", "NODES", "backend_available", "resolve_backend", "checked_status", "guarded_sweep",
+           "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
 
 #: Gauss-Legendre nodes per quadrature panel (the accuracy knob of the times).
 NODES = 16
-#: Scenes a thread of a parallel sweep takes at a time (numba backend).
-SWEEP_GRAIN = 16
 #: Environment variable that forces a backend ("numba" or "python").
 BACKEND_ENV = "SYMVIB_BACKEND"
 #: Largest relative residual of the energy budget (physics.md, "Energies") a trusted run may
@@ -92,18 +91,8 @@ BACKEND_ENV = "SYMVIB_BACKEND"
 #: point, a branch flip, a normal-force zero) or an overflow leaves a residual of the order of
 #: the energy it mislays.  A run beyond it ends with status ``energy_budget_mismatch``.
 BUDGET_RTOL = 1e-9
-#: Kernel-module functions compiled besides the ``*_scalar`` kernels.
-_JIT_EXTRA = ("_antiderivative_scalar", "domain")
-
-#: (shape, module, core functions) by the shape's identity and the backend asked for.
+#: (shape, kernel module, bound engine) by the shape's identity and the backend asked for.
 _BOUND: dict = {}
-
-_KINDS = [EventKind.IMPACT, EventKind.REVERSAL, EventKind.ARREST, EventKind.REST_ON_LIMITER,
-          EventKind.NORMAL_SIGN_CHANGE, EventKind.LEFT_CURVE]
-_STATUS = {core.ARRESTED: Status.ARRESTED, core.RESTING: Status.RESTING_ON_LIMITER, core.T_MAX: Status.T_MAX,
-           core.MAX_EVENTS: Status.MAX_EVENTS, core.LEFT_DOMAIN: Status.LEFT_DOMAIN,
-           core.NON_FINITE: Status.NON_FINITE, core.BUDGET_MISMATCH: Status.BUDGET_MISMATCH,
-           core.LEFT_CURVE: Status.LEFT_CURVE}
 
 
 def backend_available(name: str) -> bool:
@@ -130,98 +119,14 @@ def resolve_backend(backend: str) -> str:
     return backend
 
 
-@lru_cache(maxsize=None)
-def engine(module_file: str, backend: str):
-    """``(simulate, samples, sweep)`` of the core bound to one kernel module, on a backend (cached).
-
-    The core's source (:mod:`symvib.numeric.engine`) is appended to the kernel module's
-    source; on the numba backend every ``*_scalar`` kernel and every core
-    function is compiled with ``numba.njit(cache=True)`` from a file in the
-    kernel cache folder, so later processes load the compiled code.
-
-    The kernel module's text is read once and checked (:func:`symvib.numeric.kernels.check_text`:
-    digest and whitelist) before it is compiled; an engine file already in the cache
-    is used only when it holds exactly the text built here, and what is executed is
-    that text, not a second read of a file.
-    """
-    import hashlib
-    import importlib.util
-
-    kernel_text = Path(module_file).read_text(encoding="utf-8")
-    check_text(kernel_text, module_file)
-    kernel_src = _strip_future(kernel_text)
-    core_src = _strip_future(Path(core.__file__).read_text(encoding="utf-8"))
-    ncp = len(_params_of(kernel_src))
-    cp_tuple = ("def cp_tuple(row):\n    return (" + "".join(f"row[{i}], " for i in range(ncp)) + ")\n\n")
-    if backend == "numba":
-        names = [n for n in _kernel_functions(kernel_src)]
-        text = ("import numba\n\njit = numba.njit(cache=True)\npjit = numba.njit(cache=True, parallel=True)\n"
-                "prange = numba.prange\n" + kernel_src + "\n"
-                + "\n".join(f"{n} = jit({n})" for n in names) + "\n\n@jit\n" + cp_tuple + core_src)
-    else:
-        text = ("def jit(fn):\n    return fn\n\n\npjit = jit\nprange = range\n\n" + kernel_src + "\n"
-                + cp_tuple + core_src)
-    digest = hashlib.sha256(text.encode()).hexdigest()[:20]
-    stem = f"engine_{Path(module_file).stem}_{backend}_{digest}"
-    if backend == "numba":
-        folder = cache_dir() / "engines"
-        folder.mkdir(parents=True, exist_ok=True)
-        path = folder / f"{stem}.py"
-        if not path.exists() or path.read_text(encoding="utf-8", errors="replace") != text:
-            # Missing, or not the text built here (edited, truncated): written again.
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_text(text, encoding="utf-8")
-            tmp.replace(path)
-        name = f"symvib_engine_{stem}"
-        spec = importlib.util.spec_from_loader(name, loader=None, origin=str(path))
-        module = importlib.util.module_from_spec(spec)
-        module.__file__ = str(path)
-        # numba's on-disk cache re-imports the module by name when it loads, and
-        # locates its index by the file name the code was compiled from.
-        sys.modules[name] = module
-        exec(compile(text, str(path), "exec"), module.__dict__)  # noqa: S102 - checked kernel text and our core
-        return module.simulate, module.samples, _balanced(module.sweep)
-    namespace = {"__name__": f"symvib._engines.{stem}"}
-    exec(compile(text, f"<engine {stem}>", "exec"), namespace)  # noqa: S102 - generated code and our core
-    return namespace["simulate"], namespace["samples"], namespace["sweep"]
-
-
-def _balanced(sweep_fn):
-    """``sweep_fn`` with its threads taking :data:`SWEEP_GRAIN` scenes at a time.
-
-    By default numba gives each thread one fixed share of a ``prange`` loop; the
-    scenes of a grid differ in cost (a row of fast scenes makes many events), so
-    one thread would finish early and wait.
-    """
-    import numba
-
-    def balanced(*args):
-        old = numba.set_parallel_chunksize(SWEEP_GRAIN)
-        try:
-            return sweep_fn(*args)
-        finally:
-            numba.set_parallel_chunksize(old)
-
-    return balanced
-
-
-def _strip_future(text: str) -> str:
-    return text.replace("from __future__ import annotations\n", "")
-
-
-def _params_of(text: str) -> tuple:
-    import ast
-    import re
-
-    return ast.literal_eval(re.search(r"^PARAMS = (.*)$", text, re.M).group(1))
-
-
-def _kernel_functions(text: str) -> list:
-    """Names of the kernel module's functions the core may call (compiled on numba)."""
-    import re
-
-    names = re.findall(r"^def (\w+)\(", text, re.M)
-    return [n for n in names if n.endswith("_scalar") or n in _JIT_EXTRA]
+def bound_engine(shape, backend: str = "auto"):
+    """``(kernel module, engine)`` of a shape on a backend (:func:`symvib.numeric.engine.bind`), cached."""
+    entry = _BOUND.get((id(shape), backend))
+    if entry is None or entry[0] is not shape or backend == "auto" and os.environ.get(BACKEND_ENV):
+        mod = load(shape)
+        entry = (shape, mod, bind(mod, resolve_backend(backend)))
+        _BOUND[(id(shape), backend)] = entry
+    return entry[1], entry[2]
 
 
 def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto") -> Result:
@@ -242,45 +147,40 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     Result
         Status, events, samples and energy budget.
     """
-    shape = _run_shape(scene)
-    entry = _BOUND.get((id(shape), backend))
-    if entry is None or entry[0] is not shape or backend == "auto" and os.environ.get(BACKEND_ENV):
-        mod = load(shape)
-        entry = (shape, mod, *engine(mod.__file__, resolve_backend(backend)))
-        _BOUND[(id(shape), backend)] = entry
-    _, mod, sim, sample_fn, _ = entry
-    R = _rule(nodes)
+    mod, eng = bound_engine(_run_shape(scene), backend)
+    R = rules(nodes)
     cp = tuple(float(v) for v in scene.param_values)
-    scal = scene_row(scene)
+    row = scene_row(scene)
     try:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
-            (status, ne, ev, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, E_final, zeno, scale) = sim(
-                scal, cp, R, samples)
+            out = eng.simulate(cp, row, R, samples)
     except (ArithmeticError, ValueError) as exc:
         if not _math_error(exc):
             raise
         return _non_finite(scene, exc)
-    status = checked_status(status, t, q, qdot_final, E0, E_final, Wf, Wimp)
+    status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
     detail = "plastic" if scene.k == 0.0 else ""
-    events = [Event(_KINDS[int(r[0])], r[1], r[2], r[3], r[4], r[5], detail if r[0] == core.IMPACT else "")
-              for r in ev[:ne].tolist()]
+    events = [Event(kind_of(r[0]), r[1], r[2], r[3], r[4], r[5], detail if r[0] == EventCode.IMPACT else "")
+              for r in out.events[:out.n_events].tolist()]
+    zeno = out.zeno
     zinfo = None
-    if zeno[0] > 0.0:
-        zinfo = ZenoInfo("right" if zeno[3] > 0 else "left", float(zeno[0]), int(zeno[1]), float(zeno[2]), float(t))
+    if zeno.ratio > 0.0:
+        zinfo = ZenoInfo("right" if zeno.side > 0 else "left", float(zeno.ratio), int(zeno.simulated),
+                         float(zeno.remaining), float(out.t))
         events[-1] = events[-1]._replace(
-            detail=f"Zeno accumulation: geometric series of bounces, ratio {zeno[0]:.9g}")
-    budget = EnergyBudget(float(E0), float(E_final), float(Wf), float(Wimp))
+            detail=f"Zeno accumulation: geometric series of bounces, ratio {zeno.ratio:.9g}")
+    budget = EnergyBudget(float(out.E0), float(out.E_final), float(out.W_friction), float(out.W_impacts))
     S = None
-    if samples and status != core.NON_FINITE:
+    if samples and status != StatusCode.NON_FINITE:
         try:
-            S = _samples(sample_fn, ivs, ni, scale, R, scene, mod)
+            S = _samples(eng, cp, row, out.intervals, out.n_intervals, R, scene, mod)
         except (ArithmeticError, ValueError) as exc:
             if not _math_error(exc):
                 raise
             return _non_finite(scene, exc)
-    return Result(scene=scene, status=_STATUS[int(status)], events=tuple(events), samples=S,
-                  energy_budget=budget, t_final=float(t), q_final=float(q), qdot_final=float(qdot_final),
-                  zeno=zinfo, stats={"intervals": int(ni) if samples else None})
+    return Result(scene=scene, status=status_of(status), events=tuple(events), samples=S,
+                  energy_budget=budget, t_final=float(out.t), q_final=float(out.q), qdot_final=float(out.qdot),
+                  zeno=zinfo, stats={"intervals": int(out.n_intervals) if samples else None})
 
 
 #: Messages of the exceptions Python's ``math`` raises where compiled code returns inf or NaN.
@@ -314,21 +214,21 @@ def checked_status(status, t_final, q_final, qdot_final, E0, E_final, friction_w
     A run whose final state or energy sums are not finite ends ``NON_FINITE``;
     one whose energy budget ``E0 - E_final = W_friction + W_impacts`` misses by
     more than :data:`BUDGET_RTOL` of the largest of those terms ends
-    ``BUDGET_MISMATCH``; any other status is kept.  Works on one run (numbers)
+    ``ENERGY_BUDGET_MISMATCH``; any other status is kept.  Works on one run (numbers)
     or on the columns of a sweep (arrays).
 
     Returns
     -------
     int or ndarray of int
-        Codes of :mod:`symvib.numeric.engine` (``core.STATUS_NAMES`` names them).
+        Codes of :class:`symvib.numeric.layout.StatusCode`.
 
     Examples
     --------
-    >>> checked_status(core.ARRESTED, 1.0, 0.0, 0.0, 4.9, 0.1, 2.8, 2.0) == core.ARRESTED
+    >>> checked_status(StatusCode.ARRESTED, 1.0, 0.0, 0.0, 4.9, 0.1, 2.8, 2.0) == StatusCode.ARRESTED
     True
-    >>> checked_status(core.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 9.9, 0.0) == core.BUDGET_MISMATCH
+    >>> checked_status(StatusCode.T_MAX, 1.0, 0.0, 0.0, 4.9, 0.0, 9.9, 0.0) == StatusCode.ENERGY_BUDGET_MISMATCH
     True
-    >>> checked_status(core.ARRESTED, math.nan, 0.0, 0.0, 4.9, 0.0, 4.9, 0.0) == core.NON_FINITE
+    >>> checked_status(StatusCode.ARRESTED, math.nan, 0.0, 0.0, 4.9, 0.0, 4.9, 0.0) == StatusCode.NON_FINITE
     True
     """
     scalar = np.ndim(status) == 0
@@ -341,8 +241,8 @@ def checked_status(status, t_final, q_final, qdot_final, E0, E_final, friction_w
         residual = np.abs(E0 - E_final - Wf - Wimp)
         scale = np.maximum(np.maximum(np.abs(E0), np.abs(E_final)), np.maximum(np.abs(Wf), np.abs(Wimp)))
         closes = residual <= BUDGET_RTOL * scale
-    out = np.where(~finite, core.NON_FINITE, np.where(closes | np.isin(code, core.ERROR_CODES), code,
-                                                       core.BUDGET_MISMATCH))
+    out = np.where(~finite, StatusCode.NON_FINITE, np.where(closes | np.isin(code, ERROR_CODES), code,
+                                                       StatusCode.ENERGY_BUDGET_MISMATCH))
     return int(out) if scalar else out.astype(np.int64)
 
 
@@ -355,8 +255,6 @@ def guarded_sweep(sweep_fn):
     plain-Python backend an overflow raises: the scenes then run one at a time
     and the failing ones get status ``non_finite`` and NaN values.
     """
-    col = {name: j for j, name in enumerate(core.SUMMARY)}
-
     def guarded(scal_rows, cp_rows, R, max_log):
         try:
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
@@ -365,15 +263,15 @@ def guarded_sweep(sweep_fn):
             if not _math_error(exc):
                 raise
             if len(scal_rows) == 1:
-                out = np.full((1, len(core.SUMMARY)), np.nan)
-                out[:, [col["status"], col["events"], col["impacts"], col["reversals"],
-                        col["normal_sign_changes"]]] = [core.NON_FINITE, 0, 0, 0, 0]
-                return out, np.zeros((1, max(max_log, 1), 6))
+                out = np.full((1, len(Summary)), np.nan)
+                out[:, [Summary.status, Summary.events, Summary.impacts, Summary.reversals,
+                        Summary.normal_sign_changes]] = [StatusCode.NON_FINITE, 0, 0, 0, 0]
+                return out, np.zeros((1, max(max_log, 1), len(EventColumn)))
             parts = [guarded(scal_rows[i:i + 1], cp_rows[i:i + 1], R, max_log) for i in range(len(scal_rows))]
             return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
-        out[:, col["status"]] = checked_status(
-            out[:, col["status"]], out[:, col["t_final"]], out[:, col["q_final"]], out[:, col["qdot_final"]],
-            out[:, col["E0"]], out[:, col["E_final"]], out[:, col["friction_work"]], out[:, col["impact_loss"]])
+        out[:, Summary.status] = checked_status(
+            out[:, Summary.status], out[:, Summary.t_final], out[:, Summary.q_final], out[:, Summary.qdot_final],
+            out[:, Summary.E0], out[:, Summary.E_final], out[:, Summary.friction_work], out[:, Summary.impact_loss])
         return out, logs
 
     guarded.__wrapped__ = sweep_fn
@@ -414,13 +312,12 @@ def sweep_function(scene, backend: str = "auto"):
     of each scene (columns :class:`symvib.numeric.layout.EventColumn`).  Statuses
     are checked as :func:`simulate` checks them (:func:`checked_status`).
     """
-    from symvib.numeric.kernels import load
-
-    mod = load(scene.shape)
-    fn = guarded_sweep(engine(mod.__file__, resolve_backend(backend))[2])
+    _, eng = bound_engine(scene.shape, backend)
+    fn = guarded_sweep(eng.sweep)
 
     def run(scene_rows, param_rows, nodes, max_log):
-        return fn(scene_rows, param_rows, _rule(nodes), max_log)
+        return fn(np.ascontiguousarray(scene_rows, dtype=float), np.ascontiguousarray(param_rows, dtype=float),
+                  rules(nodes), int(max_log))
 
     return run
 
@@ -459,28 +356,28 @@ def plain_nodes(nodes: int) -> int:
 
 
 @lru_cache(maxsize=8)
-def _rule(nodes):
-    """The rules as the core takes them (see :func:`symvib.numeric.engine.quad`).
+def rules(nodes: int) -> Rules:
+    """The quadrature rules the engine takes (:class:`symvib.numeric.engine.state.Rules`;
+    see :func:`symvib.numeric.engine.timing.quad`).
 
     For panels that start on a root: nodes, weights and both integration
     matrices, transposed; for the others: nodes, weights and the matrix of the
     :func:`plain_nodes` rule.
     """
     r, p = rule(nodes), rule(plain_nodes(nodes))
-    return (np.ascontiguousarray(r.x), np.ascontiguousarray(r.weights), np.ascontiguousarray(r.cumulative.T),
-            np.ascontiguousarray(r.cumulative_weighted.T), np.ascontiguousarray(p.x),
-            np.ascontiguousarray(p.weights), np.ascontiguousarray(p.cumulative.T))
+    # Fresh C-contiguous copies: the compiled engine's signature takes writable arrays.
+    return Rules(*(np.array(a, dtype=float, order="C") for a in (
+        r.x, r.weights, r.cumulative.T, r.cumulative_weighted.T, p.x, p.weights, p.cumulative.T)))
 
 
-def _samples(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
+def _samples(eng, cp, row, ivs, ni, R, scene, mod) -> Samples:
     """Each interval's samples: start point, Gauss nodes (sorted in time), end point.
 
     Linear in the number of intervals: the nodes are ordered by (interval, time)
     with one stable sort, and every interval's block is placed by offsets
     (``benchmarks/bench_samples.py``).
     """
-    cp = tuple(float(v) for v in scene.param_values)
-    nodes, index = sample_fn(ivs, ni, float(scene.g), float(scene.mu), float(scale), cp, R)
+    nodes, index = eng.samples(cp, row, R, np.ascontiguousarray(ivs), ni)
     if not ni:
         empty = np.zeros(0)
         return Samples(*(empty.copy() for _ in range(8)), np.zeros(0, dtype=int), np.zeros(0, dtype=int))
@@ -496,7 +393,7 @@ def _samples(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
     inner[last] = False
     ends = np.empty((ni, 8))
     for i in range(ni):
-        qa, qb, Ga, Gb, s, sigma, t0, T = ivs[i, :8]
+        qa, qb, Ga, Gb, s, sigma, t0, T = ivs[i, :IntervalColumn.W_friction]
         wa = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qa, *cp))) * Ga
         wb = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qb, *cp))) * Gb
         ends[i] = (t0, t0 + T, qa, qb, wa, wb, mod.N_w_scalar(qa, wa, scene.g, *cp),
@@ -510,8 +407,8 @@ def _samples(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
         columns.append(col)
     t, q, w, N = columns
     interval = np.repeat(np.arange(ni), sizes)
-    branch = np.repeat(ivs[:ni, 4].astype(int), sizes)
-    sig = np.repeat(ivs[:ni, 5], sizes)
+    branch = np.repeat(ivs[:ni, IntervalColumn.s].astype(int), sizes)
+    sig = np.repeat(ivs[:ni, IntervalColumn.sigma], sizes)
     m, g, mu = scene.m, scene.g, scene.mu
     v = np.sqrt(np.maximum(w, 0.0))
     Ep = m * g * mod.z(q, *cp)
@@ -519,14 +416,13 @@ def _samples(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
                    Ek=0.5 * m * w, Ep=Ep, E=0.5 * m * w + Ep, interval=interval, branch=branch)
 
 
-def _samples_quadratic(sample_fn, ivs, ni, scale, R, scene, mod) -> Samples:
+def _samples_quadratic(eng, cp, row, ivs, ni, R, scene, mod) -> Samples:
     """The former :func:`_samples` (``nodes[index == i]`` per interval, quadratic): the reference
     of the bitwise test and of ``benchmarks/bench_samples.py``."""
-    cp = tuple(float(v) for v in scene.param_values)
-    nodes, index = sample_fn(ivs, ni, float(scene.g), float(scene.mu), float(scale), cp, R)
+    nodes, index = eng.samples(cp, row, R, np.ascontiguousarray(ivs), ni)
     t_parts, q_parts, w_parts, N_parts, iv_parts, s_parts, sig_parts = [], [], [], [], [], [], []
     for i in range(ni):
-        qa, qb, Ga, Gb, s, sigma, t0, T = ivs[i, :8]
+        qa, qb, Ga, Gb, s, sigma, t0, T = ivs[i, :IntervalColumn.W_friction]
         sel = nodes[index == i]
         sel = sel[np.argsort(sel[:, 0], kind="stable")]
         wa = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qa, *cp))) * Ga

@@ -7,6 +7,8 @@ Examples
 --------
 >>> Status.ARRESTED.value, EventKind.IMPACT.value
 ('arrested', 'impact')
+>>> status_of(StatusCode.ENERGY_BUDGET_MISMATCH), kind_of(1)
+(<Status.ENERGY_BUDGET_MISMATCH: 'energy_budget_mismatch'>, <EventKind.REVERSAL: 'reversal'>)
 """
 from __future__ import annotations
 
@@ -18,32 +20,33 @@ from typing import NamedTuple
 
 import numpy as np
 
+from symvib.numeric.layout import ERROR_CODES, EventCode, StatusCode
+
 __all__ = ["Status", "EventKind", "Event", "EnergyBudget", "Samples", "ZenoInfo", "Result", "MESSAGES",
-           "ERROR_STATUSES", "json_safe"]
+           "ERROR_STATUSES", "json_safe", "status_of", "kind_of"]
 
 
-class Status(enum.Enum):
-    """Why a run stopped."""
+def _named(name: str, codes, doc: str, *, skip=()) -> type[enum.Enum]:
+    """A str-valued enum of the codes' names (lowercase values), in code order."""
+    members = [(c.name, c.name.lower()) for c in sorted(codes) if c not in skip]
+    out = enum.Enum(name, members, module=__name__)
+    out.__doc__ = doc
+    return out
 
-    ARRESTED = "arrested"
-    RESTING_ON_LIMITER = "resting_on_limiter"
-    T_MAX = "t_max"
-    MAX_EVENTS = "max_events"
-    LEFT_DOMAIN = "left_domain"
-    LEFT_CURVE = "left_curve"
-    NON_FINITE = "non_finite"
-    BUDGET_MISMATCH = "energy_budget_mismatch"
 
-    @property
-    def is_error(self) -> bool:
-        """Whether a run that stopped so failed (its numbers are not a result)."""
-        return self in ERROR_STATUSES
-
+#: Why a run stopped (names and codes: :class:`symvib.numeric.layout.StatusCode`).
+Status = _named("Status", StatusCode, "Why a run stopped.", skip=(StatusCode.RUNNING,))
+Status.is_error = property(lambda self: self in ERROR_STATUSES,
+                           doc="Whether a run that stopped so failed (its numbers are not a result).")
+Status.code = property(lambda self: StatusCode[self.name], doc="The engine's code of this status.")
+#: What happened at an event (names and codes: :class:`symvib.numeric.layout.EventCode`).
+EventKind = _named("EventKind", EventCode, "What happened at an event.")
+EventKind.code = property(lambda self: EventCode[self.name], doc="The engine's code of this kind.")
 
 #: Statuses of a failed run: the state stopped being finite, or the energy budget does not close.
-ERROR_STATUSES = (Status.NON_FINITE, Status.BUDGET_MISMATCH)
+ERROR_STATUSES = tuple(Status[StatusCode(c).name] for c in ERROR_CODES)
 
-#: One sentence per status, for reports.
+#: One sentence per status, for reports (a status without one is an error at import).
 MESSAGES = {
     Status.ARRESTED: "friction holds the particle at rest (|tan alpha| <= mu)",
     Status.RESTING_ON_LIMITER: "the particle rests against a limiter that gravity pushes it into",
@@ -52,19 +55,19 @@ MESSAGES = {
     Status.LEFT_DOMAIN: "the particle reached an end of the curve's regular domain (a singular point)",
     Status.LEFT_CURVE: "the normal force reached 0 and the particle left the curve (unilateral contact)",
     Status.NON_FINITE: "error: the state stopped being finite (overflow); the numbers are not a result",
-    Status.BUDGET_MISMATCH: "error: the energy budget does not close; the numbers are not a result",
+    Status.ENERGY_BUDGET_MISMATCH: "error: the energy budget does not close; the numbers are not a result",
 }
+assert set(MESSAGES) == set(Status), "every status needs a message in MESSAGES"
 
 
-class EventKind(enum.Enum):
-    """What happened at an event."""
+def status_of(code) -> Status:
+    """The :class:`Status` of an engine status code."""
+    return Status[StatusCode(int(code)).name]
 
-    IMPACT = "impact"
-    REVERSAL = "reversal"
-    ARREST = "arrest"
-    REST_ON_LIMITER = "rest_on_limiter"
-    NORMAL_SIGN_CHANGE = "normal_sign_change"
-    LEFT_CURVE = "left_curve"
+
+def kind_of(code) -> EventKind:
+    """The :class:`EventKind` of an engine event code."""
+    return EventKind[EventCode(int(code)).name]
 
 
 class Event(NamedTuple):

@@ -58,7 +58,7 @@ from pathlib import Path
 
 import numpy as np
 
-from symvib.numeric import engine as core
+from symvib.numeric import layout as core  # issue 14: replaced by the sweep package
 from symvib import expr as _expr
 from symvib.numeric.scene import MAX_EVENTS, Scene, SceneError, load_scene, scene_from_dict
 
@@ -416,7 +416,7 @@ class SweepSpec:
 
     def chunk_bytes(self) -> int:
         """Bytes of the columns of one full chunk (row, varied fields, summary, event log)."""
-        per_row = (1 + len(self.axes) + len(core.SUMMARY) + _EVENT_WIDTH * self.log_events) * _ITEM
+        per_row = (1 + len(self.axes) + len(core.SUMMARY_COLUMNS) + _EVENT_WIDTH * self.log_events) * _ITEM
         return min(self.chunk, self.count) * per_row
 
     def scalars(self, values) -> tuple:
@@ -612,7 +612,7 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
     out = {"row": rows}
     for axis, v in zip(spec.axes, values):
         out[axis.field] = np.asarray(v, dtype=float)
-    for j, name in enumerate(core.SUMMARY):
+    for j, name in enumerate(core.SUMMARY_COLUMNS):
         col = summary[:, j]
         out[name] = col.astype(np.int64) if name in _INTEGER_COLUMNS else col
     if spec.log_events:
@@ -662,7 +662,7 @@ class SweepResult:
 
     def status_names(self) -> np.ndarray:
         """Each scene's status as a string (``"arrested"``, ...)."""
-        return np.asarray(core.STATUS_NAMES, dtype=object)[self.columns["status"]]
+        return np.asarray(core.STATUSES, dtype=object)[self.columns["status"]]
 
     def grid(self, name: str) -> np.ndarray:
         """Column ``name`` shaped as the grid (axes in the order declared)."""
@@ -675,7 +675,7 @@ class SweepResult:
         if "event_log" not in self.columns:
             raise ValueError("this sweep kept no event log (log_events = 0)")
         n = min(int(self.columns["events"][row]), self.spec.log_events)
-        return [(core.EVENT_NAMES[int(r[0])], *map(float, r[1:])) for r in self.columns["event_log"][row, :n]]
+        return [(core.EVENT_KINDS[int(r[0])], *map(float, r[1:])) for r in self.columns["event_log"][row, :n]]
 
     @property
     def failed(self) -> np.ndarray:
@@ -740,13 +740,13 @@ def _manifest(spec: SweepSpec, ident: str) -> dict:
 
     return {"format": FORMAT, "sweep_id": ident, "definition": spec.to_dict(), "chunks": spec.chunks,
             "columns": _column_names(spec),
-            "status_names": list(core.STATUS_NAMES), "event_names": list(core.EVENT_NAMES),
+            "status_names": list(core.STATUSES), "event_names": list(core.EVENT_KINDS),
             "event_log_columns": ["kind", "t", "q", "qdot_before", "qdot_after", "energy"],
             "symvib_version": __version__}
 
 
 def _column_names(spec: SweepSpec) -> list:
-    return ["row"] + [a.field for a in spec.axes] + list(core.SUMMARY) + (["event_log"] if spec.log_events else [])
+    return ["row"] + [a.field for a in spec.axes] + list(core.SUMMARY_COLUMNS) + (["event_log"] if spec.log_events else [])
 
 
 def _chunk_path(out: Path, index: int) -> Path:
@@ -809,7 +809,7 @@ def _read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
             np.array_equal(columns[a.field], v) for a, v in zip(spec.axes, values)):
         raise _bad_chunk(path, f"rows or varied values are not those of chunk {index}")
     status = columns["status"]
-    if status.size and (status.min() < 0 or status.max() >= len(core.STATUS_NAMES)):
+    if status.size and (status.min() < 0 or status.max() >= len(core.STATUSES)):
         raise _bad_chunk(path, "status codes out of range")
     return columns
 
@@ -1352,7 +1352,7 @@ def _main(args) -> int:
                 log_events=pick("log_events", 0), nodes=pick("nodes", 16), out=out, overwrite=args.overwrite, scheduler=args.scheduler,
                 progress=not args.quiet, backend=args.backend)
     names = res.status_names()
-    status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in core.STATUS_NAMES if np.any(names == s))
+    status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in core.STATUSES if np.any(names == s))
     events = int(np.sum(res["events"]))
     print(f"sweep of {res.count} scenes of {scene.name} into {out}: {len(res.computed)} chunk(s) computed, "
           f"{len(res.reused)} reused" + (f" ({len(res.discarded)} found truncated or foreign)" if res.discarded else ""))

@@ -1,0 +1,228 @@
+"""Binding a curve's kernels to the engine: plain Python, or compiled by numba.
+
+The engine (:mod:`~symvib.numeric.engine.laws`, ``roots``, ``scan``, ``timing``,
+``loop``) is written once, as plain Python functions that receive the curve's
+kernels as an argument (a :class:`~symvib.numeric.engine.state.Kernels` tuple);
+no source text is pasted or executed.
+
+* ``python``: the engine's functions as they are, the kernels the generated
+  module's ``*_scalar`` functions.
+* ``numba``: each kernel is compiled with its signature from
+  :data:`~symvib.numeric.engine.state.KERNEL_INTERFACE` (per curve: a few
+  seconds), and the engine is compiled once per number of curve parameters,
+  with the kernels as first-class function arguments, and cached on disk
+  (``cache=True``): a new curve with a known number of parameters reuses it.
+  Every engine function is compiled from its own code object with its calls
+  bound to its compiled siblings (:func:`_compiled_functions`).
+
+Examples
+--------
+>>> from symvib.numeric.kernels import load
+>>> from symvib.shapes import shape
+>>> engine = bind(load(shape("parabola")), "python")
+>>> sorted(engine._fields)
+['samples', 'simulate', 'sweep']
+"""
+from __future__ import annotations
+
+import hashlib
+import types
+from functools import lru_cache, partial
+from pathlib import Path
+from typing import NamedTuple
+
+from symvib.numeric.engine import laws, loop, roots, scan, timing
+from symvib.numeric.engine.state import KERNEL_INTERFACE, Rules
+
+__all__ = ["Engine", "bind", "kernel_functions", "ENGINE_MODULES", "ENTRY_POINTS"]
+
+#: The engine's modules, in import order.
+ENGINE_MODULES = (laws, roots, scan, timing, loop)
+#: Entry points compiled with explicit signatures (and cached on disk).
+ENTRY_POINTS = ("simulate_scene", "sample_scene", "sweep_scenes")
+
+
+class Engine(NamedTuple):
+    """The engine bound to one curve's kernels.
+
+    ``simulate(cp, row, R, keep) -> Outcome``; ``samples(cp, row, R, intervals, n)
+    -> (samples, index)``; ``sweep(rows, cp_rows, R, max_log) -> (summary, logs)``
+    (see :mod:`symvib.numeric.engine.loop`).
+    """
+
+    simulate: object
+    samples: object
+    sweep: object
+
+
+def kernel_functions(module) -> tuple:
+    """The generated module's functions in :data:`KERNEL_INTERFACE` order."""
+    return tuple(getattr(module, name) for name, _, _ in KERNEL_INTERFACE.values())
+
+
+def bind(module, backend: str) -> Engine:
+    """The engine bound to the kernels of a generated ``module`` on ``backend``."""
+    if backend == "python":
+        k = kernel_functions(module)
+        return Engine(partial(loop.simulate_scene, k), partial(loop.sample_scene, k),
+                      partial(loop.sweep_scenes, k))
+    if backend != "numba":
+        raise ValueError(f"unknown backend {backend!r}; use 'numba' or 'python'")
+    ncp = len(module.PARAMS)
+    k = _compiled_kernels(module, ncp)
+    entries = _compiled_engine(ncp)
+    return Engine(partial(entries["simulate_scene"], k), partial(entries["sample_scene"], k),
+                  _balanced(partial(entries["sweep_scenes"], k)))
+
+
+# --- numba ------------------------------------------------------------------------
+#: Scenes a thread of a parallel sweep takes at a time (numba backend).
+SWEEP_GRAIN = 16
+
+
+def _signatures(ncp: int) -> dict:
+    """numba signatures of the kernels (by engine name) for ``ncp`` curve parameters."""
+    from numba import types as nt
+
+    f64 = nt.float64
+    out = {}
+    for name, (_, leading, returns) in KERNEL_INTERFACE.items():
+        result = f64 if returns == 1 else nt.UniTuple(f64, returns)
+        out[name] = result(*([f64] * (len(leading) + ncp)))
+    return out
+
+
+def _rebound(fn, namespace: dict):
+    """``fn``'s code with ``namespace`` as its globals (its calls bound to compiled siblings)."""
+    new = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
+    new.__qualname__, new.__module__, new.__doc__ = fn.__qualname__, fn.__module__, fn.__doc__
+    return new
+
+
+def _compiled_functions(modules, extra: dict, keep) -> dict:
+    """numba dispatchers of the functions defined in ``modules`` whose names pass ``keep``.
+
+    Each function gets a copy of its module's globals in which every such name is
+    the compiled function (names must be unique across the modules), plus ``extra``.
+    Dispatchers are lazy (compiled on first call, or by the caller with a signature).
+    """
+    import numba
+
+    functions, spaces = {}, []
+    for mod in modules:
+        namespace = dict(vars(mod))
+        spaces.append(namespace)
+        for name, fn in vars(mod).items():
+            if isinstance(fn, types.FunctionType) and fn.__module__ == mod.__name__ and keep(name):
+                if name in functions:
+                    raise RuntimeError(f"engine function {name!r} is defined twice ({mod.__name__})")
+                functions[name] = (fn, namespace)
+    compiled = {}
+    for name, (fn, namespace) in functions.items():
+        options = extra.get("_options", {}).get(name, {})
+        compiled[name] = numba.njit(**options)(_rebound(fn, namespace))
+    for namespace in spaces:
+        namespace.update(compiled)
+        namespace.update({k: v for k, v in extra.items() if k != "_options"})
+    return compiled
+
+
+def _compiled_kernels(module, ncp: int) -> tuple:
+    """The module's interface kernels compiled with their signatures (cached per module)."""
+    cached = getattr(module, "_symvib_compiled_kernels", None)
+    if cached is not None:
+        return cached
+    sigs = _signatures(ncp)
+    wanted = {fname for fname, _, _ in KERNEL_INTERFACE.values()}
+    # Every function the interface kernels may call: the module's float-only functions.
+    compiled = _compiled_functions(
+        [module], {"_options": {f: {"cache": True} for f in wanted}},
+        lambda n: n.endswith("_scalar") or n in wanted)
+    out = []
+    for name, (fname, _, _) in KERNEL_INTERFACE.items():
+        dispatcher = compiled[fname]
+        dispatcher.compile(sigs[name])
+        out.append(dispatcher)
+    module._symvib_compiled_kernels = tuple(out)
+    return module._symvib_compiled_kernels
+
+
+def engine_digest() -> str:
+    """SHA-256 (hex, 20 digits) of the engine's source files, for cache invalidation."""
+    digest = hashlib.sha256()
+    for mod in ENGINE_MODULES + (_state_module(),):
+        digest.update(Path(mod.__file__).read_bytes())
+    return digest.hexdigest()[:20]
+
+
+def _state_module():
+    from symvib.numeric.engine import state
+
+    return state
+
+
+@lru_cache(maxsize=None)
+def _compiled_engine(ncp: int) -> dict:
+    """The engine's entry points compiled for ``ncp`` curve parameters.
+
+    numba's cache checks the file of each entry point only, not the modules it
+    calls; so the cache is flushed once whenever :func:`engine_digest` changes.
+    """
+    import numba
+    from numba import types as nt
+    from numba.np.unsafe.ndarray import to_fixed_tuple
+
+    from symvib.numeric.kernels import cache_dir
+
+    f64 = nt.float64
+    sigs = _signatures(ncp)
+    k_type = nt.Tuple([nt.FunctionType(sigs[name]) for name in KERNEL_INTERFACE])
+    cp_type = nt.Tuple([f64] * ncp)
+    vec, mat = f64[::1], f64[:, ::1]
+    rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat], Rules)
+
+    def params_of(row, n):
+        return to_fixed_tuple(row, ncp)
+
+    options = {name: {"cache": True} for name in ENTRY_POINTS}
+    options["sweep_scenes"] = {"cache": True, "parallel": True}
+    extra = {"prange": numba.prange, "_options": options}
+    compiled = _compiled_functions(ENGINE_MODULES, extra, lambda n: True)
+    # The loop's globals (shared by its compiled functions) get the static-length version.
+    compiled["sweep_scenes"].py_func.__globals__["params_of"] = numba.njit(params_of)
+    marker = cache_dir() / "engines" / f"engine-{engine_digest()}"
+    if not marker.exists():
+        for name in ENTRY_POINTS:
+            compiled[name]._cache.flush()
+    signatures = {
+        "simulate_scene": (k_type, cp_type, vec, rules_type, nt.boolean),
+        "sample_scene": (k_type, cp_type, vec, rules_type, mat, nt.int64),
+        "sweep_scenes": (k_type, mat, mat, rules_type, nt.int64),  # rows, parameter rows
+    }
+    for name, sig in signatures.items():
+        compiled[name].compile(sig)
+        # Locked to its signature: a call with the kernels' dispatchers converts them to
+        # function pointers instead of compiling a specialization (slow, not cacheable).
+        compiled[name].disable_compile()
+    marker.parent.mkdir(parents=True, exist_ok=True)
+    marker.touch()
+    return compiled
+
+
+def _balanced(sweep_fn):
+    """``sweep_fn`` with its threads taking :data:`SWEEP_GRAIN` scenes at a time.
+
+    By default numba gives each thread one fixed share of a ``prange`` loop; the
+    scenes of a grid differ in cost (a row of fast scenes makes many events), so
+    one thread would finish early and wait.
+    """
+    import numba
+
+    def balanced(*args):
+        old = numba.set_parallel_chunksize(SWEEP_GRAIN)
+        try:
+            return sweep_fn(*args)
+        finally:
+            numba.set_parallel_chunksize(old)
+
+    return balanced

@@ -1,0 +1,337 @@
+"""The event loop of one scene, and its entry points for one scene and for a sweep.
+
+A run alternates motion intervals and events (physics.md, "Events"): from the
+current state, :func:`~symvib.numeric.engine.scan.locate` finds where the
+interval ends, :func:`~symvib.numeric.engine.timing.quad` how long it takes and
+the friction work on it, and the end decides what happens: an impact at a
+limiter (:func:`~symvib.numeric.engine.laws.impact`, perhaps the start of a Zeno
+series), a turning point (the rest test
+:func:`~symvib.numeric.engine.laws.rest`: arrest, rest on a limiter or reversal),
+a zero of the normal force (the branch flips, or a unilateral contact ends), or
+the end of the search window (the motion goes on).
+
+Entry points (what the driver calls, compiled by numba or run as plain Python
+by :mod:`symvib.numeric.engine.bind`): :func:`simulate_scene`,
+:func:`sample_scene` and :func:`sweep_scenes`.  Each takes the kernels as a
+tuple (``k``, in :data:`~symvib.numeric.engine.state.KERNEL_INTERFACE` order),
+the curve's parameter values and the scene as a row of floats
+(:class:`~symvib.numeric.layout.SceneRow`).
+
+Examples
+--------
+>>> EVENT_LOG_START, INTERVAL_LOG_START
+(64, 64)
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from symvib.numeric.engine.laws import (
+    SLIDE,
+    Fs,
+    energy,
+    finite_state,
+    impact,
+    nsign_of,
+    qdot_of,
+    rest,
+    rest_outcome,
+    side_at,
+    zeno_series,
+)
+from symvib.numeric.engine.scan import CRIT_STEP, End, locate, map_new
+from symvib.numeric.engine.state import Kernels, Outcome, Setup, Zeno
+from symvib.numeric.engine.timing import WORK_ROWS, quad, root_time, samples
+from symvib.numeric.layout import EventCode, EventColumn, IntervalColumn, SceneRow, StatusCode, Summary
+from symvib.numeric.layout import EVENT_COLUMNS, INTERVAL_COLUMNS, SUMMARY_COLUMNS
+
+__all__ = ["run", "params_of", "setup_of", "simulate_scene", "sample_scene", "sweep_scenes"]
+
+#: Rows the event log starts with (it doubles when full).
+EVENT_LOG_START = 64
+#: Rows the interval log starts with (it doubles when full).
+INTERVAL_LOG_START = 64
+#: Spare event rows beyond ``max_events`` (the events of the last step).
+EVENT_LOG_SPARE = 4
+#: Columns of the event log, the interval log and the sweep summary.
+EVENT_WIDTH, INTERVAL_WIDTH, SUMMARY_WIDTH = len(EVENT_COLUMNS), len(INTERVAL_COLUMNS), len(SUMMARY_COLUMNS)
+#: ``prange`` on the plain-Python engine; :mod:`symvib.numeric.engine.bind` gives the
+#: compiled engine numba's parallel range.
+prange = range
+
+
+def put_event(events, ne, kind, t, q, before, after, e):
+    """Append an event (columns :class:`~symvib.numeric.layout.EventColumn`); the log doubles when full."""
+    if ne == events.shape[0]:
+        new = np.zeros((2 * events.shape[0], EVENT_WIDTH))
+        new[:ne] = events[:ne]
+        events = new
+    events[ne, EventColumn.kind] = kind.value
+    events[ne, EventColumn.t] = t
+    events[ne, EventColumn.q] = q
+    events[ne, EventColumn.qdot_before] = before
+    events[ne, EventColumn.qdot_after] = after
+    events[ne, EventColumn.energy] = e
+    return events, ne + 1
+
+
+def put_interval(ivs, ni, qa, qb, Ga, Gb, s, sigma, t0, T, Wi):
+    """Append a motion interval (columns :class:`~symvib.numeric.layout.IntervalColumn`)."""
+    if ni == ivs.shape[0]:
+        new = np.zeros((2 * ivs.shape[0], INTERVAL_WIDTH))
+        new[:ni] = ivs[:ni]
+        ivs = new
+    ivs[ni, IntervalColumn.qa] = qa
+    ivs[ni, IntervalColumn.qb] = qb
+    ivs[ni, IntervalColumn.Ga] = Ga
+    ivs[ni, IntervalColumn.Gb] = Gb
+    ivs[ni, IntervalColumn.s] = s
+    ivs[ni, IntervalColumn.sigma] = sigma
+    ivs[ni, IntervalColumn.t0] = t0
+    ivs[ni, IntervalColumn.T] = T
+    ivs[ni, IntervalColumn.W_friction] = Wi
+    return ivs, ni + 1
+
+
+def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
+    """Simulate one scene from ``(q0, qdot0)`` until a rest, ``t_max`` or ``max_events``.
+
+    ``S``: the scene's constants (:class:`~symvib.numeric.engine.state.Setup`); with
+    ``S.unilateral`` the curve only pushes along its normal, so where ``N`` reaches 0
+    (or is negative at the start of an interval) the run ends with ``LEFT_CURVE``
+    (physics.md, "Events").  Returns an :class:`~symvib.numeric.engine.state.Outcome`.
+    """
+    g, m, mu, k, scale = S.g, S.m, S.mu, S.k, S.scale
+    region, roots, count = map_new(q0, S.lo, S.hi, mu, K, cp, CRIT_STEP * scale)
+    X = R.Xw
+    n = max(X.shape[0], R.Xp.shape[0])
+    work = np.empty((WORK_ROWS, n))
+    dummy = np.empty((1, 4))
+    events = np.zeros((min(max_events + EVENT_LOG_SPARE, EVENT_LOG_START), EVENT_WIDTH))
+    ne = 0
+    ivs = np.zeros((INTERVAL_LOG_START if keep_intervals else 1, INTERVAL_WIDTH))
+    ni = 0
+    t = 0.0
+    Wf = 0.0
+    Wimp = 0.0
+    zeno = Zeno(0.0, 0.0, 0.0, 0.0)
+    status = StatusCode.RUNNING
+    q = q0
+    w = (K.h(q, *cp) * qdot0) ** 2
+    # At rest also when w underflows to 0 (qdot0 = 1e-300): the rest test decides.
+    sigma = 0 if qdot0 == 0.0 or w == 0.0 else (1 if qdot0 > 0.0 else -1)
+    E0 = energy(q, w, m, g, K, cp)
+    flip = False
+    nsign = 1
+    side = side_at(q, S.has_left, S.left, S.has_right, S.right)
+    pending_impact = sigma != 0 and side == sigma
+    if not (math.isfinite(E0) and finite_state(t, q, w, Wf, Wimp)):
+        status = StatusCode.NON_FINITE  # e.g. qdot0 = 1e200: w = inf from the start
+    elif S.unilateral and K.N_w(q, w, g, *cp) < 0.0:
+        # Unilateral contact and N < 0 at the start: the particle leaves the curve at once.
+        events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, q, qdot0, qdot0, E0)
+        status = StatusCode.LEFT_CURVE
+    elif sigma == 0:
+        what, direction = rest(q, side, mu, K, cp)
+        if what != SLIDE:
+            code, status = rest_outcome(what)
+            events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp))
+        sigma = direction
+    while status == StatusCode.RUNNING:
+        if not finite_state(t, q, w, Wf, Wimp):
+            status = StatusCode.NON_FINITE  # overflow: stop at once rather than run max_events impacts at inf
+            break
+        if pending_impact:
+            # An impact at q with squared speed w moving sigma.
+            pending_impact = False
+            qd = qdot_of(q, w, sigma, K, cp)
+            qd_after, w_after, loss = impact(qd, w, k, m)
+            Wimp += loss
+            events, ne = put_event(events, ne, EventCode.IMPACT, t, q, qd, qd_after, energy(q, w_after, m, g, K, cp))
+            side = int(sigma)
+            w_before = w
+            w = w_after
+            sigma = -sigma
+            if w == 0.0:
+                what, direction = rest(q, side, mu, K, cp)
+                if what != SLIDE:
+                    code, status = rest_outcome(what)
+                    events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp))
+                    break
+                sigma = direction
+            else:
+                applies, ratio, remaining, w_imp, w_fric = zeno_series(q, w_before, sigma, g, mu, k, m, scale, K, cp)
+                if applies:
+                    Wimp += w_imp
+                    Wf += w_fric
+                    simulated = 0
+                    for j in range(ne - 1, -1, -1):
+                        if int(events[j, EventColumn.kind]) == EventCode.IMPACT and events[j, EventColumn.q] == q:
+                            simulated += 1
+                        elif int(events[j, EventColumn.kind]) != EventCode.REVERSAL:
+                            break
+                    t += remaining
+                    zeno = Zeno(ratio, float(simulated), remaining, float(side))
+                    events, ne = put_event(events, ne, EventCode.REST_ON_LIMITER, t, q, 0.0, 0.0,
+                                           energy(q, 0.0, m, g, K, cp))
+                    w = 0.0
+                    status = StatusCode.RESTING_ON_LIMITER
+                    break
+            if ne >= max_events:
+                status = StatusCode.MAX_EVENTS
+                break
+        if ne >= max_events:
+            status = StatusCode.MAX_EVENTS
+            break
+        if flip:
+            nsign = -nsign
+        else:
+            nsign = nsign_of(q, w, g, K, cp)
+        flip = False
+        if S.unilateral and nsign < 0:
+            # N < 0 here (at the start, or after an impact): the particle is not held.
+            events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, q, qdot_of(q, w, sigma, K, cp),
+                                   qdot_of(q, w, sigma, K, cp), energy(q, w, m, g, K, cp))
+            status = StatusCode.LEFT_CURVE
+            break
+        s = sigma * nsign
+        Ga = w * math.exp(2.0 * s * mu * K.alpha(q, *cp))
+        end, qb, Gb, roots = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X)
+        T, Wi, _ = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, False, dummy, 0)
+        if t + T > t_max:
+            # Stop inside this interval where t reaches t_max.
+            target = t_max - t
+            C = Ga + 2.0 * g * Fs(s, q, mu, K, cp)
+            pt = (q, Ga, C, s, sigma, S, K, cp, R, work, dummy, target)
+            qe = root_time(pt, q, qb, -target, T - target)
+            Ge = max(C - 2.0 * g * Fs(s, qe, mu, K, cp), 0.0)
+            Tq, Wq, _ = quad(q, qe, Ga, Ge, s, sigma, S, K, cp, R, work, False, dummy, 0)
+            if keep_intervals:
+                ivs, ni = put_interval(ivs, ni, q, qe, Ga, Ge, s, sigma, t, Tq, Wq)
+            Wf += m * Wq
+            t = t_max
+            q = qe
+            w = math.exp(-2.0 * s * mu * K.alpha(qe, *cp)) * Ge
+            status = StatusCode.T_MAX
+            break
+        wb = math.exp(-2.0 * s * mu * K.alpha(qb, *cp)) * Gb
+        if keep_intervals:
+            ivs, ni = put_interval(ivs, ni, q, qb, Ga, Gb, s, sigma, t, T, Wi)
+        t += T
+        Wf += m * Wi
+        if end == End.TURN:
+            side = side_at(qb, S.has_left, S.left, S.has_right, S.right)
+            what, direction = rest(qb, side, mu, K, cp)
+            q, w = qb, 0.0
+            code = EventCode.REVERSAL
+            if what != SLIDE:
+                code, status = rest_outcome(what)
+            else:
+                sigma = direction
+            events, ne = put_event(events, ne, code, t, qb, 0.0, 0.0, energy(qb, 0.0, m, g, K, cp))
+        elif end == End.LIMIT:
+            q, w = qb, wb
+            pending_impact = True
+        elif end == End.NSIGN and S.unilateral:
+            qd = qdot_of(qb, wb, sigma, K, cp)
+            events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, qb, qd, qd, energy(qb, wb, m, g, K, cp))
+            q, w = qb, wb
+            status = StatusCode.LEFT_CURVE
+        elif end == End.NSIGN:
+            qd = qdot_of(qb, wb, sigma, K, cp)
+            events, ne = put_event(events, ne, EventCode.NORMAL_SIGN_CHANGE, t, qb, qd, qd,
+                                   energy(qb, wb, m, g, K, cp))
+            q, w = qb, wb
+            flip = True
+        elif end == End.PASS:
+            q, w = qb, wb
+        else:
+            q, w = qb, wb
+            status = StatusCode.LEFT_DOMAIN
+    if status == StatusCode.MAX_EVENTS and w == 0.0:
+        sigma = 0
+    if not finite_state(t, q, w, Wf, Wimp):
+        status = StatusCode.NON_FINITE  # e.g. mu = 1e65: an arrest reached at t = nan
+    qdot_final = qdot_of(q, w, sigma, K, cp) if sigma != 0 else 0.0
+    return Outcome(status.value, ne, events, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, energy(q, w, m, g, K, cp),
+                   zeno, scale)
+
+
+def params_of(row, n):
+    """The first ``n`` values of a parameter row as the tuple the kernels take (``*cp``).
+
+    :mod:`symvib.numeric.engine.bind` gives the compiled engine a version with ``n``
+    fixed at compile time (numba builds tuples of a static length only).
+    """
+    return tuple(row[:n])
+
+
+def setup_of(row, K, cp):
+    """The scene constants (:class:`~symvib.numeric.engine.state.Setup`) of a scene row."""
+    lo, hi = K.domain(*cp)
+    return Setup(row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k],
+                 row[SceneRow.has_left] != 0.0, row[SceneRow.left], row[SceneRow.has_right] != 0.0,
+                 row[SceneRow.right], lo, hi, K.q_scale(*cp), row[SceneRow.unilateral] != 0.0)
+
+
+def simulate_scene(k, cp, row, R, keep):
+    """Entry point: run the scene ``row`` (keeping its intervals when ``keep``); an Outcome."""
+    K = Kernels(*k)
+    S = setup_of(row, K, cp)
+    return run(S, K, cp, R, row[SceneRow.q0], row[SceneRow.qdot0], row[SceneRow.t_max],
+               int(row[SceneRow.max_events]), keep)
+
+
+def sample_scene(k, cp, row, R, ivs, ni):
+    """Entry point: node samples (t, q, w, N) of the logged intervals of a run of ``row``."""
+    K = Kernels(*k)
+    return samples(ivs, ni, setup_of(row, K, cp), K, cp, R)
+
+
+def sweep_scenes(k, rows, cp_rows, R, max_log):
+    """Entry point: run many scenes of one curve (rows of :class:`~symvib.numeric.layout.SceneRow`
+    values and of parameter values).
+
+    Returns the per-scene summary (columns :class:`~symvib.numeric.layout.Summary`) and,
+    when ``max_log > 0``, the first ``max_log`` events of each scene.  Scenes run in
+    parallel threads on the numba backend (``prange``).
+    """
+    K = Kernels(*k)
+    n = rows.shape[0]
+    out = np.zeros((n, SUMMARY_WIDTH))
+    logs = np.zeros((n, max(max_log, 1), EVENT_WIDTH))
+    for i in prange(n):
+        cp = params_of(cp_rows[i], cp_rows.shape[1])
+        S = setup_of(rows[i], K, cp)
+        o = run(S, K, cp, R, rows[i, SceneRow.q0], rows[i, SceneRow.qdot0], rows[i, SceneRow.t_max],
+                int(rows[i, SceneRow.max_events]), False)
+        impacts = 0
+        reversals = 0
+        flips = 0
+        for j in range(o.n_events):
+            kind = int(o.events[j, EventColumn.kind])
+            if kind == EventCode.IMPACT:
+                impacts += 1
+            elif kind == EventCode.REVERSAL:
+                reversals += 1
+            elif kind == EventCode.NORMAL_SIGN_CHANGE:
+                flips += 1
+            if j < max_log:
+                for c in range(EVENT_WIDTH):
+                    logs[i, j, c] = o.events[j, c]
+        out[i, Summary.status] = o.status
+        out[i, Summary.events] = o.n_events
+        out[i, Summary.impacts] = impacts
+        out[i, Summary.reversals] = reversals
+        out[i, Summary.normal_sign_changes] = flips
+        out[i, Summary.t_final] = o.t
+        out[i, Summary.q_final] = o.q
+        out[i, Summary.qdot_final] = o.qdot
+        out[i, Summary.friction_work] = o.W_friction
+        out[i, Summary.impact_loss] = o.W_impacts
+        out[i, Summary.E0] = o.E0
+        out[i, Summary.E_final] = o.E_final
+        out[i, Summary.zeno_ratio] = o.zeno.ratio
+    return out, logs

@@ -1,0 +1,140 @@
+"""Named state of the engine, and the kernel interface it needs, declared once.
+
+The engine's functions pass named tuples, not positional ones: numba compiles
+named tuples (heterogeneous, with arrays and functions as fields), and plain
+Python reads them as any tuple.
+
+:data:`KERNEL_INTERFACE` is the contract between the code generator and the
+engine: for each kernel the engine calls, the function of a generated module
+that provides it and the arguments that come before the curve's parameters.
+:func:`symvib.codegen.generate.generate` checks every module it writes
+against it, and :func:`symvib.numeric.kernels.load` every module it loads.
+
+Examples
+--------
+>>> KERNEL_INTERFACE["F_p"]
+('F_p_scalar', ('q', 'mu'), 1)
+>>> Kernels._fields[:4]
+('F_p', 'F_m', 'dF_p', 'dF_m')
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno"]
+
+#: engine name -> (function of the generated module, arguments before the curve's
+#: parameters, number of floats returned).
+KERNEL_INTERFACE = {
+    "F_p": ("F_p_scalar", ("q", "mu"), 1),
+    "F_m": ("F_m_scalar", ("q", "mu"), 1),
+    "dF_p": ("dF_p_scalar", ("q", "mu"), 1),
+    "dF_m": ("dF_m_scalar", ("q", "mu"), 1),
+    "node_p": ("node_p_scalar", ("q", "mu"), 5),
+    "node_m": ("node_m_scalar", ("q", "mu"), 5),
+    "z": ("z_scalar", ("q",), 1),
+    "h": ("h_scalar", ("q",), 1),
+    "dx": ("dx_scalar", ("q",), 1),
+    "dz": ("dz_scalar", ("q",), 1),
+    "alpha": ("alpha_scalar", ("q",), 1),
+    "kappa": ("kappa_scalar", ("q",), 1),
+    "N_w": ("N_w_scalar", ("q", "w", "g"), 1),
+    "q_scale": ("q_scale_scalar", (), 1),
+    "domain": ("domain", (), 2),
+}
+
+
+class Kernels(NamedTuple):
+    """The curve's kernels as the engine calls them (fields: :data:`KERNEL_INTERFACE`).
+
+    Each takes its leading arguments and then the curve's parameter values
+    (``*cp``).  ``node_s`` returns ``(F_s', h, exp(s mu alpha), kappa, cos alpha)``
+    at once, for the time quadrature; ``domain`` the open interval of ``q``.
+    """
+
+    F_p: object
+    F_m: object
+    dF_p: object
+    dF_m: object
+    node_p: object
+    node_m: object
+    z: object
+    h: object
+    dx: object
+    dz: object
+    alpha: object
+    kappa: object
+    N_w: object
+    q_scale: object
+    domain: object
+
+
+assert Kernels._fields == tuple(KERNEL_INTERFACE), "Kernels must list KERNEL_INTERFACE in order"
+
+
+class Setup(NamedTuple):
+    """One scene's constants: gravity, mass, friction, restitution, limiters, the curve's
+    regular domain ``(lo, hi)``, its length scale ``scale`` (``q_scale``) and its contact."""
+
+    g: float
+    m: float
+    mu: float
+    k: float
+    has_left: bool
+    left: float
+    has_right: bool
+    right: float
+    lo: float
+    hi: float
+    scale: float
+    unilateral: bool
+
+
+class Rules(NamedTuple):
+    """Gauss-Legendre rules of the time quadrature (:func:`symvib.numeric.driver.rules`).
+
+    ``Xw, Ww, Sw, SWw``: nodes, weights and the transposed cumulative and weighted
+    cumulative matrices of the rule for panels that start on a root; ``Xp, Wp, Sp``:
+    nodes, weights and transposed cumulative matrix of the rule for every other panel.
+    """
+
+    Xw: object
+    Ww: object
+    Sw: object
+    SWw: object
+    Xp: object
+    Wp: object
+    Sp: object
+
+
+class Zeno(NamedTuple):
+    """A Zeno accumulation summed as a geometric series (physics.md, "Events" 3):
+    the ratio of successive bounce speeds, the impacts simulated before it, the
+    time the series takes and the limiter's side (+1 right, -1 left); all 0 if none."""
+
+    ratio: float
+    simulated: float
+    remaining: float
+    side: float
+
+
+class Outcome(NamedTuple):
+    """What a run returns: status code, the event log (``n_events`` rows, columns
+    :class:`~symvib.numeric.layout.EventColumn`), the interval log (``n_intervals``
+    rows, columns :class:`~symvib.numeric.layout.IntervalColumn`), the final state,
+    the energy sums and the Zeno summary."""
+
+    status: int
+    n_events: int
+    events: object
+    n_intervals: int
+    intervals: object
+    t: float
+    q: float
+    qdot: float
+    W_friction: float
+    W_impacts: float
+    E0: float
+    E_final: float
+    zeno: Zeno
+    scale: float
