@@ -497,9 +497,9 @@ def _check_rows(spec: SweepSpec, scal, cp, names) -> None:
 
 
 def _domain(scene: Scene, values) -> tuple:
-    from symvib.numeric.scene import _domain as scene_domain
+    from symvib.numeric.scene import declared_domain
 
-    return scene_domain(scene.replace(params=dict(zip((n for n, _ in scene.params), (float(v) for v in values)))))
+    return declared_domain(scene.replace(params=dict(zip((n for n, _ in scene.params), (float(v) for v in values)))))
 
 
 def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
