@@ -13,7 +13,9 @@ import pytest
 
 from symvib.numeric.driver import simulate
 from symvib.numeric.scene import SceneError, scene_from_dict
-from symvib.numeric.sweep import (FORMAT, Progress, load_sweep, make_spec, main, run_chunk, sweep, _resolve_scene)
+from symvib.cli import sweep_main as main
+from symvib.numeric.scene import resolve_scene as _resolve_scene
+from symvib.numeric.sweep import FORMAT, Progress, load_sweep, make_spec, run_chunk, sweep
 
 PARABOLA = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
             "physics": {"g": 9.81, "m": 0.2, "mu": 0.05, "restitution": 0.8},

@@ -369,7 +369,7 @@ class SceneNumbers:
             return v[i] if hasattr(v, "__len__") and not isinstance(v, str) else v
 
         return SceneNumbers(params={n: pick(v) for n, v in self.params.items()}, kinds=self.kinds,
-                            domain=tuple(pick(v) for v in self.domain),
+                            domain=lambda: tuple(pick(v) for v in self.domain),
                             **{n: pick(getattr(self, n)) for n in self.NAMES})
 
 
