@@ -107,6 +107,9 @@ def check_rows(scene, rows: np.ndarray, params: np.ndarray, *, vary_params: bool
 
     columns = {name: rows[:, SceneRow[name]] for name in SceneNumbers.NAMES if name != "contact"}
     columns["has_left"], columns["has_right"] = columns["has_left"] != 0, columns["has_right"] != 0
+    events = columns["max_events"]
+    if np.all((events % 1 == 0) & (np.abs(events) < 2**62)):   # whole numbers: shown as a scene file's integer
+        columns["max_events"] = events.astype(np.int64)
     numbers = SceneNumbers(params={n: params[:, j] for j, n in enumerate(names)}, kinds=dict(scene.shape.params),
                            domain=domain, contact=scene.contact, **columns)
     for c in checks(numbers):
