@@ -26,7 +26,7 @@ import numpy as np  # noqa: E402
 from symvib.numeric import driver  # noqa: E402
 from symvib.numeric.engine import bind  # noqa: E402
 from symvib.numeric.kernels import load  # noqa: E402
-from symvib.numeric.sweep import _resolve_scene  # noqa: E402
+from symvib.numeric.scene import resolve_scene as _resolve_scene  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -6,7 +6,7 @@
 ``symvib generate``       write the kernel modules of the catalogue into generated/ (``--check``)
 ``symvib audit``          the paper's printed equations against the derivation (errata)
 ``symvib bench ...``      work-precision and stability (options: ``symvib bench --help``)
-``symvib sweep ...``      parameter sweeps (options: ``symvib sweep --help``)
+``symvib sweep ...``      parameter sweeps (options: ``symvib sweep --help``; :func:`sweep_main`)
 
 Every error the user can cause (an unknown shape, a malformed expression, a
 bad scene, a path that is a directory, a device or not writable) is reported
@@ -19,13 +19,15 @@ import argparse
 import importlib
 import sys
 
-__all__ = ["main", "one_line"]
+__all__ = ["main", "sweep_main", "build_parser", "build_sweep_parser", "one_line"]
 
 #: Exit status for bad input.
 EXIT_BAD_INPUT = 2
-#: Exit status of a run that ended with an error status (non_finite, energy_budget_mismatch),
-#: and of a sweep with such rows (``symvib.numeric.sweep.EXIT_FAILED_SCENES``).
+#: Exit status of a run that ended with an error status (non_finite, energy_budget_mismatch).
 EXIT_RUN_FAILED = 3
+#: Exit status of ``symvib sweep`` when some scenes failed (their rows are written, with their
+#: status): the status of ``symvib run`` for a failed run, one code for one meaning.
+EXIT_FAILED_SCENES = EXIT_RUN_FAILED
 #: Longest error message printed, in characters (a message may quote a long user text).
 MAX_MESSAGE_LENGTH = 500
 
@@ -256,10 +258,144 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Jobs that parse their own options: name -> (module:function taking the words after the name, help).
 FORWARDED = {
-    "bench": ("symvib.checks.bench", "work-precision charts and the stability suite"),
-    "sweep": ("symvib.numeric.sweep", "parameter sweeps over many scenes"),
+    "bench": ("symvib.checks.bench:main", "work-precision charts and the stability suite"),
+    "sweep": ("symvib.cli:sweep_main", "parameter sweeps over many scenes"),
 }
+
+
+# ----------------------------------------------------------------------------- symvib sweep
+
+def _sweep_file(path) -> dict:
+    """Read a sweep file as a scene file is read (:func:`symvib.paths.read_user_toml`:
+    size cap, no device or folder, no TOML bomb), then check its keys."""
+    from pathlib import Path
+
+    from symvib.numeric.scene import SceneError
+    from symvib.paths import read_user_toml
+
+    data = read_user_toml(path, "sweep file")
+    known = {"scene", "vary", "random", "seed", "chunk", "log_events", "nodes", "out"}
+    for key in data:
+        if key not in known:
+            raise SceneError(f"{path.name}:{key}", f"unknown key; known: {', '.join(sorted(known))}")
+    _check_sweep_file(data, path)
+    if "scene" in data:
+        scene = Path(data["scene"])
+        data["scene"] = str(scene if scene.is_absolute() or not (path.parent / scene).exists()
+                            else path.parent / scene)
+    return data
+
+
+#: Types of the keys of a sweep file (``vary`` is a table; integers are checked by :func:`symvib.numeric.sweep.make_spec`).
+_SWEEP_FILE_TYPES = {"scene": str, "out": str, "vary": dict, "random": int, "seed": int, "chunk": int,
+                     "log_events": int, "nodes": int}
+
+
+def _check_sweep_file(data: dict, path) -> None:
+    """Refuse keys of the wrong type in a sweep file, naming the file and key."""
+    from symvib.numeric.scene import SceneError
+
+    for key, kind in _SWEEP_FILE_TYPES.items():
+        if key in data and (not isinstance(data[key], kind) or isinstance(data[key], bool)):
+            raise SceneError(f"{path.name}:{key}", f"must be {'a table' if kind is dict else kind.__name__}, "
+                                                   f"got {type(data[key]).__name__}")
+    for key in ("scene", "out"):
+        if key in data and (not data[key] or "\0" in data[key]):
+            raise SceneError(f"{path.name}:{key}", "must be a non-empty path")
+
+
+def build_sweep_parser() -> argparse.ArgumentParser:
+    """The options of ``symvib sweep`` (its own parser: :func:`main` forwards the words after ``sweep``)."""
+    from pathlib import Path
+
+    from symvib.numeric.sweep import DEFAULT_CHUNK
+
+    ap = argparse.ArgumentParser(
+        prog="symvib sweep", description="Run a parameter sweep over scenes of one curve.",
+        epilog="example: symvib sweep paper-parabola --vary qdot=3:12:200 --vary mu=0.01:0.2:100 -o OUT --plot")
+    ap.add_argument("scene", nargs="?", help="scene TOML file (or a packaged scene name, e.g. paper-parabola)")
+    ap.add_argument("--file", type=Path, help="sweep file (TOML: scene, [vary], random, seed, chunk, log_events, out)")
+    ap.add_argument("--vary", action="append", default=[], metavar="KEY=SPEC",
+                    help="start:stop:count (grid), a,b,c (values) or start:stop (with --random)")
+    ap.add_argument("--random", type=int, metavar="N", help="N random samples instead of a grid")
+    ap.add_argument("--seed", type=int)
+    ap.add_argument("--chunk", type=int, help=f"scenes per chunk (default {DEFAULT_CHUNK})")
+    ap.add_argument("--log-events", type=int, metavar="L", help="keep the first L events of every scene")
+    ap.add_argument("--nodes", type=int, help="Gauss-Legendre nodes per quadrature panel (default 16)")
+    ap.add_argument("-o", "--out", help="output folder (resumed if it holds the same sweep)")
+    ap.add_argument("--overwrite", action="store_true", help="replace a different sweep in the output folder")
+    ap.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address (tcp://...)")
+    ap.add_argument("--backend", default="auto", choices=("auto", "numba", "python"))
+    ap.add_argument("--plot", action="store_true", help="write maps over the first two varied fields")
+    ap.add_argument("--quiet", action="store_true", help="no progress bar")
+    return ap
+
+
+def sweep_main(argv=None) -> int:
+    """``symvib sweep``: returns the exit status (2 on bad input, :data:`EXIT_FAILED_SCENES` when
+    some scenes failed)."""
+    args = build_sweep_parser().parse_args(argv)
+    try:
+        return _cmd_sweep(args)
+    except (ValueError, OSError) as exc:   # SceneError and SweepError are ValueErrors
+        print(f"symvib sweep: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def _cmd_sweep(args) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from symvib.numeric.layout import STATUSES
+    from symvib.numeric.scene import SceneError, resolve_scene
+    from symvib.numeric.sweep import DEFAULT_CHUNK, DEFAULT_NODES, sweep
+
+    conf = _sweep_file(args.file) if args.file else {}
+    scene_text = args.scene or conf.get("scene")
+    if not scene_text:
+        raise SceneError("scene", "give a scene file (or 'scene = ...' in the sweep file)")
+    scene = resolve_scene(str(scene_text))
+    vary = dict(conf.get("vary", {}))
+    for item in args.vary:
+        if "=" not in item:
+            raise SceneError("--vary", f"expected KEY=SPEC, got {item!r}")
+        key, value = item.split("=", 1)
+        vary[key.strip()] = value.strip()
+    out = args.out or conf.get("out")
+    if not out:
+        raise SceneError("--out", "give an output folder (-o OUT)")
+
+    def pick(name, default):
+        value = getattr(args, name)
+        return value if value is not None else conf.get(name, default)
+
+    res = sweep(scene, vary, random=pick("random", None), seed=pick("seed", 0), chunk=pick("chunk", DEFAULT_CHUNK),
+                log_events=pick("log_events", 0), nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite, scheduler=args.scheduler,
+                progress=not args.quiet, backend=args.backend)
+    names = res.status_names()
+    status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in STATUSES if np.any(names == s))
+    events = int(np.sum(res["events"]))
+    print(f"sweep of {res.count} scenes of {scene.name} into {out}: {len(res.computed)} chunk(s) computed, "
+          f"{len(res.reused)} reused" + (f" ({len(res.discarded)} found truncated or foreign)" if res.discarded else ""))
+    print(f"  status: {status}; {events} events; {np.mean(res['impacts']):.3g} impacts per scene on average")
+    if res.computed and res.seconds > 0:
+        n = sum(len(res.spec.rows(i)[0]) for i in res.computed)
+        print(f"  {n / res.seconds:,.0f} scenes/s over {res.seconds:.3g} s")
+    if args.plot:
+        from symvib.numeric.sweepmaps import sweep_maps
+
+        for path in sweep_maps(res, Path(out) / "maps"):
+            print(f"wrote {path}")
+    failed = res.failed
+    if failed.any():
+        kinds = ", ".join(sorted(set(names[failed])))
+        print(f"symvib sweep: error: {int(failed.sum())} of {res.count} scenes failed ({kinds}; first: row "
+              f"{int(np.flatnonzero(failed)[0])}): their rows hold no result", file=sys.stderr)
+        return EXIT_FAILED_SCENES
+    return 0
 
 
 def main(argv=None) -> int:
@@ -267,7 +403,8 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv and argv[0] in FORWARDED:
         command = argv[0]
-        run = lambda: importlib.import_module(FORWARDED[command][0]).main(argv[1:])  # noqa: E731
+        module, function = FORWARDED[command][0].split(":")
+        run = lambda: getattr(importlib.import_module(module), function)(argv[1:])  # noqa: E731
     else:
         args = build_parser().parse_args(argv)
         command = args.command

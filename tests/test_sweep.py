@@ -13,7 +13,9 @@ import pytest
 
 from symvib.numeric.driver import simulate
 from symvib.numeric.scene import SceneError, scene_from_dict
-from symvib.numeric.sweep import (FORMAT, Progress, load_sweep, make_spec, main, run_chunk, sweep, _resolve_scene)
+from symvib.cli import sweep_main as main
+from symvib.numeric.scene import resolve_scene as _resolve_scene
+from symvib.numeric.sweep import FORMAT, Progress, load_sweep, make_spec, run_chunk, sweep
 
 PARABOLA = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
             "physics": {"g": 9.81, "m": 0.2, "mu": 0.05, "restitution": 0.8},
@@ -105,6 +107,37 @@ def test_bad_definitions_name_the_field(vary, kwargs, field):
     with pytest.raises(SceneError) as info:
         make_spec(base(), vary, **kwargs)
     assert info.value.field == field
+
+
+#: One bad value per checked field: (section, key, value as a scene file gives it, vary key, vary value).
+SAME_ERROR = [
+    ("physics", "restitution", 1.5, "restitution", "1.5"),
+    ("physics", "mu", -0.1, "mu", "-0.1"),
+    ("physics", "alpha0", 2.0, "alpha0", "2.0"),
+    ("physics", "g", -2.0, "g", "-2.0"),
+    ("physics", "m", 0.0, "m", "0.0"),
+    ("initial", "q", 1.0, "q", "1.0"),
+    ("initial", "q", -1.0, "q", "-1.0"),
+    ("limiters", "right", -0.6, "right", "-0.6"),
+    ("run", "t_max", -1.0, "t_max", "-1.0"),
+    ("run", "max_events", 0, "max_events", "0"),
+    ("parameters", "p", -1.0, "p", "-1.0"),
+]
+
+
+@pytest.mark.parametrize("section, key, value, vary, text", SAME_ERROR)
+def test_a_sweep_and_a_scene_file_give_the_same_error_for_the_same_bad_value(section, key, value, vary, text):
+    """One set of checks (scene.CHECKS): the sweep's message is the scene file's, with the row appended."""
+    data = {k: dict(v) for k, v in PARABOLA.items()}
+    if key == "alpha0":
+        del data["physics"]["mu"]
+    data.setdefault(section, {})[key] = value
+    with pytest.raises(SceneError) as from_file:
+        scene_from_dict(data)
+    with pytest.raises(SceneError) as from_sweep:
+        make_spec(base(), {vary: f"{text},{text}"})
+    assert from_sweep.value.field == from_file.value.field
+    assert str(from_sweep.value) == f"{from_file.value} (sweep row 0 of its chunk)"
 
 
 def test_cli_bad_input_exits_2(capsys):

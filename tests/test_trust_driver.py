@@ -18,7 +18,8 @@ from symvib.numeric.engine import bind
 from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
 from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe
 from symvib.numeric.scene import CONTACTS, MAX_EVENTS, SceneError, scene_from_dict
-from symvib.numeric.sweep import _resolve_scene, make_spec, sweep
+from symvib.numeric.scene import resolve_scene as _resolve_scene
+from symvib.numeric.sweep import make_spec, sweep
 
 #: The README's parabola scene (paper figs. 5-11, k = 0.8).
 BASE = {"curve": {"shape": "parabola"}, "parameters": {"p": 1},

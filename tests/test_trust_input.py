@@ -463,11 +463,11 @@ def test_bad_scene_files_name_the_file(kind, tmp_path):
 @pytest.mark.parametrize("kind", sorted(BAD_SCENE_FILES))
 def test_bad_sweep_files_are_one_line_errors(kind, tmp_path, capsys):
     """``symvib sweep --file`` reads through the same guard as a scene file (it once used tomllib directly)."""
-    from symvib.numeric import sweep
+    from symvib.cli import sweep_main
 
     make, message = BAD_SCENE_FILES[kind]
     path = make(tmp_path)
-    assert sweep.main(["--file", str(path), "-o", str(tmp_path / "out"), "--quiet"]) == cli.EXIT_BAD_INPUT
+    assert sweep_main(["--file", str(path), "-o", str(tmp_path / "out"), "--quiet"]) == cli.EXIT_BAD_INPUT
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and re.search(message, err)
     assert not (tmp_path / "out").exists()

@@ -228,7 +228,7 @@ def test_a_sweep_refuses_a_user_curve_with_a_singular_point_in_its_domain(tmp_pa
     import dataclasses
     import re
 
-    from symvib.numeric.sweep import _refuse_singular_domain
+    from symvib.numeric.sweep.runner import _refuse_singular_domain
 
     lo, hi = re.search(r'domain = \["([^"]+)", "([^"]+)"\]', str(info.value)).groups()
     assert 0.3 < float(lo) < 0.3 + 1e-9 and hi == "oo"

@@ -10,7 +10,8 @@ from symvib.numeric.driver import simulate
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.shapes import CATALOGUE
 from symvib.cli import EXIT_RUN_FAILED
-from symvib.numeric.sweep import main, sweep
+from symvib.cli import sweep_main as main
+from symvib.numeric.sweep import sweep
 
 #: The README's own user curve (a graph z = f(x)).
 BOWL = {
@@ -118,9 +119,11 @@ import time  # noqa: E402
 import tracemalloc  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from symvib.numeric import sweep as sweep_mod  # noqa: E402
+from symvib import cli  # noqa: E402
+from symvib.numeric.sweep import lock as lock_mod, result as result_mod, runner as runner_mod  # noqa: E402
 from symvib.numeric.sweep import (FORMAT, MAX_LIST_VALUES, SweepError, WriterLock, load_sweep, make_spec,  # noqa: E402
-                          sweep_id, _linspace_at)
+                          sweep_id)
+from symvib.numeric.sweep.axes import linspace_at as _linspace_at  # noqa: E402
 
 PARABOLA = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
             "physics": {"g": 9.81, "m": 0.2, "mu": 0.05, "restitution": 0.8},
@@ -520,7 +523,7 @@ def test_an_empty_lock_is_stale_only_after_its_grace_time(tmp_path):
     lock.write_bytes(b"")
     with pytest.raises(SweepError, match="lock file being written"):
         sweep(parabola(), VARY, chunk=CHUNK, out=out)
-    old = time.time() - 2 * sweep_mod.LOCK_GRACE
+    old = time.time() - 2 * lock_mod.LOCK_GRACE
     os.utime(lock, (old, old))
     assert sweep(parabola(), VARY, chunk=CHUNK, out=out).count == 12
 
@@ -539,7 +542,7 @@ def test_writer_lock_excludes_verifies_and_releases_only_its_own(tmp_path):
 
 def test_a_writer_that_loses_its_lock_stops_before_writing_another_chunk(tmp_path, monkeypatch):
     out = tmp_path / "sw"
-    real = sweep_mod.run_chunk
+    real = runner_mod.run_chunk
     calls = []
 
     def run_chunk(definition, index, backend="auto"):
@@ -548,7 +551,7 @@ def test_a_writer_that_loses_its_lock_stops_before_writing_another_chunk(tmp_pat
             (out / WriterLock.NAME).write_text(json.dumps({"pid": 1, "host": "h", "nonce": "thief"}))
         return real(definition, index, backend)
 
-    monkeypatch.setattr(sweep_mod, "run_chunk", run_chunk)
+    monkeypatch.setattr(runner_mod, "run_chunk", run_chunk)
     with pytest.raises(SweepError, match="lost the lock"):
         sweep(parabola(), VARY, chunk=CHUNK, out=out)
     assert calls == [0, 1] and sorted(p.name for p in (out / "chunks").iterdir()) == ["chunk-000000.npz"]
@@ -566,9 +569,9 @@ def test_the_issues_race_two_processes_one_folder(tmp_path, capsys):
     first = ["paper-parabola", "--vary", "qdot=3:12:12", "--vary", "mu=0.01:0.2:25", "--chunk", "4",
              "-o", str(out), "--backend", "python", "--quiet"]
     env = dict(os.environ, SYMVIB_BACKEND="python")
-    slow_writer = ("import sys, time\nimport symvib.numeric.sweep as s\nreal = s.run_chunk\n"
+    slow_writer = ("import sys, time\nimport symvib.cli as cli\nimport symvib.numeric.sweep.runner as s\nreal = s.run_chunk\n"
                    "s.run_chunk = lambda *a, **k: (time.sleep(SLOW_CHUNK), real(*a, **k))[1]\n"
-                   "sys.exit(s.main(sys.argv[1:]))\n").replace("SLOW_CHUNK", repr(SLOW_CHUNK))
+                   "sys.exit(cli.sweep_main(sys.argv[1:]))\n").replace("SLOW_CHUNK", repr(SLOW_CHUNK))
     proc = subprocess.Popen([sys.executable, "-c", slow_writer, *first], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
@@ -624,13 +627,13 @@ def test_a_directory_as_sweep_file_is_a_one_line_error(tmp_path, capsys):
 def test_cli_exits_nonzero_when_scenes_failed(tmp_path, capsys, monkeypatch):
     """Rows of an error status (the driver's ERROR_CODES) make the sweep exit 3 (as `symvib run`) in one line; here the
     'arrested' code stands in for one, so the test does not depend on which inputs overflow."""
-    from symvib.numeric import layout as core
+    from symvib.numeric.layout import STATUSES
 
     args = ["paper-parabola", "--vary", "qdot=3:12:3", "-o", str(tmp_path / "o"), "--quiet"]
     assert main(args) == 0
-    monkeypatch.setattr(core, "ERROR_CODES", (core.STATUSES.index("arrested"),), raising=False)
+    monkeypatch.setattr(result_mod, "ERROR_CODES", (STATUSES.index("arrested"),))
     capsys.readouterr()
-    assert main(args) == sweep_mod.EXIT_FAILED_SCENES == EXIT_RUN_FAILED
+    assert main(args) == cli.EXIT_FAILED_SCENES == EXIT_RUN_FAILED
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "3 of 3 scenes failed (arrested; first: row 0)" in err
     assert load_sweep(tmp_path / "o").failed.all()
@@ -648,7 +651,7 @@ def test_the_issues_overflow_inputs_fail_a_sweep(tmp_path, capsys):
     for args, failed in (([str(scene), "--vary", "k=0.6,0.8"], [True, True]),
                          (["paper-parabola", "--vary", "mu=0.05,1e60"], [False, True])):
         out = tmp_path / f"o{len(failed)}{failed[0]}"
-        assert main([*args, "-o", str(out), "--quiet"]) == sweep_mod.EXIT_FAILED_SCENES
+        assert main([*args, "-o", str(out), "--quiet"]) == cli.EXIT_FAILED_SCENES
         assert "scenes failed" in capsys.readouterr().err
         res = load_sweep(out)
         assert list(res.failed) == failed

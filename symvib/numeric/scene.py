@@ -52,13 +52,15 @@ import dataclasses
 import math
 import numbers
 from dataclasses import dataclass, field
+from typing import Callable
 from pathlib import Path
 
 from symvib import expr as _expr
 from symvib.paths import UserPathError, read_user_toml, safe_stem
 from symvib.shapes import CATALOGUE, Shape
 
-__all__ = ["Scene", "SceneError", "load_scene", "scene_from_dict", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS"]
+__all__ = ["Scene", "SceneError", "SceneNumbers", "Check", "CHECKS", "load_scene", "resolve_scene", "scene_from_dict",
+           "declared_domain", "friction_coefficient", "check_numbers", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS"]
 
 #: Default time bound of a run, in seconds.
 DEFAULT_T_MAX = 1000.0
@@ -114,9 +116,39 @@ def _curve_dict(sh: Shape) -> dict:
 
 def _friction_dict(s: "Scene") -> dict:
     """``{"alpha0": ...}`` when the scene's ``mu`` is ``tan(alpha0)``, else ``{"mu": ...}``."""
-    if s.alpha0 is not None and math.tan(s.alpha0) == s.mu:
-        return {"alpha0": s.alpha0}
+    if s.alpha0 is not None:
+        try:
+            if friction_coefficient(s.alpha0) == s.mu:
+                return {"alpha0": s.alpha0}
+        except SceneError:
+            pass
     return {"mu": s.mu}
+
+
+def friction_coefficient(alpha0, field: str = "physics.alpha0") -> float:
+    """The friction coefficient ``mu = tan(alpha0)`` of a friction angle ``alpha0`` (radians).
+
+    The one conversion of the package: scene files, :meth:`Scene.replace` and
+    sweeps that vary ``alpha0`` all call it.
+
+    Raises
+    ------
+    SceneError
+        Naming ``field`` when ``alpha0`` is not a finite number in ``[0, pi/2)``.
+
+    Examples
+    --------
+    >>> round(friction_coefficient(0.05), 9)
+    0.050041708
+    >>> friction_coefficient(2.0)
+    Traceback (most recent call last):
+    ...
+    symvib.numeric.scene.SceneError: physics.alpha0: friction angle must be in [0, pi/2) radians, got 2.0
+    """
+    alpha0 = _finite(alpha0, field)
+    if not 0 <= alpha0 < math.pi / 2:
+        raise SceneError(field, f"friction angle must be in [0, pi/2) radians, got {alpha0}")
+    return math.tan(alpha0)
 
 
 @dataclass(frozen=True)
@@ -190,7 +222,7 @@ class Scene:
         if "mu" in changes and "alpha0" not in changes:
             changes["alpha0"] = None
         if "alpha0" in changes and changes["alpha0"] is not None and "mu" not in changes:
-            changes["mu"] = math.tan(_finite(changes["alpha0"], "physics.alpha0"))
+            changes["mu"] = friction_coefficient(changes["alpha0"])
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict:
@@ -282,57 +314,228 @@ def _validate(s: Scene) -> None:
     for n in declared:
         if n not in given:
             raise SceneError(f"parameters.{n}", f"missing: curve '{s.shape.name}' needs a value for {n}")
-    for n, v in s.params:
-        _finite(v, f"parameters.{n}")
-        if s.shape.params.get(n, "positive") == "positive" and not v > 0:
-            raise SceneError(f"parameters.{n}", f"must be positive, got {_show(v)}")
-    if not _finite(s.g, "physics.g") > 0:
-        raise SceneError("physics.g", f"must be positive, got {_show(s.g)}")
-    if not _finite(s.m, "physics.m") > 0:
-        raise SceneError("physics.m", f"must be positive, got {_show(s.m)}")
-    if _finite(s.mu, "physics.mu") < 0:
-        raise SceneError("physics.mu", f"friction coefficient must be >= 0, got {_show(s.mu)}")
-    k = _finite(s.k, "physics.restitution")
-    if not 0.0 <= k <= 1.0:
-        raise SceneError("physics.restitution",
-                         f"must be in [0, 1] (1 = ideally elastic, 0 = plastic), got {_show(k)}")
-    for side in ("left", "right"):
-        v = getattr(s, side)
-        if v is not None:
-            _finite(v, f"limiters.{side}")
-    if s.left is not None and s.right is not None and not s.left < s.right:
-        raise SceneError("limiters", f"left limiter ({_show(s.left)}) must be left of the right one "
-                                     f"({_show(s.right)})")
-    q0 = _finite(s.q0, "initial.q")
-    _finite(s.qdot0, "initial.qdot")
-    if s.left is not None and q0 < s.left:
-        raise SceneError("initial.q", f"{_show(q0)} is outside the limiters: left of the left limiter at "
-                                      f"{_show(s.left)}")
-    if s.right is not None and q0 > s.right:
-        raise SceneError("initial.q", f"{_show(q0)} is outside the limiters: right of the right limiter at "
-                                      f"{_show(s.right)}")
-    lo, hi = _domain(s)
-    for label, v in (("limiters.left", s.left), ("limiters.right", s.right), ("initial.q", q0)):
-        if v is not None and not lo < v < hi:
-            raise SceneError(label, f"{_show(v)} is outside the curve's regular domain ({lo:.6g}, {hi:.6g})")
-    if not _finite(s.t_max, "run.t_max") > 0:
-        raise SceneError("run.t_max", f"must be positive, got {_show(s.t_max)}")
-    if s.contact not in CONTACTS:
-        raise SceneError("physics.contact", f"must be one of {', '.join(map(repr, CONTACTS))}, got {_show(s.contact)}")
-    if isinstance(s.max_events, bool) or not isinstance(s.max_events, int) or s.max_events < 1:
-        raise SceneError("run.max_events", f"must be a positive integer, got {_show(s.max_events)}")
-    if s.max_events > MAX_EVENTS:
-        raise SceneError("run.max_events", f"at most {MAX_EVENTS} (scene.MAX_EVENTS), got {_show(s.max_events)}")
+    check_numbers(SceneNumbers.of(s))
+
+
+class SceneNumbers:
+    """The numbers of one scene, or of many as columns, as :data:`CHECKS` read them.
+
+    For one scene (:meth:`of`) every attribute is the scene's value (``left``
+    and ``right`` may be ``None``; ``has_left`` says whether there is one) and
+    ``domain`` is computed when a check first reads it
+    (:func:`declared_domain`), so its errors come in their order.  For many
+    scenes (a sweep's rows, :mod:`symvib.numeric.sweep.rows`) the attributes
+    are NumPy columns of equal length or single values, and ``domain`` is
+    ``(lo, hi)`` as values or columns.
+
+    Parameters
+    ----------
+    params : dict
+        Parameter name -> value (or column).
+    kinds : dict
+        Parameter name -> assumption (``"positive"``, ...), the curve's.
+    domain : tuple or callable
+        ``(lo, hi)``, or a function returning it (called once, when first read).
+    """
+
+    NAMES = ("g", "m", "mu", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max",
+             "max_events", "contact")
+
+    def __init__(self, *, params: dict, kinds: dict, domain, **values):
+        missing = set(self.NAMES) - set(values)
+        if missing or set(values) - set(self.NAMES):
+            raise TypeError(f"SceneNumbers takes {', '.join(self.NAMES)}")
+        self.__dict__.update(values)
+        self.params, self.kinds, self._domain = params, kinds, domain
+
+    @classmethod
+    def of(cls, s: Scene) -> "SceneNumbers":
+        """The numbers of scene ``s`` (its domain computed on first use)."""
+        return cls(params=dict(s.params), kinds=dict(s.shape.params), domain=lambda: declared_domain(s),
+                   g=s.g, m=s.m, mu=s.mu, k=s.k, has_left=s.left is not None, left=s.left,
+                   has_right=s.right is not None, right=s.right, q0=s.q0, qdot0=s.qdot0, t_max=s.t_max,
+                   max_events=s.max_events, contact=s.contact)
+
+    @property
+    def domain(self) -> tuple:
+        """``(lo, hi)``: the curve's declared domain for these parameter values."""
+        if callable(self._domain):
+            self._domain = self._domain()
+        return self._domain
+
+    def row(self, i: int) -> "SceneNumbers":
+        """The numbers of scene ``i`` of columns (single values are shared by every row)."""
+        def pick(v):
+            return v[i] if hasattr(v, "__len__") and not isinstance(v, str) else v
+
+        return SceneNumbers(params={n: pick(v) for n, v in self.params.items()}, kinds=self.kinds,
+                            domain=lambda: tuple(pick(v) for v in self.domain),
+                            **{n: pick(getattr(self, n)) for n in self.NAMES})
+
+
+@dataclass(frozen=True)
+class Check:
+    """One check of a scene's numbers: where it applies, what it tests and what it says.
+
+    ``value``, ``test`` and ``when`` take a :class:`SceneNumbers`.  They use
+    arithmetic, comparisons, ``&`` and ``|`` only, so they hold for one scene
+    and, element-wise, for columns of many (a sweep's rows).  ``test`` ``None``
+    means: ``value`` must be a finite number (for one scene the type is checked
+    too, :func:`_finite`).  ``reason`` gives the message for one scene: a text
+    (then ``", got VALUE"`` follows) or a function of its numbers.
+    """
+
+    field: str
+    value: Callable
+    test: Callable | None = None
+    reason: str | Callable = "must be finite"
+    when: Callable | None = None
+
+    def message(self, n: SceneNumbers) -> str:
+        """The reason this check fails for the one scene ``n``."""
+        if callable(self.reason):
+            return self.reason(n)
+        return f"{self.reason}, got {_show(self.value(n))}"
+
+
+def _positive_integer(v):
+    """``v >= 1`` and whole: a Python ``int`` for one scene, whole numbers in a float column."""
+    if isinstance(v, numbers.Number) or not hasattr(v, "dtype"):
+        return isinstance(v, numbers.Integral) and not isinstance(v, bool) and v >= 1
+    return (v % 1 == 0) & (v >= 1)
+
+
+def _attr(name: str) -> Callable:
+    return lambda n: getattr(n, name)
+
+
+def _finite_check(field: str, name: str, when=None) -> Check:
+    return Check(field, _attr(name), when=when)
+
+
+def _limit_reason(side: str) -> Callable:
+    where = "left of the left" if side == "left" else "right of the right"
+    return lambda n: (f"{_show(float(n.q0))} is outside the limiters: {where} limiter at "
+                      f"{_show(getattr(n, side))}")
+
+
+def _domain_check(field: str, name: str, when=None) -> Check:
+    def test(n):
+        lo, hi = n.domain
+        v = getattr(n, name)
+        return (lo < v) & (v < hi)
+
+    def reason(n):
+        lo, hi = n.domain
+        v = getattr(n, name)
+        return f"{_show(float(v) if name == 'q0' else v)} is outside the curve's regular domain ({lo:.6g}, {hi:.6g})"
+
+    return Check(field, _attr(name), test, reason, when)
+
+
+def _parameter_checks(n: SceneNumbers) -> list:
+    out = []
+    for name in n.params:
+        value = (lambda name: lambda n: n.params[name])(name)
+        out.append(Check(f"parameters.{name}", value))
+        if n.kinds.get(name, "positive") == "positive":
+            out.append(Check(f"parameters.{name}", value, lambda n, value=value: value(n) > 0, "must be positive"))
+    return out
+
+
+_has_left, _has_right = _attr("has_left"), _attr("has_right")
+
+#: The checks of a scene's numbers after its parameters', in the order they are made
+#: (:func:`check_numbers`); a sweep applies the same to its rows (:mod:`symvib.numeric.sweep.rows`).
+CHECKS = (
+    _finite_check("physics.g", "g"),
+    Check("physics.g", _attr("g"), lambda n: n.g > 0, "must be positive"),
+    _finite_check("physics.m", "m"),
+    Check("physics.m", _attr("m"), lambda n: n.m > 0, "must be positive"),
+    _finite_check("physics.mu", "mu"),
+    Check("physics.mu", _attr("mu"), lambda n: n.mu >= 0, "friction coefficient must be >= 0"),
+    _finite_check("physics.restitution", "k"),
+    Check("physics.restitution", lambda n: float(n.k), lambda n: (n.k >= 0) & (n.k <= 1),
+          "must be in [0, 1] (1 = ideally elastic, 0 = plastic)"),
+    _finite_check("limiters.left", "left", when=_has_left),
+    _finite_check("limiters.right", "right", when=_has_right),
+    Check("limiters", _attr("left"), lambda n: n.left < n.right,
+          lambda n: f"left limiter ({_show(n.left)}) must be left of the right one ({_show(n.right)})",
+          when=lambda n: n.has_left & n.has_right),
+    _finite_check("initial.q", "q0"),
+    _finite_check("initial.qdot", "qdot0"),
+    Check("initial.q", _attr("q0"), lambda n: n.q0 >= n.left, _limit_reason("left"), when=_has_left),
+    Check("initial.q", _attr("q0"), lambda n: n.q0 <= n.right, _limit_reason("right"), when=_has_right),
+    _domain_check("limiters.left", "left", when=_has_left),
+    _domain_check("limiters.right", "right", when=_has_right),
+    _domain_check("initial.q", "q0"),
+    _finite_check("run.t_max", "t_max"),
+    Check("run.t_max", _attr("t_max"), lambda n: n.t_max > 0, "must be positive"),
+    Check("physics.contact", _attr("contact"), lambda n: n.contact in CONTACTS,
+          lambda n: f"must be one of {', '.join(map(repr, CONTACTS))}, got {_show(n.contact)}"),
+    Check("run.max_events", _attr("max_events"), lambda n: _positive_integer(n.max_events),
+          "must be a positive integer"),
+    Check("run.max_events", _attr("max_events"), lambda n: n.max_events <= MAX_EVENTS,
+          f"at most {MAX_EVENTS} (scene.MAX_EVENTS)"),
+)
+
+
+def checks(n: SceneNumbers) -> list:
+    """Every check of the numbers ``n``, in order: the parameters', then :data:`CHECKS`."""
+    return _parameter_checks(n) + list(CHECKS)
+
+
+def check_numbers(n: SceneNumbers) -> None:
+    """Make every check (:func:`checks`) of one scene's numbers; the first that fails raises.
+
+    Raises
+    ------
+    SceneError
+        Naming the field of the first failing check.
+
+    Examples
+    --------
+    >>> s = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
+    ...     "physics": {"restitution": 1}, "initial": {"q": 0, "qdot": 1}})
+    >>> n = SceneNumbers.of(s)
+    >>> n.k = 1.5
+    >>> check_numbers(n)
+    Traceback (most recent call last):
+    ...
+    symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5
+    """
+    for c in checks(n):
+        if c.when is not None and not c.when(n):
+            continue
+        if c.test is None:
+            _finite(c.value(n), c.field)
+        elif not c.test(n):
+            raise SceneError(c.field, c.message(n))
 
 
 #: Texts of an infinite end of a curve's domain (with an optional sign).
 _INFINITE = ("oo", "inf")
 
 
-def _domain(s: Scene) -> tuple:
-    """The curve's domain as floats; a SceneError naming ``curve.domain[i]`` (or ``curve.domain``
-    when the ends are reversed), before any limiter or initial position is compared with it."""
-    values = dict(s.params)
+def declared_domain(s: Scene, values=None) -> tuple:
+    """The curve's declared domain ``(lo, hi)`` as floats, for the scene's parameter values
+    or for ``values`` (the parameters' values in the curve's order).
+
+    Raises
+    ------
+    SceneError
+        Naming ``curve.domain[i]`` (or ``curve.domain`` when the ends are
+        reversed), before any limiter or initial position is compared with it.
+
+    Examples
+    --------
+    >>> s = scene_from_dict({"curve": {"shape": "cycloid"}, "parameters": {"R": 1},
+    ...     "physics": {"restitution": 1}, "initial": {"q": 0, "qdot": 1}})
+    >>> [round(v, 6) for v in declared_domain(s)]
+    [-3.141593, 3.141593]
+    """
+    names = [n for n, _ in s.params]
+    values = dict(s.params) if values is None else dict(zip(names, (float(v) for v in values)))
     out = []
     for i, end in enumerate(s.shape.domain):
         text = str(end).strip()
@@ -498,9 +701,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         raise SceneError("physics", "give mu or alpha0 (mu = tan(alpha0)), not both")
     alpha0 = _number(phys, "alpha0", "physics")
     if alpha0 is not None:
-        if not 0 <= alpha0 < math.pi / 2:
-            raise SceneError("physics.alpha0", f"friction angle must be in [0, pi/2) radians, got {alpha0}")
-        mu = math.tan(alpha0)
+        mu = friction_coefficient(alpha0)
     else:
         mu = _number(phys, "mu", "physics", default=0.0)
     if "restitution" not in phys:
@@ -550,3 +751,23 @@ def load_scene(path) -> Scene:
         raise SceneError(_key(exc.path), exc.reason) from None
     stem = path.stem if path.stem.isprintable() and len(path.stem) <= MAX_NAME_LENGTH else safe_stem(path.stem)
     return scene_from_dict(data, name=data.get("name", stem))
+
+
+def resolve_scene(text: str) -> Scene:
+    """The scene of a file path, or of a packaged scene's name (``"paper-parabola"``).
+
+    Raises
+    ------
+    SceneError
+        When ``text`` is neither an existing file nor a packaged scene, or the scene is not valid.
+    """
+    path = Path(text)
+    if path.exists() or text.endswith(".toml"):
+        return load_scene(path)
+    from importlib import resources
+
+    packaged = resources.files("symvib") / "scenes" / f"{text}.toml"
+    if not packaged.is_file():
+        raise SceneError(text, "no such scene file (nor a packaged scene of that name)")
+    with resources.as_file(packaged) as p:
+        return load_scene(p)

@@ -367,7 +367,7 @@ def regular_shape(scene):
     import json
 
     from symvib.numeric.scene import SceneError
-    from symvib.numeric.scene import _domain as declared_domain
+    from symvib.numeric.scene import declared_domain
 
     shape = scene.shape
     source = json.dumps(shape.source(), sort_keys=True)

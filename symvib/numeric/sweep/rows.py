@@ -1,0 +1,125 @@
+"""A sweep's scenes as rows: the engine's scene rows and parameter rows of a chunk, checked.
+
+Every row starts as the base scene's row (:func:`symvib.numeric.driver.scene_row`,
+columns :class:`symvib.numeric.layout.SceneRow`) with the varied fields set,
+and is checked by the scene's own checks (:data:`symvib.numeric.scene.CHECKS`,
+applied element-wise to the columns): a bad row raises the
+:class:`~symvib.numeric.scene.SceneError` a scene file with that value raises,
+naming the field, with ``(sweep row i of its chunk)`` appended.
+
+Examples
+--------
+>>> from symvib.numeric.scene import resolve_scene
+>>> from symvib.numeric.sweep.axes import parse_axis
+>>> base = resolve_scene("paper-parabola")
+>>> axes = (parse_axis(base, "restitution", "0.5,1.5", random=False),)
+>>> scene_rows(base, axes, [np.array([0.5, 1.5])])
+Traceback (most recent call last):
+...
+symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5 (sweep row 1 of its chunk)
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from symvib.numeric.driver import scene_row
+from symvib.numeric.layout import SceneRow
+from symvib.numeric.scene import SceneError, SceneNumbers, checks, declared_domain, friction_coefficient
+from symvib.numeric.sweep.axes import FIELDS
+
+__all__ = ["scene_rows", "check_rows"]
+
+
+def scene_rows(scene, axes, values) -> tuple:
+    """The engine's rows for varied ``values`` (one array per axis) of ``scene``.
+
+    Parameters
+    ----------
+    scene : Scene
+        The base scene: fields not varied keep its values.
+    axes : sequence of Axis
+        The varied fields (:class:`symvib.numeric.sweep.axes.Axis`).
+    values : sequence of ndarray
+        Each axis's values, one per row.
+
+    Returns
+    -------
+    scene_rows, param_rows : ndarray
+        C-contiguous ``(n, len(SceneRow))`` and ``(n, number of curve parameters)``.
+
+    Raises
+    ------
+    SceneError
+        For the first check a row fails (:func:`check_rows`), naming the field and the row.
+    """
+    n = len(values[0]) if values else 0
+    rows = np.repeat(scene_row(scene)[None, :], n, axis=0)
+    names = [name for name, _ in scene.params]
+    params = np.repeat(np.array(scene.param_values, dtype=float)[None, :], n, axis=0)
+    for axis, v in zip(axes, values):
+        v = np.asarray(v, dtype=float)
+        if axis.field.startswith("parameters."):
+            params[:, names.index(axis.field.split(".", 1)[1])] = v
+            continue
+        if axis.field == "physics.alpha0":
+            v = _friction_coefficients(v, axis.field)
+        rows[:, FIELDS[axis.field]] = v
+        if axis.field == "limiters.left":
+            rows[:, SceneRow.has_left] = 1.0
+        elif axis.field == "limiters.right":
+            rows[:, SceneRow.has_right] = 1.0
+    check_rows(scene, rows, params, vary_params=any(a.field.startswith("parameters.") for a in axes))
+    return np.ascontiguousarray(rows), np.ascontiguousarray(params)
+
+
+def _friction_coefficients(alpha0: np.ndarray, field: str) -> np.ndarray:
+    """``mu = tan(alpha0)`` per row, by the scene's own conversion (:func:`~symvib.numeric.scene.friction_coefficient`)."""
+    out = np.empty_like(alpha0)
+    for i, a in enumerate(alpha0):
+        try:
+            out[i] = friction_coefficient(a, field)
+        except SceneError as exc:
+            raise SceneError(exc.field, f"{exc.reason} (sweep row {i} of its chunk)") from None
+    return out
+
+
+def check_rows(scene, rows: np.ndarray, params: np.ndarray, *, vary_params: bool = True) -> None:
+    """Make the checks of :func:`symvib.numeric.scene.check_numbers` on every row, in the same order.
+
+    ``rows`` are scene rows (columns :class:`~symvib.numeric.layout.SceneRow`),
+    ``params`` the curve's parameter values per row.  The curve's domain is
+    evaluated once, or per row when ``vary_params``.
+
+    Raises
+    ------
+    SceneError
+        The scene's message for the first failing check (of its first failing
+        row), with ``(sweep row i of its chunk)`` appended.
+    """
+    count = rows.shape[0]
+    names = [name for name, _ in scene.params]
+
+    def domain():
+        if not vary_params:
+            return declared_domain(scene)
+        ends = np.array([declared_domain(scene, p) for p in params]).reshape(count, 2)
+        return ends[:, 0], ends[:, 1]
+
+    columns = {name: rows[:, SceneRow[name]] for name in SceneNumbers.NAMES if name != "contact"}
+    columns["has_left"], columns["has_right"] = columns["has_left"] != 0, columns["has_right"] != 0
+    events = columns["max_events"]
+    if np.all((events % 1 == 0) & (np.abs(events) < 2**62)):   # whole numbers: shown as a scene file's integer
+        columns["max_events"] = events.astype(np.int64)
+    numbers = SceneNumbers(params={n: params[:, j] for j, n in enumerate(names)}, kinds=dict(scene.shape.params),
+                           domain=domain, contact=scene.contact, **columns)
+    for c in checks(numbers):
+        if c.test is None:
+            ok = np.isfinite(np.asarray(c.value(numbers), dtype=float))
+        else:
+            ok = c.test(numbers)
+        if c.when is not None:
+            ok = np.logical_or(ok, np.logical_not(c.when(numbers)))
+        bad = np.flatnonzero(~np.broadcast_to(ok, (count,)))
+        if bad.size:
+            i = int(bad[0])
+            raise SceneError(c.field, f"{c.message(numbers.row(i))} (sweep row {i} of its chunk)")

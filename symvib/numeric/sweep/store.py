@@ -1,0 +1,314 @@
+"""A sweep on disk: folder layout, manifest, chunk files, loading.
+
+Layout of a sweep folder ``DIR``: ``DIR/manifest.json`` (the definition, its
+identity :func:`sweep_id` and the names of columns and codes) and one
+``DIR/chunks/chunk-NNNNNN.npz`` per chunk of rows, NumPy's own archive format
+(``numpy.load`` reads it; :func:`load_sweep` joins the chunks into columns).
+Every chunk carries the sweep's identity; it is written to a temporary name
+and renamed, so it either exists complete or not at all.  Every file read is
+checked (sizes, types, identity) before it is used: a chunk that is truncated
+or another sweep's is refused with a one-line :class:`SweepError` naming it.
+One writer at a time: :class:`symvib.numeric.sweep.lock.WriterLock`.
+
+Examples
+--------
+>>> import tempfile
+>>> from symvib.numeric.scene import resolve_scene
+>>> from symvib.numeric.sweep import sweep
+>>> out = tempfile.mkdtemp()
+>>> _ = sweep(resolve_scene("paper-parabola"), {"qdot": "3:12:3"}, chunk=2, out=out, backend="python")
+>>> sorted(chunk_files(Path(out)))
+['chunk-000000.npz', 'chunk-000001.npz']
+>>> res = load_sweep(out)
+>>> res.count, res.spec.chunks, len(sweep_id(res.spec.to_dict()))
+(3, 2, 32)
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import zipfile
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from symvib.numeric.layout import EVENT_COLUMNS, EVENT_KINDS, STATUSES, SUMMARY_COLUMNS
+from symvib.numeric.scene import SceneError
+from symvib.numeric.sweep import limits
+from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
+from symvib.numeric.sweep.result import INTEGER_COLUMNS, SweepResult, join_chunks
+from symvib.numeric.sweep.spec import SweepSpec
+
+__all__ = ["FORMAT", "OLD_FORMATS", "sweep_id", "load_sweep", "manifest", "read_manifest", "column_names",
+           "chunk_path", "chunk_files", "write_chunk", "read_chunk", "check_out", "prepare"]
+
+#: Identifier of the on-disk layout (manifest key ``format``).  Version 2 added the
+#: sweep identity (``sweep_id``) to the manifest and to every chunk.
+FORMAT = "symvib-sweep/2"
+#: Layouts this version recognizes but does not read (their chunks carry no sweep identity).
+OLD_FORMATS = ("symvib-sweep/1",)
+#: Hex digits of the sweep identity (a SHA-256 of the format and definition).
+_ID_DIGITS = 32
+
+
+def sweep_id(definition: dict) -> str:
+    """The identity of a sweep: a hash of the layout :data:`FORMAT` and its definition.
+
+    Written in the manifest and in every chunk; a chunk is used only by the
+    sweep of the same identity (the definition's canonical JSON, so a
+    definition read back from a manifest has the identity it was written with).
+    """
+    text = json.dumps({"format": FORMAT, "definition": definition}, sort_keys=True, separators=(",", ":"),
+                      allow_nan=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:_ID_DIGITS]
+
+
+def manifest(spec: SweepSpec, ident: str) -> dict:
+    from symvib import __version__
+
+    return {"format": FORMAT, "sweep_id": ident, "definition": spec.to_dict(), "chunks": spec.chunks,
+            "columns": column_names(spec),
+            "status_names": list(STATUSES), "event_names": list(EVENT_KINDS),
+            "event_log_columns": list(EVENT_COLUMNS),
+            "symvib_version": __version__}
+
+
+def column_names(spec: SweepSpec) -> list:
+    return ["row"] + [a.field for a in spec.axes] + list(SUMMARY_COLUMNS) + (["event_log"] if spec.log_events else [])
+
+
+def chunk_path(out: Path, index: int) -> Path:
+    return out / "chunks" / f"chunk-{index:06d}.npz"
+
+
+def write_chunk(out: Path, index: int, columns: dict, ident: str) -> None:
+    """Write a chunk with its sweep's identity: to a temporary name, then renamed (atomic)."""
+    path = chunk_path(out, index)
+    tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
+    try:
+        np.savez(tmp, sweep_id=np.array(ident), **columns)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise SweepError(str(path), f"cannot write the chunk: {exc.strerror or exc}") from None
+
+
+def _bad_chunk(path: Path, reason: str) -> SweepError:
+    return SweepError(str(path), f"{reason}; run the same sweep again to recompute it")
+
+
+def read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
+    """The columns of chunk ``index``, checked against the sweep: identity, names, dtypes, shapes, rows.
+
+    Raises
+    ------
+    SweepError
+        Naming the chunk file: truncated or unreadable, made by another sweep,
+        or columns that are not this sweep's.
+    """
+    rows, values = spec.rows(index)
+    n = len(rows)
+    expected = column_names(spec)
+    try:
+        if path.stat().st_size > spec.chunk_bytes() + limits.MAX_MANIFEST_BYTES:
+            raise _bad_chunk(path, "larger than a chunk of this sweep can be")
+        with np.load(path, allow_pickle=False) as data:
+            names = set(data.files)
+            if "sweep_id" not in names:
+                raise _bad_chunk(path, "no sweep identity: not a chunk of this sweep")
+            _check_header(path, data, "sweep_id", lambda d, sh: d.kind == "U" and sh == () and d.itemsize <= 4 * 64,
+                          "a text")
+            if str(data["sweep_id"]) != ident:
+                raise _bad_chunk(path, "made by another sweep (its sweep_id differs from the manifest's)")
+            if names != set(expected) | {"sweep_id"}:
+                raise _bad_chunk(path, f"columns {sorted(names - {'sweep_id'})} are not this sweep's")
+            columns = {}
+            for name in expected:   # each header checked before its array is allocated
+                want = np.dtype(np.int64 if name == "row" or name in INTEGER_COLUMNS else np.float64)
+                shape = (n, spec.log_events, EVENT_WIDTH) if name == "event_log" else (n,)
+                _check_header(path, data, name, lambda d, sh: d == want and sh == shape,
+                              f"{want}{list(shape)}")
+                columns[name] = data[name]
+    except SweepError:
+        raise
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+        raise _bad_chunk(path, f"truncated or unreadable ({type(exc).__name__})") from None
+    if not np.array_equal(columns["row"], rows) or not all(
+            np.array_equal(columns[a.field], v) for a, v in zip(spec.axes, values)):
+        raise _bad_chunk(path, f"rows or varied values are not those of chunk {index}")
+    status = columns["status"]
+    if status.size and (status.min() < 0 or status.max() >= len(STATUSES)):
+        raise _bad_chunk(path, "status codes out of range")
+    return columns
+
+
+def _check_header(path: Path, data, name: str, ok, expected: str) -> None:
+    """Check the ``.npy`` header of member ``name`` (dtype, shape) before its array is read."""
+    with data.zip.open(f"{name}.npy") as fh:
+        version = np.lib.format.read_magic(fh)
+        read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, fortran, dtype = read(fh)
+    if fortran or dtype.hasobject or not ok(dtype, shape):
+        raise _bad_chunk(path, f"column {name} is {dtype}{list(shape)}, expected {expected}")
+
+
+def check_out(out) -> Path:
+    """Create the sweep folder ``out`` (and its ``chunks``), or raise a one-line :class:`SweepError`."""
+    if not isinstance(out, (str, os.PathLike)):
+        raise SweepError("out", f"must be a folder path, got {type(out).__name__}")
+    out = Path(out)
+    if not str(out) or "\0" in str(out):
+        raise SweepError("out", f"not a usable folder name: {str(out)!r}")
+    for folder in (out, out / "chunks"):
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except FileExistsError:
+            raise SweepError("out", f"{folder} exists and is not a folder (a file or a device)") from None
+        except NotADirectoryError:
+            raise SweepError("out", f"{folder}: a parent of it is a file, not a folder") from None
+        except OSError as exc:
+            raise SweepError("out", f"cannot create the folder {folder}: {exc.strerror or exc}") from None
+        if not folder.is_dir() or folder.name == "chunks" and folder.is_symlink():
+            raise SweepError("out", f"{folder} is not a folder (or a symbolic link, which could lead outside {out})")
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise SweepError("out", f"folder {folder} is not writable")
+    manifest = out / "manifest.json"
+    if manifest.exists() and not manifest.is_file():
+        raise SweepError(str(manifest), "is not a regular file")
+    return out
+
+
+def read_manifest(out: Path) -> tuple:
+    """``(manifest, spec, sweep_id)`` of the sweep in ``out``, every part checked.
+
+    Raises
+    ------
+    SweepError
+        One line naming ``manifest.json``: missing, not a small regular file,
+        not JSON, not an object, an old or unknown format, a definition that
+        is not valid or not the one its ``sweep_id`` was made of.
+    """
+    path = out / "manifest.json"
+    if not path.exists():
+        raise SweepError(str(out), "no sweep here (manifest.json missing)")
+    if not path.is_file():
+        raise SweepError(str(path), "is not a regular file")
+    try:
+        size = path.stat().st_size
+        if size > limits.MAX_MANIFEST_BYTES:
+            raise SweepError(str(path), f"is {size} bytes, more than a manifest may hold ({limits.MAX_MANIFEST_BYTES})")
+        with open(path, "rb") as fh:
+            raw = fh.read(size + 1)   # the size was checked: no buffer of the bound's size
+        if len(raw) > limits.MAX_MANIFEST_BYTES:
+            raise SweepError(str(path), f"is more than a manifest may hold ({limits.MAX_MANIFEST_BYTES} bytes)")
+        manifest = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
+    except SweepError:
+        raise
+    except OSError as exc:
+        raise SweepError(str(path), f"cannot read it: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise SweepError(str(path), "not a JSON manifest (not UTF-8 text)") from None
+    except (ValueError, RecursionError) as exc:
+        reason = exc.args[0] if isinstance(exc, ValueError) else "nested too deeply"
+        raise SweepError(str(path), f"not a JSON manifest ({reason})") from None
+    if not isinstance(manifest, dict):
+        raise SweepError(str(path), f"must hold a JSON object, got {type(manifest).__name__}")
+    fmt = manifest.get("format")
+    if fmt in OLD_FORMATS:
+        raise SweepError(str(path), f"written in the older layout {fmt}, whose chunks carry no sweep identity; "
+                                    f"run the sweep again with --overwrite (layout {FORMAT})")
+    if fmt != FORMAT:
+        raise SweepError(str(path), f"unknown format {fmt!r}; expected {FORMAT}")
+    definition = manifest.get("definition")
+    try:
+        spec = SweepSpec.from_dict(definition)
+    except SceneError as exc:
+        raise SweepError(str(path), f"{exc.field}: {exc.reason}") from None
+    ident = sweep_id(definition)
+    if manifest.get("sweep_id") != ident:
+        raise SweepError(str(path), "sweep_id does not match the definition (the manifest was edited)")
+    return manifest, spec, ident
+
+
+def _no_constant(name: str):
+    """``json.loads`` hook: a manifest holds finite numbers only (no NaN or Infinity)."""
+    raise ValueError(f"non-finite number {name}")
+
+
+def chunk_files(out: Path) -> set:
+    try:
+        return set(os.listdir(out / "chunks"))
+    except (FileNotFoundError, NotADirectoryError):
+        return set()
+
+
+def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool) -> tuple:
+    """Open ``out`` for the sweep ``ident`` (the caller holds its lock).
+
+    Returns ``(done, discarded)``: chunks complete and valid there, and chunks
+    removed because they were truncated, unreadable or another sweep's.
+    """
+    path = out / "manifest.json"
+    old = None
+    if path.exists():
+        try:
+            old = read_manifest(out)[2]
+        except SweepError as exc:
+            if not overwrite:
+                raise SweepError(exc.field, f"{exc.reason}; --overwrite replaces it with this sweep") from None
+    if old is not None and old != ident and not overwrite:
+        raise SweepError("out", f"{out} holds a different sweep; choose another folder or overwrite it")
+    files = chunk_files(out)
+    if old != ident:
+        for name in files:
+            if name.startswith("chunk-"):
+                (out / "chunks" / name).unlink(missing_ok=True)
+        files = set()
+    for name in files:
+        if name.endswith(".tmp.npz"):
+            (out / "chunks" / name).unlink(missing_ok=True)  # a killed writer's partial file
+    tmp = path.with_suffix(".json.tmp")
+    try:
+        tmp.write_text(json.dumps(manifest(spec, ident), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise SweepError(str(path), f"cannot write the manifest: {exc.strerror or exc}") from None
+    done, discarded = [], []
+    for i in range(spec.chunks):
+        chunk = chunk_path(out, i)
+        if chunk.name not in files:
+            continue
+        try:
+            read_chunk(chunk, spec, ident, i)
+            done.append(i)
+        except SweepError:
+            chunk.unlink(missing_ok=True)
+            discarded.append(i)
+    return done, discarded
+
+
+def load_sweep(out) -> SweepResult:
+    """Read a sweep folder (manifest and chunks) into a :class:`SweepResult`.
+
+    Every chunk is checked against the manifest (:func:`read_chunk`: the
+    sweep's identity, column names, dtypes, shapes and rows).
+
+    Raises
+    ------
+    SweepError
+        One line naming the file: no or a bad manifest, missing chunks (the
+        sweep is incomplete), a truncated chunk or one of another sweep.
+    """
+    out = Path(out)
+    _, spec, ident = read_manifest(out)
+    files = chunk_files(out)
+    missing = [i for i in range(spec.chunks) if chunk_path(out, i).name not in files]
+    if missing:
+        raise SweepError(str(out), f"sweep is incomplete: {len(missing)} of {spec.chunks} chunks missing "
+                                   f"(first: {missing[0]}); run the same sweep again to resume")
+    parts = [read_chunk(chunk_path(out, i), spec, ident, i) for i in range(spec.chunks)]
+    return SweepResult(spec, join_chunks(spec, parts), out=str(out))
+
+
