@@ -140,9 +140,9 @@ def _scene_table(scene) -> list:
 
 
 def _equations(shape_name, verdicts) -> list:
-    from symvib.symbolic.audit import _derivation
+    from symvib.symbolic.audit import derivation
 
-    d = _derivation(shape_name)
+    d = derivation(shape_name)
     tex = d.latex()
     lines = [
         f"Geometry: $${tex['geometry']}$$",

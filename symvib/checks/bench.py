@@ -111,10 +111,6 @@ class Setting:
     value: float
 
     @property
-    def family(self) -> str:
-        return "symvib" if self.method == "symvib" else "RK4" if self.method == "RK4" else "solve_ivp"
-
-    @property
     def label(self) -> str:
         if self.method == "symvib":
             return f"symvib nodes={int(self.value)}"

@@ -36,10 +36,10 @@ import mpmath
 import sympy as sp
 
 from symvib.symbolic.curve import CHECK_DIGITS, identity_holds, sample_points
-from symvib.symbolic.derive import coefficients, derive
+from symvib.symbolic.derive import coefficients, derive, pm_latex
 from symvib.symbolic.symbols import C, g, m, mu, sigma
 
-__all__ = ["Printed", "Verdict", "PRINTED", "audit", "errata_markdown"]
+__all__ = ["Printed", "Verdict", "PRINTED", "audit", "derivation", "errata_markdown"]
 
 pm = sp.Symbol("pm")
 #: Points at which numeric comparisons are made.
@@ -83,10 +83,6 @@ class Verdict:
     evidence: str
     printed_tex: str
     corrected_tex: str
-
-
-def _phi(c):
-    return c.q, c.qdot, c.qddot
 
 
 def _par(c, name):
@@ -209,16 +205,28 @@ PRINTED = _entries()
 
 # --- comparisons --------------------------------------------------------------------------
 @lru_cache(maxsize=None)
-def _derivation(name):
+def derivation(name: str):
+    """The :class:`~symvib.symbolic.derive.Derivation` of catalogue shape ``name``, derived once per process.
+
+    The audit and the paper report (:mod:`symvib.paper`) share it, so the
+    report does not derive a curve the audit already derived.
+
+    Parameters
+    ----------
+    name : str
+        A catalogue shape name (``"parabola"``, ``"cycloid"``, ``"circle"``, ...).
+
+    Returns
+    -------
+    symvib.symbolic.derive.Derivation
+    """
     return derive(name)
 
 
 def _tex(d, e):
-    from symvib.symbolic.derive import _pm
-
     names = d.curve.latex_names()
     names[pm] = r"\pm"
-    return _pm(sp.latex(e, symbol_names=names))
+    return pm_latex(sp.latex(e, symbol_names=names))
 
 
 def _split_eom(expr, c):
@@ -457,7 +465,7 @@ def audit(shapes=("parabola", "cycloid", "circle"), *, general: bool = True) -> 
     judges = {"eom": _judge_eom, "phase": _judge_phase, "energy": _judge_energy}
     for entry in PRINTED:
         if entry.shape in shapes:
-            verdicts.append(judges[entry.kind](entry, _derivation(entry.shape)))
+            verdicts.append(judges[entry.kind](entry, derivation(entry.shape)))
     return tuple(verdicts)
 
 

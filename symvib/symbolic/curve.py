@@ -165,10 +165,6 @@ class Curve:
     def coordinate(self) -> str:
         return self.q.name
 
-    @property
-    def param_names(self) -> tuple:
-        return tuple(p.name for p in self.params)
-
     @cached_property
     def qdot(self) -> sp.Symbol:
         """The generalized velocity symbol (``phidot`` for ``q = phi``)."""

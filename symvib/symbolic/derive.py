@@ -37,7 +37,7 @@ from symvib.symbolic.curve import Curve, identity_holds
 from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivative
 from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
 
-__all__ = ["Branch", "Derivation", "derive", "coefficients"]
+__all__ = ["Branch", "Derivation", "derive", "coefficients", "pm_latex"]
 
 
 def _simplest(expr: sp.Expr) -> sp.Expr:
@@ -186,7 +186,7 @@ class Derivation:
         names[shown] = r"\pm" if pm else r"\sigma"
 
         def tex(e):
-            return _pm(sp.latex(e.subs(sigma, shown), symbol_names=names, order="none"))
+            return pm_latex(sp.latex(e.subs(sigma, shown), symbol_names=names, order="none"))
 
         lhs = c.qddot + self.A * c.qdot**2 + self.B
         Fs = sp.Symbol("F_sigma")
@@ -225,7 +225,27 @@ class Derivation:
         return self.markdown()
 
 
-def _pm(text: str) -> str:
+def pm_latex(text: str) -> str:
+    r"""LaTeX ``text`` with the branch sign ``\pm`` written as printed: ``- \pm`` becomes ``\mp``.
+
+    SymPy prints a product with the branch-sign symbol as ``- \pm`` or
+    ``+ \pm``; the paper writes ``\mp`` and ``\pm``.  Used by
+    :meth:`Derivation.latex` and the audit (:mod:`symvib.symbolic.audit`).
+
+    Parameters
+    ----------
+    text : str
+        LaTeX in which the branch-sign symbol is printed as ``\pm``.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> pm_latex(r"a - \pm b + \pm c - 2 \pm d")
+    'a \\mp b \\pm c \\mp 2 d'
+    """
     text = re.sub(r"- (\d+) \\pm", r"\\mp \1", text)
     return text.replace(r"- \pm", r"\mp").replace(r"+ \pm", r"\pm").replace(r"-\pm", r"\mp")
 
