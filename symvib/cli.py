@@ -17,9 +17,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
-__all__ = ["main", "one_line"]
+__all__ = ["main", "one_line", "build_parser", "build_bench_parser", "bench_main"]
 
 #: Exit status for bad input.
 EXIT_BAD_INPUT = 2
@@ -203,6 +204,71 @@ def _cmd_paper(args) -> int:
     return paper_main(args.out, low_k=args.restitution, quiet=args.quiet)
 
 
+class _BenchParser(argparse.ArgumentParser):
+    """The parser of ``symvib bench``: its errors are one line (exit status 2), not a usage block."""
+
+    def error(self, message):
+        print(f"symvib bench: error: {message}", file=sys.stderr)
+        raise SystemExit(EXIT_BAD_INPUT)
+
+
+#: Default output folder of ``symvib bench`` (relative to the current directory).
+BENCH_OUT = "symvib-bench"
+
+
+def build_bench_parser() -> argparse.ArgumentParser:
+    """The options of ``symvib bench`` (jobs in :mod:`symvib.checks.bench`)."""
+    from symvib.checks.bench import PEER_BUDGET, RANDOM_SCENES, REFERENCE_NAME
+
+    parser = _BenchParser(prog="symvib bench", description="work-precision charts and the stability suite")
+    sub = parser.add_subparsers(dest="job", required=True)
+    p = sub.add_parser("work-precision", help="error against CPU time on the paper scenes; wrong-sequence counts")
+    p.add_argument("--out", default=BENCH_OUT, help=f"output folder (default: {BENCH_OUT})")
+    p.add_argument("--quick", action="store_true", help="a small run (2 scenes, few settings, 20 random scenes)")
+    p.add_argument("--random", type=int, default=None, help=f"random scenes (default {RANDOM_SCENES})")
+    p.add_argument("--workers", type=int, default=1, help="processes for the random scenes (default 1)")
+    p.add_argument("--budget", type=float, default=PEER_BUDGET, help="CPU seconds per peer run")
+    p = sub.add_parser("stability", help="every method on every stability case, outcomes classified")
+    p.add_argument("--out", default=BENCH_OUT, help=f"output folder (default: {BENCH_OUT})")
+    p.add_argument("--quick", action="store_true", help="five of the cases")
+    p.add_argument("--workers", type=int, default=1, help="processes (default 1)")
+    p.add_argument("--budget", type=float, default=PEER_BUDGET, help="CPU seconds per peer run")
+    p = sub.add_parser("reference", help="recompute the 30-digit time references of the paper scenes")
+    p.add_argument("--write", action="store_true", help=f"store them in OUT/{REFERENCE_NAME}")
+    p.add_argument("--out", default=BENCH_OUT,
+                   help=f"folder of --write (default: {BENCH_OUT}; symvib/checks/data updates the shipped file)")
+    return parser
+
+
+def bench_main(argv) -> int:
+    """``symvib bench``: returns an exit status (2 for bad options)."""
+    from pathlib import Path
+
+    from symvib.checks import bench
+    from symvib.paths import check_output_dir
+
+    try:
+        args = build_bench_parser().parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    if getattr(args, "workers", 1) < 1 or getattr(args, "workers", 1) > os.cpu_count():
+        print(f"symvib bench: error: --workers: must be between 1 and {os.cpu_count()}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if getattr(args, "budget", 1.0) <= 0 or (getattr(args, "random", None) or 0) < 0:
+        print("symvib bench: error: --budget and --random must be positive", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.job != "reference" or args.write:
+        check_output_dir(args.out, "--out folder")
+    if args.job == "work-precision":
+        bench.work_precision(Path(args.out), quick=args.quick, n_random=args.random, workers=args.workers,
+                             budget=args.budget)
+    elif args.job == "stability":
+        bench.stability(Path(args.out), quick=args.quick, workers=args.workers, budget=args.budget)
+    else:
+        bench.references(Path(args.out) if args.write else None)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="symvib", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -245,8 +311,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seconds per integration route for a user curve (default 10)")
     p.set_defaults(func=_cmd_generate)
 
-    # Jobs whose options live in their own module: listed here for the help,
-    # dispatched by main() before parsing (argparse.REMAINDER drops a leading option).
+    # Jobs with a parser of their own: listed here for the help, dispatched by main()
+    # before parsing (argparse.REMAINDER drops a leading option).
+    sub.add_parser("bench", help="work-precision charts and the stability suite", add_help=False)
     for name, (_, text) in FORWARDED.items():
         sub.add_parser(name, help=text, add_help=False)
 
@@ -256,8 +323,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Jobs whose options are parsed by their own module's ``main(argv)``.
 FORWARDED = {
-    "bench": ("symvib.checks.bench", "work-precision charts and the stability suite"),
     "sweep": ("symvib.numeric.sweep", "parameter sweeps over many scenes"),
 }
 
@@ -265,7 +332,10 @@ FORWARDED = {
 def main(argv=None) -> int:
     """Entry point of the ``symvib`` command."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    if argv and argv[0] in FORWARDED:
+    if argv and argv[0] == "bench":
+        command = "bench"
+        run = lambda: bench_main(argv[1:])  # noqa: E731
+    elif argv and argv[0] in FORWARDED:
         command = argv[0]
         run = lambda: importlib.import_module(FORWARDED[command][0]).main(argv[1:])  # noqa: E731
     else:
