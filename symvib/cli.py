@@ -50,9 +50,9 @@ def _user_errors() -> tuple:
 
 
 def _cmd_derive(args) -> int:
+    from symvib.shapes import shape
     from symvib.symbolic import curve as _curve
     from symvib.symbolic.derive import derive
-    from symvib.shapes import shape
 
     if args.z is not None:
         if args.x is not None:
@@ -82,8 +82,8 @@ def _cmd_derive(args) -> int:
 
 
 def _cmd_audit(args) -> int:
-    from symvib.symbolic.audit import audit, errata_markdown
     from symvib.paths import check_output_file
+    from symvib.symbolic.audit import audit, errata_markdown
 
     if args.write:
         check_output_file(args.write, "--write file")
@@ -153,8 +153,8 @@ def _cmd_run(args) -> int:
     from pathlib import Path
 
     from symvib.numeric.driver import simulate
-    from symvib.paths import UserPathError, check_output_dir, check_output_file
     from symvib.numeric.scene import load_scene
+    from symvib.paths import UserPathError, check_output_dir, check_output_file
 
     # Every path first: no simulation is spent on a run whose output cannot be written.
     scene = load_scene(args.scene)

@@ -1,10 +1,10 @@
 """symvib bench: options, ratio, random scenes, peer budgets, shipped data, and (slow) the quick runs end to end."""
 import csv
-import tomllib
 from fnmatch import fnmatch
 from pathlib import Path
 
 import pytest
+import tomllib
 
 from symvib.checks import bench
 from symvib.checks.peers import solve_ivp_events
@@ -15,10 +15,11 @@ DATA = Path(bench.__file__).resolve().parent / bench.DATA_FOLDER
 
 
 def _package_state() -> dict:
-    """Every file of the installed package folder with its size and modification time."""
+    """Every data file of the installed package folder (what bench could write: not its Python
+    sources, which an editable checkout may change meanwhile) with its size and modification time."""
     package = Path(bench.__file__).resolve().parents[1]
     return {p: (p.stat().st_size, p.stat().st_mtime_ns) for p in package.rglob("*")
-            if p.is_file() and "__pycache__" not in p.parts}
+            if p.is_file() and p.suffix not in (".py", ".pyc")}
 
 
 def test_bad_options_exit_2_with_one_line(capsys):

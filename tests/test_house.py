@@ -70,7 +70,8 @@ def test_the_scan_finds_a_private_import(tmp_path):
     fake.mkdir(parents=True)
     (fake / "x.py").write_text("from symvib.symbolic.derive import _pm\nfrom ..paper import _y as y\n"
                                "from symvib.symbolic import curve as _curve\n", encoding="utf-8")
-    assert _private_imports(fake / "x.py", tmp_path / "symvib") == [(1, "symvib.symbolic.derive", "_pm"), (2, "symvib.paper", "_y")]
+    assert _private_imports(fake / "x.py", tmp_path / "symvib") == [(1, "symvib.symbolic.derive", "_pm"),
+                                                                    (2, "symvib.paper", "_y")]
 
 
 def test_no_module_imports_private_names_of_another():

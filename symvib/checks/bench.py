@@ -358,9 +358,9 @@ def _sequence_task(args):
     out = []
     for st in settings:
         try:
-            status, events, message = run_setting(st, scene, budget=budget, backend=backend)
-        except Exception as exc:  # noqa: BLE001 - a crash is a failure to count
-            status, events, message = "failed", [], f"{type(exc).__name__}: {exc}"
+            status, events, _ = run_setting(st, scene, budget=budget, backend=backend)
+        except Exception:  # noqa: BLE001 - a crash is a failure to count
+            status, events = "failed", []
         if status == "failed":
             out.append("failed")
         else:

@@ -23,7 +23,7 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -46,7 +46,7 @@ class GaussRule:
     cumulative_weighted: np.ndarray
 
 
-@lru_cache(maxsize=None)
+@cache
 def rule(n: int) -> GaussRule:
     """The :class:`GaussRule` with ``n`` nodes (cached; arrays read-only).
 
