@@ -29,9 +29,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from symvib.numeric import driver  # noqa: E402
 from symvib.checks.peers import event_errors, solve_ivp_events  # noqa: E402
 from symvib.checks.reference import phase_reference  # noqa: E402
+from symvib.numeric import driver  # noqa: E402
 from symvib.numeric.scene import load_scene  # noqa: E402
 
 SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")

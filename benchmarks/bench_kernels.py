@@ -112,7 +112,8 @@ def main(argv=None):
     # Import times.
     empty = interpreter_seconds("pass", args.repeat)
     t_kern = interpreter_seconds(
-        "from symvib.numeric.kernels import load; load('parabola').w_p(0.3, 60.0, 9.81, 0.05, 1.0)", args.repeat) - empty
+        "from symvib.numeric.kernels import load; load('parabola').w_p(0.3, 60.0, 9.81, 0.05, 1.0)",
+        args.repeat) - empty
     t_numpy = interpreter_seconds("import numpy", args.repeat) - empty
     t_sympy = interpreter_seconds("import sympy", args.repeat) - empty
     print(f"import (median of {args.repeat}, minus an empty interpreter): generated module + numpy "

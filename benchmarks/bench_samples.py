@@ -21,7 +21,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import numpy as np  # noqa: E402
 
 from symvib.numeric import driver  # noqa: E402
 from symvib.numeric.engine import bind  # noqa: E402

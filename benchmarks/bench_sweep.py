@@ -36,9 +36,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from symvib.numeric import driver  # noqa: E402
 from symvib.checks.peers import solve_ivp_events  # noqa: E402
 from symvib.checks.reference import phase_reference  # noqa: E402
+from symvib.numeric import driver  # noqa: E402
 from symvib.numeric.scene import load_scene  # noqa: E402
 from symvib.numeric.sweep import sweep  # noqa: E402
 

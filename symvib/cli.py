@@ -17,9 +17,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
-__all__ = ["main", "sweep_main", "build_parser", "build_sweep_parser", "one_line"]
+__all__ = ["main", "one_line", "build_parser", "build_bench_parser", "bench_main", "build_sweep_parser", "sweep_main"]
 
 #: Exit status for bad input.
 EXIT_BAD_INPUT = 2
@@ -51,9 +52,9 @@ def _user_errors() -> tuple:
 
 
 def _cmd_derive(args) -> int:
+    from symvib.shapes import shape
     from symvib.symbolic import curve as _curve
     from symvib.symbolic.derive import derive
-    from symvib.shapes import shape
 
     if args.z is not None:
         if args.x is not None:
@@ -83,8 +84,8 @@ def _cmd_derive(args) -> int:
 
 
 def _cmd_audit(args) -> int:
-    from symvib.symbolic.audit import audit, errata_markdown
     from symvib.paths import check_output_file
+    from symvib.symbolic.audit import audit, errata_markdown
 
     if args.write:
         check_output_file(args.write, "--write file")
@@ -100,7 +101,7 @@ def _cmd_audit(args) -> int:
 
 def _cmd_generate(args) -> int:
     from symvib.codegen import generate as codegen
-    from symvib.numeric.kernels import _module_name, generated_dir
+    from symvib.numeric.kernels import generated_dir, module_name
     from symvib.paths import check_output_dir
 
     if args.out:
@@ -111,7 +112,7 @@ def _cmd_generate(args) -> int:
         if not args.out:
             raise ValueError("--scene: the curve of a scene file is written where --out says")
         shape = load_scene(args.scene).shape
-        path = codegen.generate(shape, args.out, name=_module_name(shape.module), source=shape.source(),
+        path = codegen.generate(shape, args.out, name=module_name(shape.module), source=shape.source(),
                                 seconds=args.budget)
         print(f"wrote {_inside(path, args.out)}")
         return 0
@@ -125,7 +126,7 @@ def _cmd_generate(args) -> int:
         kind = "parametric" if args.x is not None else "graph"
         user = Shape(name=args.name or "user", kind=kind, q=args.q or ("q" if args.x else "x"), z=args.z,
                      x=args.x)
-        path = codegen.generate(user, args.out, name=_module_name(user.module), source=user.source(),
+        path = codegen.generate(user, args.out, name=module_name(user.module), source=user.source(),
                                 seconds=args.budget)
         print(f"wrote {_inside(path, args.out)}")
         return 0
@@ -154,8 +155,8 @@ def _cmd_run(args) -> int:
     from pathlib import Path
 
     from symvib.numeric.driver import simulate
-    from symvib.paths import UserPathError, check_output_dir, check_output_file
     from symvib.numeric.scene import load_scene
+    from symvib.paths import UserPathError, check_output_dir, check_output_file
 
     # Every path first: no simulation is spent on a run whose output cannot be written.
     scene = load_scene(args.scene)
@@ -205,6 +206,71 @@ def _cmd_paper(args) -> int:
     return paper_main(args.out, low_k=args.restitution, quiet=args.quiet)
 
 
+class _BenchParser(argparse.ArgumentParser):
+    """The parser of ``symvib bench``: its errors are one line (exit status 2), not a usage block."""
+
+    def error(self, message):
+        print(f"symvib bench: error: {message}", file=sys.stderr)
+        raise SystemExit(EXIT_BAD_INPUT)
+
+
+#: Default output folder of ``symvib bench`` (relative to the current directory).
+BENCH_OUT = "symvib-bench"
+
+
+def build_bench_parser() -> argparse.ArgumentParser:
+    """The options of ``symvib bench`` (jobs in :mod:`symvib.checks.bench`)."""
+    from symvib.checks.bench import PEER_BUDGET, RANDOM_SCENES, REFERENCE_NAME
+
+    parser = _BenchParser(prog="symvib bench", description="work-precision charts and the stability suite")
+    sub = parser.add_subparsers(dest="job", required=True)
+    p = sub.add_parser("work-precision", help="error against CPU time on the paper scenes; wrong-sequence counts")
+    p.add_argument("--out", default=BENCH_OUT, help=f"output folder (default: {BENCH_OUT})")
+    p.add_argument("--quick", action="store_true", help="a small run (2 scenes, few settings, 20 random scenes)")
+    p.add_argument("--random", type=int, default=None, help=f"random scenes (default {RANDOM_SCENES})")
+    p.add_argument("--workers", type=int, default=1, help="processes for the random scenes (default 1)")
+    p.add_argument("--budget", type=float, default=PEER_BUDGET, help="CPU seconds per peer run")
+    p = sub.add_parser("stability", help="every method on every stability case, outcomes classified")
+    p.add_argument("--out", default=BENCH_OUT, help=f"output folder (default: {BENCH_OUT})")
+    p.add_argument("--quick", action="store_true", help="five of the cases")
+    p.add_argument("--workers", type=int, default=1, help="processes (default 1)")
+    p.add_argument("--budget", type=float, default=PEER_BUDGET, help="CPU seconds per peer run")
+    p = sub.add_parser("reference", help="recompute the 30-digit time references of the paper scenes")
+    p.add_argument("--write", action="store_true", help=f"store them in OUT/{REFERENCE_NAME}")
+    p.add_argument("--out", default=BENCH_OUT,
+                   help=f"folder of --write (default: {BENCH_OUT}; symvib/checks/data updates the shipped file)")
+    return parser
+
+
+def bench_main(argv) -> int:
+    """``symvib bench``: returns an exit status (2 for bad options)."""
+    from pathlib import Path
+
+    from symvib.checks import bench
+    from symvib.paths import check_output_dir
+
+    try:
+        args = build_bench_parser().parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    if getattr(args, "workers", 1) < 1 or getattr(args, "workers", 1) > os.cpu_count():
+        print(f"symvib bench: error: --workers: must be between 1 and {os.cpu_count()}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if getattr(args, "budget", 1.0) <= 0 or (getattr(args, "random", None) or 0) < 0:
+        print("symvib bench: error: --budget and --random must be positive", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.job != "reference" or args.write:
+        check_output_dir(args.out, "--out folder")
+    if args.job == "work-precision":
+        bench.work_precision(Path(args.out), quick=args.quick, n_random=args.random, workers=args.workers,
+                             budget=args.budget)
+    elif args.job == "stability":
+        bench.stability(Path(args.out), quick=args.quick, workers=args.workers, budget=args.budget)
+    else:
+        bench.references(Path(args.out) if args.write else None)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="symvib", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -247,8 +313,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seconds per integration route for a user curve (default 10)")
     p.set_defaults(func=_cmd_generate)
 
-    # Jobs whose options live in their own module: listed here for the help,
-    # dispatched by main() before parsing (argparse.REMAINDER drops a leading option).
+    # Jobs with a parser of their own: listed here for the help, dispatched by main()
+    # before parsing (argparse.REMAINDER drops a leading option).
+    sub.add_parser("bench", help="work-precision charts and the stability suite", add_help=False)
     for name, (_, text) in FORWARDED.items():
         sub.add_parser(name, help=text, add_help=False)
 
@@ -258,9 +325,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: Jobs that parse their own options: name -> (module:function taking the words after the name, help).
+#: Jobs that parse their own options (with their parsers here): name -> (module:function taking
+#: the words after the name, help).
 FORWARDED = {
-    "bench": ("symvib.checks.bench:main", "work-precision charts and the stability suite"),
     "sweep": ("symvib.cli:sweep_main", "parameter sweeps over many scenes"),
 }
 
@@ -288,7 +355,8 @@ def _sweep_file(path) -> dict:
     return data
 
 
-#: Types of the keys of a sweep file (``vary`` is a table; integers are checked by :func:`symvib.numeric.sweep.make_spec`).
+#: Types of the keys of a sweep file (``vary`` is a table; integers are checked by
+#: :func:`symvib.numeric.sweep.make_spec`).
 _SWEEP_FILE_TYPES = {"scene": str, "out": str, "vary": dict, "random": int, "seed": int, "chunk": int,
                      "log_events": int, "nodes": int}
 
@@ -373,13 +441,14 @@ def _cmd_sweep(args) -> int:
         return value if value is not None else conf.get(name, default)
 
     res = sweep(scene, vary, random=pick("random", None), seed=pick("seed", 0), chunk=pick("chunk", DEFAULT_CHUNK),
-                log_events=pick("log_events", 0), nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite, scheduler=args.scheduler,
-                progress=not args.quiet, backend=args.backend)
+                log_events=pick("log_events", 0), nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite,
+                scheduler=args.scheduler, progress=not args.quiet, backend=args.backend)
     names = res.status_names()
     status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in STATUSES if np.any(names == s))
     events = int(np.sum(res["events"]))
     print(f"sweep of {res.count} scenes of {scene.name} into {out}: {len(res.computed)} chunk(s) computed, "
-          f"{len(res.reused)} reused" + (f" ({len(res.discarded)} found truncated or foreign)" if res.discarded else ""))
+          f"{len(res.reused)} reused"
+          + (f" ({len(res.discarded)} found truncated or foreign)" if res.discarded else ""))
     print(f"  status: {status}; {events} events; {np.mean(res['impacts']):.3g} impacts per scene on average")
     if res.computed and res.seconds > 0:
         n = sum(len(res.spec.rows(i)[0]) for i in res.computed)
@@ -401,7 +470,10 @@ def _cmd_sweep(args) -> int:
 def main(argv=None) -> int:
     """Entry point of the ``symvib`` command."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    if argv and argv[0] in FORWARDED:
+    if argv and argv[0] == "bench":
+        command = "bench"
+        run = lambda: bench_main(argv[1:])  # noqa: E731
+    elif argv and argv[0] in FORWARDED:
         command = argv[0]
         module, function = FORWARDED[command][0].split(":")
         run = lambda: getattr(importlib.import_module(module), function)(argv[1:])  # noqa: E731

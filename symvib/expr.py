@@ -221,7 +221,7 @@ def _precheck(text, field: str) -> str:
         depth -= ch in ")]}"
         if depth > MAX_DEPTH:
             raise ExpressionError(field, f"expression nested deeper than {MAX_DEPTH} levels")
-    if re.search(r"(?:[-+~]\s*){%d}" % (MAX_UNARY + 2), text):
+    if re.search(rf"(?:[-+~]\s*){{{MAX_UNARY + 2}}}", text):
         raise ExpressionError(field, f"expression nested deeper than {MAX_UNARY} levels "
                                      f"(more than {MAX_UNARY} signs in a row)")
     return text

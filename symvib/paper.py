@@ -140,9 +140,9 @@ def _scene_table(scene) -> list:
 
 
 def _equations(shape_name, verdicts) -> list:
-    from symvib.symbolic.audit import _derivation
+    from symvib.symbolic.audit import derivation
 
-    d = _derivation(shape_name)
+    d = derivation(shape_name)
     tex = d.latex()
     lines = [
         f"Geometry: $${tex['geometry']}$$",
@@ -257,8 +257,8 @@ def _start_symbolic():
 
 def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = True, progress=None) -> dict:
     """Write the report, figures and results into ``out_dir``; returns what was written."""
-    from symvib.symbolic.audit import errata_markdown
     from symvib.numeric.driver import simulate
+    from symvib.symbolic.audit import errata_markdown
 
     say = progress or (lambda msg: None)
     out = Path(out_dir)
@@ -268,7 +268,7 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
     pool, jobs = _start_symbolic()
     with pool:
         runs = []
-        for name, figs in SCENES:
+        for name, _figs in SCENES:
             base = _scene(name)
             for k in (HIGH_K, low_k):
                 key = f"{name}-k{k:g}"
@@ -351,8 +351,9 @@ def markdown_to_html(text: str, *, title: str) -> str:
             rows = [r for r in table if not re.match(r"^\|\s*:?-", r)]
             cells = [[c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", r.strip()[1:-1])]
                      for r in rows]
-            out = ["<table>"] + ["<tr>" + "".join(f"<{'th' if i == 0 else 'td'}>{inline(c)}</{'th' if i == 0 else 'td'}>"
-                                                  for c in row) + "</tr>" for i, row in enumerate(cells)] + ["</table>"]
+            tag = lambda i: "th" if i == 0 else "td"  # noqa: E731
+            out = ["<table>"] + ["<tr>" + "".join(f"<{tag(i)}>{inline(c)}</{tag(i)}>" for c in row) + "</tr>"
+                                 for i, row in enumerate(cells)] + ["</table>"]
             body.append("\n".join(out))
             table.clear()
 

@@ -27,8 +27,9 @@ import hashlib
 import os
 import re
 import stat
-import tomllib
 from pathlib import Path
+
+import tomllib
 
 __all__ = ["UserPathError", "MAX_INPUT_BYTES", "MAX_STEM_LENGTH", "MAX_TOML_DOTS", "safe_stem", "inside",
            "read_user_file", "read_user_toml", "check_output_file", "check_output_dir"]

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 __all__ = ["GENERATOR_VERSION", "GENERATOR_SOURCES", "generator_digest", "input_hash"]
@@ -26,7 +26,7 @@ GENERATOR_SOURCES = ("symbolic/symbols.py", "expr.py", "symbolic/curve.py", "sym
                      "symbolic/derive.py", "codegen/generate.py")
 
 
-@lru_cache(maxsize=None)
+@cache
 def generator_digest() -> str:
     """SHA-256 over the generator's own source files (line endings normalized)."""
     here = Path(__file__).resolve().parent

@@ -1,17 +1,62 @@
-"""symvib bench: options, ratio, random scenes, peer budgets, and (slow) the quick runs end to end."""
+"""symvib bench: options, ratio, random scenes, peer budgets, shipped data, and (slow) the quick runs end to end."""
 import csv
+from fnmatch import fnmatch
+from pathlib import Path
 
 import pytest
+import tomllib
 
 from symvib.checks import bench
 from symvib.checks.peers import solve_ivp_events
+from symvib.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = Path(bench.__file__).resolve().parent / bench.DATA_FOLDER
+
+
+def _package_state() -> dict:
+    """Every data file of the installed package folder (what bench could write: not its Python
+    sources, which an editable checkout may change meanwhile) with its size and modification time."""
+    package = Path(bench.__file__).resolve().parents[1]
+    return {p: (p.stat().st_size, p.stat().st_mtime_ns) for p in package.rglob("*")
+            if p.is_file() and p.suffix not in (".py", ".pyc")}
 
 
 def test_bad_options_exit_2_with_one_line(capsys):
-    assert bench.main(["work-precision", "--workers", "0"]) == 2
-    assert bench.main(["no-such-job"]) == 2
+    assert main(["bench", "work-precision", "--workers", "0"]) == 2
+    assert main(["bench", "no-such-job"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and all(line.startswith("symvib bench: error:") for line in err)
+
+
+def test_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys):
+    (tmp_path / "f").write_text("x", encoding="utf-8")
+    assert main(["bench", "stability", "--out", str(tmp_path / "f")]) == 2
+    assert "--out folder" in capsys.readouterr().err
+
+
+def test_shipped_references_are_package_data():
+    """The references ship inside the package (importlib.resources) and pyproject installs them."""
+    assert bench.shipped(bench.REFERENCE_NAME) and bench.shipped(bench.RANDOM_TRUTH_NAME)
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    patterns = config["tool"]["setuptools"]["package-data"][bench.DATA_PACKAGE]
+    for name in (bench.REFERENCE_NAME, bench.RANDOM_TRUTH_NAME):
+        assert (DATA / name).is_file()
+        assert any(fnmatch(f"{bench.DATA_FOLDER}/{name}", p) for p in patterns), name
+    with pytest.raises(FileNotFoundError, match="symvib/checks/data/no-such.json"):
+        bench.shipped("no-such.json")
+
+
+def test_a_computed_reference_goes_to_the_named_cache(tmp_path):
+    """Recomputed references are stored in the file named, merged, never in the package."""
+    label, scene = bench.paper_scenes()[5]  # paper-circle-3.8 k=0.8: four events, under a second
+    cache = tmp_path / "out" / bench.REFERENCE_NAME
+    before = _package_state()
+    fresh = bench.reference_events(scene, label=label, cached=False, cache=cache)
+    stored = bench._load_json(cache)
+    assert list(stored) == [bench.scene_key(scene)] and stored[bench.scene_key(scene)]["scene"] == label
+    assert bench.reference_events(scene, cache=cache) == fresh
+    assert _package_state() == before
 
 
 def test_ratio_at_equal_accuracy():
@@ -40,7 +85,9 @@ def test_peer_budget_stops_a_run():
 
 @pytest.mark.slow
 def test_quick_work_precision_run(tmp_path):
-    assert bench.main(["work-precision", "--quick", "--out", str(tmp_path), "--random", "6"]) == 0
+    before = _package_state()
+    assert main(["bench", "work-precision", "--quick", "--out", str(tmp_path), "--random", "6"]) == 0
+    assert _package_state() == before, "symvib bench wrote inside the package"
     for name in ("work_precision.png", "work_precision.csv", "work_precision_runs.csv", "wrong_sequences.csv",
                  "summary.md"):
         assert (tmp_path / name).stat().st_size > 0
@@ -54,7 +101,7 @@ def test_quick_work_precision_run(tmp_path):
 
 @pytest.mark.slow
 def test_quick_stability_run(tmp_path):
-    assert bench.main(["stability", "--quick", "--out", str(tmp_path), "--budget", "5"]) == 0
+    assert main(["bench", "stability", "--quick", "--out", str(tmp_path), "--budget", "5"]) == 0
     rows = list(csv.DictReader(open(tmp_path / "stability.csv", encoding="utf-8")))
     ours = [r for r in rows if r["method"].startswith("symvib")]
     assert ours and all(r["outcome"] == "correct" for r in ours)

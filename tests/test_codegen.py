@@ -1,5 +1,4 @@
 """Generated kernels: accuracy against mpmath, no SymPy at run time, determinism, staleness."""
-import os
 import shutil
 import subprocess
 import sys
@@ -12,9 +11,9 @@ import sympy as sp
 
 from symvib.codegen import generate as codegen
 from symvib.numeric import kernels
+from symvib.shapes import CATALOGUE, shape
 from symvib.symbolic.derive import derive
 from symvib.symbolic.integrals import ROUTES
-from symvib.shapes import CATALOGUE, shape
 from symvib.symbolic.symbols import C, g, m, mu
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,7 +91,8 @@ def _check_kernel(label, kernel, scalar, args, expr, values, symbols, d):
         ref = []
         for i in range(POINTS):
             point = [mpmath.mpf(float(a[i])) for a in arrays]
-            ref.append(float(f(*point)) if not expr.has(sp.Integral) else float(_quad_value(expr, args, symbols, point)))
+            ref.append(float(f(*point)) if not expr.has(sp.Integral)
+                       else float(_quad_value(expr, args, symbols, point)))
     ref = np.array(ref)
     magnitude = max(np.max(np.abs(ref)), 1e-300)
     err = np.max(np.abs(got - ref)) / magnitude

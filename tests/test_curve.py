@@ -3,8 +3,8 @@ import mpmath
 import pytest
 import sympy as sp
 
-from symvib.symbolic import curve as cv
 from symvib.shapes import CATALOGUE, shape
+from symvib.symbolic import curve as cv
 
 
 @pytest.mark.parametrize("name", sorted(CATALOGUE))

@@ -12,7 +12,8 @@ def test_paper_equations_of_motion_by_hand():
     phi = sp.Symbol("phi", real=True)
     p, R = sp.Symbol("p", positive=True), sp.Symbol("R", positive=True)
     hand = {
-        "parabola": lambda s: (3 * sp.tan(phi) + s * mu, g * sp.cos(phi) ** 3 * (sp.sin(phi) + s * mu * sp.cos(phi)) / p),
+        "parabola": lambda s: (3 * sp.tan(phi) + s * mu,
+                               g * sp.cos(phi) ** 3 * (sp.sin(phi) + s * mu * sp.cos(phi)) / p),
         "cycloid": lambda s: (-sp.tan(phi / 2) / 2 + s * mu / 2, g / (2 * R) * (sp.tan(phi / 2) + s * mu)),
         "circle": lambda s: (s * mu, g * (sp.sin(phi) + s * mu * sp.cos(phi)) / R),
     }

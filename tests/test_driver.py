@@ -1,13 +1,14 @@
 """The driver against an independent mpmath reference, its energy budget, and the hard cases."""
+import dataclasses
 import math
 from pathlib import Path
 
 import mpmath
 import pytest
 
+from symvib.checks.reference import phase_reference
 from symvib.numeric.driver import simulate
 from symvib.numeric.events import EventKind, Status
-from symvib.checks.reference import phase_reference
 from symvib.numeric.scene import load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "symvib" / "scenes"
@@ -55,7 +56,7 @@ def test_paper_scenes_match_reference(name, k):
 
 def test_result_is_immutable_and_serializable():
     result = simulate(load_scene(SCENES / "paper-parabola.toml"))
-    with pytest.raises(Exception):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         result.status = Status.T_MAX  # type: ignore[misc]
     with pytest.raises(ValueError):
         result.samples.t[0] = 1.0

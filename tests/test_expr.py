@@ -3,7 +3,6 @@ import math
 
 import pytest
 
-from symvib import expr
 from symvib.expr import ExpressionError, evaluate, number, parse
 
 

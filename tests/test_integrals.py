@@ -6,10 +6,9 @@ import mpmath
 import pytest
 import sympy as sp
 
-from symvib.symbolic import budget
-from symvib.symbolic import integrals
-from symvib.symbolic.integrals import antiderivative, frictionless_gap, regularize
 from symvib.shapes import shape
+from symvib.symbolic import budget, integrals
+from symvib.symbolic.integrals import antiderivative, frictionless_gap, regularize
 from symvib.symbolic.symbols import mu
 
 CLOSED = ["parabola", "parabola-x", "cycloid", "circle"]

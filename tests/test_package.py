@@ -55,3 +55,18 @@ def test_figures_leave_the_callers_matplotlib_backend_alone(tmp_path):
         paths = symvib.numeric.figures.save_run_figures(result, {str(tmp_path)!r}, only=["phase"])
         print(matplotlib.get_backend(), [p.suffix for p in paths])
     """) == "svg ['.png']"
+
+
+def test_simulate_and_sweep_of_a_catalogue_curve_import_neither_sympy_nor_mpmath(tmp_path):
+    # The wing boundary, tested for the jobs and not only for the kernels: the numeric
+    # wing runs a curve whose kernels exist without the symbolic wing.
+    assert _run(f"""
+        import sys
+        from symvib.numeric.driver import simulate
+        from symvib.numeric.scene import resolve_scene
+        from symvib.numeric.sweep import sweep
+        scene = resolve_scene("paper-circle-7")
+        r = simulate(scene, backend="python")
+        s = sweep(scene, {{"qdot": [6.0, 7.0]}}, backend="python", out={str(tmp_path / "out")!r}, progress=False)
+        print(r.status.value, list(s.status_names()), 'sympy' in sys.modules, 'mpmath' in sys.modules)
+    """) == "arrested ['arrested', 'arrested'] False False"

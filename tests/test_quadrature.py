@@ -2,13 +2,12 @@
 from pathlib import Path
 
 import mpmath
-import numpy as np
 import pytest
 
+from symvib.checks.reference import phase_reference
 from symvib.codegen import gauss
 from symvib.numeric.driver import simulate
 from symvib.numeric.quadrature import MAX_NODES, rule
-from symvib.checks.reference import phase_reference
 from symvib.numeric.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,5 +1,4 @@
 """The time-stepping mpmath reference: closed forms, the phase reference, its cache and its budget."""
-import json
 import math
 
 import mpmath
@@ -51,13 +50,13 @@ def test_agrees_with_the_phase_reference_to_1e_20(name, k):
 
 
 def test_cached_references_are_current():
-    """The committed cache holds every paper scene, and one of them recomputes to the same digits."""
-    data = json.loads(bench.REFERENCE_FILE.read_text(encoding="utf-8"))
+    """The shipped references hold every paper scene, and one of them recomputes to the same digits."""
+    data = bench.shipped(bench.REFERENCE_NAME)
     scenes = bench.paper_scenes()
     assert all(bench.scene_key(s) in data for _, s in scenes)
     label, scene = scenes[5]  # paper-circle-3.8 k=0.8: four events, under a second
     cached = bench.reference_events(scene)
-    fresh = bench.reference_events(scene, cache=None)
+    fresh = bench.reference_events(scene, cached=False)
     assert [e[0] for e in cached] == [e[0] for e in fresh]
     assert all(math.isclose(a[1], b[1], abs_tol=1e-15) and a[2] == pytest.approx(b[2], abs=1e-15)
                for a, b in zip(cached, fresh))

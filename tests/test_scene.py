@@ -1,4 +1,5 @@
 """Scenes: loading, expressions, and a clear error naming the field for every bad input."""
+import dataclasses
 import math
 from pathlib import Path
 
@@ -117,7 +118,7 @@ def test_bad_files(tmp_path):
 
 def test_scene_is_immutable_and_round_trips():
     s = scene_from_dict(base())
-    with pytest.raises(Exception):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         s.k = 0.5  # type: ignore[misc]
     again = scene_from_dict(s.to_dict())
     assert again == s

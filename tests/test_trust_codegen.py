@@ -14,10 +14,13 @@ import numpy as np
 import pytest
 
 from symvib.codegen import generate as codegen
-from symvib.numeric import kernels
-from symvib.symbolic.curve import CurveError
 from symvib.expr import ExpressionError
+from symvib.numeric import kernels
+from symvib.numeric.driver import backend_available
+from symvib.symbolic.curve import CurveError
 
+#: Whether the numba backend can run here (the numba tests skip otherwise).
+NUMBA = backend_available("numba")
 #: What a hostile name's payload writes when it runs (the tests assert it never appears).
 MARKER_NAME = "PAYLOAD_RAN"
 
@@ -48,8 +51,8 @@ def cache(tmp_path, monkeypatch):
 @pytest.fixture(scope="module")
 def bowl():
     """The derivation of BOWL (done once: SymPy takes about a second) and its source."""
-    from symvib.symbolic.derive import derive
     from symvib.shapes import Shape
+    from symvib.symbolic.derive import derive
 
     shape = Shape(name="bowl", **BOWL)
     return derive(shape.curve()), shape.source()
@@ -328,7 +331,7 @@ def test_big_integer_curve_simulates_on_python(z, cache):
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not __import__("symvib.numeric.driver").numeric.driver.backend_available("numba"), reason="no numba")
+@pytest.mark.skipif(not NUMBA, reason="no numba")
 @pytest.mark.parametrize("z", sorted(BIG_INT_CURVES))
 def test_big_integer_curve_simulates_on_numba(z, cache):
     from symvib.numeric.driver import simulate
@@ -341,7 +344,7 @@ def test_big_integer_curve_simulates_on_numba(z, cache):
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not __import__("symvib.numeric.driver").numeric.driver.backend_available("numba"), reason="no numba")
+@pytest.mark.skipif(not NUMBA, reason="no numba")
 def test_tampered_numba_engine_file_is_rewritten_before_it_runs(cache, tmp_path, monkeypatch):
     from symvib.numeric import driver
     from symvib.numeric.scene import scene_from_dict
@@ -402,3 +405,17 @@ def test_half_infinite_domain_gives_a_working_module(z, domain, q0, limiters, ca
                                        "initial": {"q": q0, "qdot": 0}}), backend="python")
     assert result.events and result.energy_budget.relative_residual < 1e-9
     assert not list(cache.glob("*.tmp*"))
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace("def node_p_scalar(q, mu, R):", "def node_p_scalar(q, R):"), r"node_p_scalar .* must take"),
+    (lambda t: t.replace("def N_w_scalar(", "def N_w_other("), r"N_w_scalar .* missing"),
+])
+def test_a_module_without_the_engine_interface_is_refused(edit, message, tmp_path):
+    # The engine's kernel interface is declared once (engine.state.KERNEL_INTERFACE); the
+    # generator and the loader both check every module against it.
+    text = (GENERATED / "circle.py").read_text(encoding="utf-8")
+    edited = edit(text)
+    assert edited != text
+    with pytest.raises(kernels.KernelError, match=message):
+        kernels.verify_text(edited, tmp_path / "circle.py")

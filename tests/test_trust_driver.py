@@ -11,12 +11,11 @@ import math
 import numpy as np
 import pytest
 
-from symvib.numeric.layout import ERROR_CODES, STATUSES, SceneRow, StatusCode, Summary
-from symvib.numeric.events import kind_of, status_of
+from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
 from symvib.numeric import driver
 from symvib.numeric.engine import bind
-from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
-from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe
+from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe, kind_of, status_of
+from symvib.numeric.layout import ERROR_CODES, STATUSES, SceneRow, StatusCode, Summary
 from symvib.numeric.scene import CONTACTS, MAX_EVENTS, SceneError, scene_from_dict
 from symvib.numeric.scene import resolve_scene as _resolve_scene
 from symvib.numeric.sweep import make_spec, sweep

@@ -10,9 +10,9 @@ import math
 
 import pytest
 
-from symvib.symbolic.curve import graph, parametric
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.shapes import CATALOGUE
+from symvib.symbolic.curve import graph, parametric
 from symvib.symbolic.singular import regular_interval, regular_shape
 
 INF = math.inf

@@ -6,12 +6,12 @@ import math
 import numpy as np
 import pytest
 
-from symvib.numeric.driver import simulate
-from symvib.numeric.scene import SceneError, scene_from_dict
-from symvib.shapes import CATALOGUE
 from symvib.cli import EXIT_RUN_FAILED
 from symvib.cli import sweep_main as main
+from symvib.numeric.driver import simulate
+from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.numeric.sweep import sweep
+from symvib.shapes import CATALOGUE
 
 #: The README's own user curve (a graph z = f(x)).
 BOWL = {
@@ -120,9 +120,10 @@ import tracemalloc  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 from symvib import cli  # noqa: E402
-from symvib.numeric.sweep import lock as lock_mod, result as result_mod, runner as runner_mod  # noqa: E402
-from symvib.numeric.sweep import (FORMAT, MAX_LIST_VALUES, SweepError, WriterLock, load_sweep, make_spec,  # noqa: E402
-                          sweep_id)
+from symvib.numeric.sweep import FORMAT, MAX_LIST_VALUES, SweepError, WriterLock, load_sweep, make_spec, sweep_id  # noqa: E402
+from symvib.numeric.sweep import lock as lock_mod  # noqa: E402
+from symvib.numeric.sweep import result as result_mod  # noqa: E402
+from symvib.numeric.sweep import runner as runner_mod  # noqa: E402
 from symvib.numeric.sweep.axes import linspace_at as _linspace_at  # noqa: E402
 
 PARABOLA = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
@@ -569,7 +570,8 @@ def test_the_issues_race_two_processes_one_folder(tmp_path, capsys):
     first = ["paper-parabola", "--vary", "qdot=3:12:12", "--vary", "mu=0.01:0.2:25", "--chunk", "4",
              "-o", str(out), "--backend", "python", "--quiet"]
     env = dict(os.environ, SYMVIB_BACKEND="python")
-    slow_writer = ("import sys, time\nimport symvib.cli as cli\nimport symvib.numeric.sweep.runner as s\nreal = s.run_chunk\n"
+    slow_writer = ("import sys, time\nimport symvib.cli as cli\nimport symvib.numeric.sweep.runner as s\n"
+                   "real = s.run_chunk\n"
                    "s.run_chunk = lambda *a, **k: (time.sleep(SLOW_CHUNK), real(*a, **k))[1]\n"
                    "sys.exit(cli.sweep_main(sys.argv[1:]))\n").replace("SLOW_CHUNK", repr(SLOW_CHUNK))
     proc = subprocess.Popen([sys.executable, "-c", slow_writer, *first], env=env,

@@ -1,16 +1,24 @@
 """``symvib bench``: work-precision charts and the stability suite.
 
-Subcommands (``symvib bench SUBCOMMAND --help``)::
+The jobs of the command line (its options are parsed by :mod:`symvib.cli`,
+``symvib bench SUBCOMMAND --help``)::
 
     symvib bench work-precision --out DIR [--quick] [--random N] [--workers 2]
     symvib bench stability --out DIR [--quick] [--budget S] [--workers 2]
-    symvib bench reference [--write]
+    symvib bench reference [--write] [--out DIR]
+
+Data.  The references the benchmarks compare with ship with the package
+(``symvib/checks/data``, read with :mod:`importlib.resources`, see
+:func:`shipped`): ``time_reference.json`` (the paper scenes) and
+``random_truth.json`` (the random scenes).  A reference missing there is
+computed on demand and cached in the output folder (``DIR/time_reference.json``,
+``DIR/random_truth.json``); nothing is ever written inside the installed package.
 
 ``work-precision``
     For the paper scenes (``k = 1`` and ``0.8``) every method and setting
     runs every scene; its error is the largest event-time or event-position
     error against the 30-digit time reference (:mod:`symvib.checks.reference_time`,
-    cached in ``docs/benchmarks/time_reference.json``), its cost the CPU time
+    shipped in ``symvib/checks/data/time_reference.json``), its cost the CPU time
     per trajectory (:func:`time.process_time`, one thread, the cheapest of
     ``TIMING_BLOCKS`` blocks of repeated calls, ``MIN_TIMING`` s in all).  A
     setting whose event sequence differs from the reference's on some scene
@@ -37,30 +45,30 @@ Subcommands (``symvib bench SUBCOMMAND --help``)::
     budget; the outcomes go to ``stability.csv`` and ``stability.md``.
 
 ``reference``
-    Recomputes the cached time references of the paper scenes (``--write``
-    stores them).
+    Recomputes the time references of the paper scenes (``--write`` stores
+    them in ``DIR/time_reference.json``; ``--out symvib/checks/data`` in a
+    checkout updates the shipped file).
 
 Examples
 --------
->>> main(["work-precision", "--help"])  # doctest: +SKIP
+>>> from symvib.cli import main
+>>> main(["bench", "work-precision", "--help"])  # doctest: +SKIP
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import hashlib
 import json
 import math
-import os
 import random
-import sys
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass
+from importlib.resources import files
 from pathlib import Path
 
-__all__ = ["main", "Setting", "paper_scenes", "reference_events", "random_scenes", "run_setting",
-           "ratio_at_equal_accuracy", "scene_key"]
+__all__ = ["Setting", "paper_scenes", "reference_events", "random_scenes", "run_setting",
+           "ratio_at_equal_accuracy", "scene_key", "shipped", "work_precision", "stability", "references",
+           "REFERENCE_NAME", "RANDOM_TRUTH_NAME"]
 
 #: The paper scenes of the work-precision diagram, each with k = 1 and k = 0.8.
 PAPER_SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
@@ -96,11 +104,14 @@ ERROR_FLOOR = 1e-16
 STABILITY_SETTINGS = (("symvib", 16), ("RK45", 1e-6), ("DOP853", 1e-10), ("Radau", 1e-8), ("LSODA", 1e-8),
                       ("RK4", 1e-3))
 
-_DATA = Path(__file__).resolve().parents[2] / "docs" / "benchmarks"  # moved by the checks brief
-#: Cached 30-digit time references of the paper scenes (regenerate: ``symvib bench reference --write``).
-REFERENCE_FILE = _DATA / "time_reference.json"
-#: Cached phase-reference event sequences of the random scenes.
-RANDOM_TRUTH_FILE = _DATA / "random_truth.json"
+#: Package and folder of the shipped references (package data, read with importlib.resources).
+DATA_PACKAGE = "symvib.checks"
+DATA_FOLDER = "data"
+#: 30-digit time references of the paper scenes: shipped in the data folder, and the name of the
+#: on-demand cache in an output folder (regenerate: ``symvib bench reference --write --out DIR``).
+REFERENCE_NAME = "time_reference.json"
+#: Phase-reference event sequences of the random scenes: shipped, and the on-demand cache's name.
+RANDOM_TRUTH_NAME = "random_truth.json"
 
 
 @dataclass(frozen=True)
@@ -109,10 +120,6 @@ class Setting:
 
     method: str
     value: float
-
-    @property
-    def family(self) -> str:
-        return "symvib" if self.method == "symvib" else "RK4" if self.method == "RK4" else "solve_ivp"
 
     @property
     def label(self) -> str:
@@ -160,8 +167,6 @@ def sequence_settings(quick: bool = False) -> list:
 # --- scenes and references -----------------------------------------------------------------------
 def paper_scenes(quick: bool = False) -> list:
     """``(label, scene)`` of the paper scenes with k = 1 and 0.8 (quick: two of them)."""
-    from importlib.resources import files
-
     from symvib.numeric.scene import load_scene
 
     out = []
@@ -182,31 +187,76 @@ def scene_key(scene) -> str:
     return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def _load_json(path: Path) -> dict:
+def shipped(name: str) -> dict:
+    """A reference file shipped with the package (``symvib/checks/data/NAME``), as a dict.
+
+    Parameters
+    ----------
+    name : str
+        :data:`REFERENCE_NAME` or :data:`RANDOM_TRUTH_NAME`.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the installed package lacks the file (the message names it).
+    """
+    resource = files(DATA_PACKAGE) / DATA_FOLDER / name
+    try:
+        text = resource.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{DATA_PACKAGE.replace('.', '/')}/{DATA_FOLDER}/{name}: shipped reference "
+                                f"missing from the installed package (reinstall symvib)") from None
+    return json.loads(text)
+
+
+def _load_json(path: Path | None) -> dict:
+    """A cache file written by the benchmarks, or ``{}`` when there is none (or it is unreadable)."""
+    if path is None:
+        return {}
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return {}
 
 
-def reference_events(scene, *, label: str = "", cache: Path | None = REFERENCE_FILE, write: bool = False) -> list:
-    """The time reference's events of ``scene`` as ``(kind, t, q, qdot_before)`` floats (cached by fingerprint)."""
+def _store_json(path: Path, entries: dict, **dump) -> None:
+    """Merge ``entries`` into the JSON cache file ``path`` (created with its folder)."""
+    data = _load_json(path)
+    data.update(entries)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, sort_keys=True, **dump) + "\n", encoding="utf-8")
+
+
+def reference_events(scene, *, label: str = "", cached: bool = True, cache: Path | None = None) -> list:
+    """The time reference's events of ``scene`` as ``(kind, t, q, qdot_before)`` floats.
+
+    Parameters
+    ----------
+    scene : symvib.numeric.scene.Scene
+    label : str
+        The scene's label in the cache file (default: its name).
+    cached : bool
+        Look the scene up (by :func:`scene_key`) in the shipped references
+        (:data:`REFERENCE_NAME`) and in ``cache`` first; False recomputes it.
+    cache : pathlib.Path, optional
+        A JSON file (in an output folder) where a computed reference is stored,
+        merged with what the file holds; None stores nothing.
+    """
     key = scene_key(scene)
-    data = _load_json(cache) if cache is not None else {}
-    if key in data and not write:
-        return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in data[key]["events"]]
+    if cached:
+        for data in (shipped(REFERENCE_NAME), _load_json(cache)):
+            if key in data:
+                return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in data[key]["events"]]
     import mpmath
 
     from symvib.checks.reference_time import time_reference
 
     ref = time_reference(scene, dps=30)
     rows = [(e.kind, mpmath.nstr(e.t, 25), mpmath.nstr(e.q, 25), mpmath.nstr(e.qdot_before, 25)) for e in ref]
-    if write and cache is not None:
-        data = _load_json(cache)
-        data[key] = {"scene": label or scene.name, "dps": 30, "method": "symvib.checks.reference_time.time_reference",
-                     "events": rows}
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        cache.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    if cache is not None:
+        _store_json(cache, {key: {"scene": label or scene.name, "dps": 30,
+                                  "method": "symvib.checks.reference_time.time_reference", "events": rows}},
+                    indent=1)
     return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in rows]
 
 
@@ -240,8 +290,7 @@ def _random_truth(scene):
     from symvib.checks.stability import labels
 
     try:
-        with _shared_derivations():
-            ref = phase_reference(scene, dps=RANDOM_DPS, max_events=RANDOM_MAX_EVENTS)
+        ref = phase_reference(scene, dps=RANDOM_DPS, max_events=RANDOM_MAX_EVENTS, derive=_shared_derive)
     except Exception as exc:  # noqa: BLE001 - a scene the reference cannot do is left out, and counted
         return {"labels": None, "why": f"{type(exc).__name__}"}
     if not ref or ref[-1].kind not in ("arrest", "rest_on_limiter"):
@@ -309,9 +358,9 @@ def _sequence_task(args):
     out = []
     for st in settings:
         try:
-            status, events, message = run_setting(st, scene, budget=budget, backend=backend)
-        except Exception as exc:  # noqa: BLE001 - a crash is a failure to count
-            status, events, message = "failed", [], f"{type(exc).__name__}: {exc}"
+            status, events, _ = run_setting(st, scene, budget=budget, backend=backend)
+        except Exception:  # noqa: BLE001 - a crash is a failure to count
+            status, events = "failed", []
         if status == "failed":
             out.append("failed")
         else:
@@ -336,30 +385,20 @@ def _map(fn, items, workers):
 _DERIVATIONS: dict = {}
 
 
-@contextmanager
-def _shared_derivations():
-    """Within the block, derive each catalogue curve once per process for the phase reference.
+def _shared_derive(curve, **kwargs):
+    """:func:`symvib.symbolic.derive.derive`, memoized per process for the phase reference.
 
     :func:`symvib.checks.reference.phase_reference` derives the scene's curve on every
     call (a second or so, in budgeted child processes); the random scenes use
-    two curves, so the derivation is memoized by the curve's expressions
-    (``_DERIVATIONS``, kept between blocks).  The module is restored on exit.
+    two curves, so the derivation is memoized by the curve's expressions and
+    the options (``_DERIVATIONS``) and passed as its ``derive``.
     """
-    from symvib.checks import reference
+    from symvib.symbolic.derive import derive
 
-    original = reference.derive
-
-    def derive(curve, **kwargs):
-        key = (curve.name, str(curve.x), str(curve.z), str(curve.q), tuple(sorted(kwargs.items())))
-        if key not in _DERIVATIONS:
-            _DERIVATIONS[key] = original(curve, **kwargs)
-        return _DERIVATIONS[key]
-
-    reference.derive = derive
-    try:
-        yield
-    finally:
-        reference.derive = original
+    key = (curve.name, str(curve.x), str(curve.z), str(curve.q), tuple(sorted(kwargs.items())))
+    if key not in _DERIVATIONS:
+        _DERIVATIONS[key] = derive(curve, **kwargs)
+    return _DERIVATIONS[key]
 
 
 def _backend():
@@ -391,7 +430,7 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
     warm = _warm_up(scenes, backend)
     log(f"symvib backend: {backend}; first call per curve (compile or load, excluded): "
         + ", ".join(f"{k} {v:.2f} s" for k, v in warm.items()))
-    refs = {label: reference_events(s, label=label) for label, s in scenes}
+    refs = {label: reference_events(s, label=label, cache=out / REFERENCE_NAME) for label, s in scenes}
     for method in IVP_METHODS:  # imports SciPy and warms its caches outside the timings
         run_setting(Setting(method, 1e-3), scenes[0][1], budget=budget)
     runs, summary = [], []
@@ -433,7 +472,7 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
             log(f"ratio at error <= {target:.1e}: no peer setting reaches it")
     # Random scenes: wrong event sequences.
     n_random = (QUICK_RANDOM if quick else RANDOM_SCENES) if n_random is None else n_random
-    seq = _sequence_counts(n_random, sequence_settings(quick), workers, budget, backend, log)
+    seq = _sequence_counts(n_random, sequence_settings(quick), workers, budget, backend, log, out / RANDOM_TRUTH_NAME)
     _write_csv(out / "wrong_sequences.csv", seq["rows"])
     _plot(out / "work_precision.png", summary, backend)
     md = _summary_markdown(summary, ratios, seq, backend, warm, scenes)
@@ -443,17 +482,18 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
     return {"summary": summary, "ratios": ratios, "sequences": seq, "backend": backend}
 
 
-def _sequence_counts(n, settings, workers, budget, backend, log) -> dict:
+def _sequence_counts(n, settings, workers, budget, backend, log, cache_file: Path) -> dict:
+    """Wrong-sequence counts over ``n`` random scenes; truths missing from the shipped
+    :data:`RANDOM_TRUTH_NAME` and from ``cache_file`` are computed and stored in ``cache_file``."""
     scenes = random_scenes(n)
-    cache = _load_json(RANDOM_TRUTH_FILE)
+    cache = {**shipped(RANDOM_TRUTH_NAME), **_load_json(cache_file)}
     todo = [s for s in scenes if scene_key(s) not in cache]
     if todo:
-        log(f"phase reference of {len(todo)} random scenes ({RANDOM_DPS} digits; cached in {RANDOM_TRUTH_FILE.name})")
+        log(f"phase reference of {len(todo)} random scenes ({RANDOM_DPS} digits; cached in {cache_file})")
         truths = _map(_random_truth, todo, workers)
-        for s, tr in zip(todo, truths):
-            cache[scene_key(s)] = tr
-        if RANDOM_TRUTH_FILE.parent.is_dir():
-            RANDOM_TRUTH_FILE.write_text(json.dumps(cache, sort_keys=True) + "\n", encoding="utf-8")
+        new = {scene_key(s): tr for s, tr in zip(todo, truths)}
+        cache.update(new)
+        _store_json(cache_file, new)
     usable = [(s, cache[scene_key(s)]["labels"]) for s in scenes if cache[scene_key(s)]["labels"] is not None]
     left_out = len(scenes) - len(usable)
     log(f"random scenes: {len(usable)} usable, {left_out} left out (more than {RANDOM_MAX_EVENTS} events, or the "
@@ -597,61 +637,28 @@ def stability_markdown(rows, names, methods) -> str:
     return "\n".join(lines) + "\n"
 
 
-# --- command line ------------------------------------------------------------------------------------
-class _Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line (exit status 2)."""
+# --- time references ---------------------------------------------------------------------------------
+def references(out: Path | None = None, *, log=print) -> list:
+    """Recompute the time reference of every paper scene (``symvib bench reference``).
 
-    def error(self, message):
-        print(f"symvib bench: error: {message}", file=sys.stderr)
-        raise SystemExit(2)
+    Parameters
+    ----------
+    out : pathlib.Path, optional
+        Folder whose :data:`REFERENCE_NAME` receives them (merged with what it
+        holds); None stores nothing.
 
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="symvib bench", description="work-precision charts and the stability suite")
-    sub = parser.add_subparsers(dest="job", required=True)
-    p = sub.add_parser("work-precision", help="error against CPU time on the paper scenes; wrong-sequence counts")
-    p.add_argument("--out", default="symvib-bench", help="output folder (default: symvib-bench)")
-    p.add_argument("--quick", action="store_true", help="a small run (2 scenes, few settings, 20 random scenes)")
-    p.add_argument("--random", type=int, default=None, help=f"random scenes (default {RANDOM_SCENES})")
-    p.add_argument("--workers", type=int, default=1, help="processes for the random scenes (default 1)")
-    p.add_argument("--budget", type=float, default=PEER_BUDGET, help="CPU seconds per peer run")
-    p = sub.add_parser("stability", help="every method on every stability case, outcomes classified")
-    p.add_argument("--out", default="symvib-bench", help="output folder (default: symvib-bench)")
-    p.add_argument("--quick", action="store_true", help="five of the cases")
-    p.add_argument("--workers", type=int, default=1, help="processes (default 1)")
-    p.add_argument("--budget", type=float, default=PEER_BUDGET, help="CPU seconds per peer run")
-    p = sub.add_parser("reference", help="recompute the cached 30-digit time references of the paper scenes")
-    p.add_argument("--write", action="store_true", help=f"store them in {REFERENCE_FILE}")
-    return parser
-
-
-def main(argv=None) -> int:
-    """``symvib bench``: returns an exit status (2 for bad options)."""
-    parser = build_parser()
-    try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:
-        return int(exc.code or 0)
-    if getattr(args, "workers", 1) < 1 or getattr(args, "workers", 1) > os.cpu_count():
-        print(f"symvib bench: error: --workers: must be between 1 and {os.cpu_count()}", file=sys.stderr)
-        return 2
-    if getattr(args, "budget", 1.0) <= 0 or (getattr(args, "random", None) or 0) < 0:
-        print("symvib bench: error: --budget and --random must be positive", file=sys.stderr)
-        return 2
-    if args.job == "work-precision":
-        work_precision(Path(args.out), quick=args.quick, n_random=args.random, workers=args.workers,
-                       budget=args.budget)
-    elif args.job == "stability":
-        stability(Path(args.out), quick=args.quick, workers=args.workers, budget=args.budget)
-    else:
-        for label, scene in paper_scenes():
-            start = time.process_time()
-            ev = reference_events(scene, label=label, write=args.write)
-            print(f"{label:24s} {len(ev):3d} events, {time.process_time() - start:.1f} s")
-        if args.write:
-            print(f"wrote {REFERENCE_FILE}")
-    return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    Returns
+    -------
+    list of (str, list)
+        ``(label, events)`` per paper scene.
+    """
+    cache = None if out is None else Path(out) / REFERENCE_NAME
+    done = []
+    for label, scene in paper_scenes():
+        start = time.process_time()
+        ev = reference_events(scene, label=label, cached=False, cache=cache)
+        log(f"{label:24s} {len(ev):3d} events, {time.process_time() - start:.1f} s")
+        done.append((label, ev))
+    if cache is not None:
+        log(f"wrote {cache}")
+    return done

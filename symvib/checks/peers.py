@@ -94,10 +94,6 @@ class _Physics:
             return "arrest", 0
         return "slide", 1 if -sin > 0 else -1
 
-    def may_flip(self, q):
-        """Whether N can be negative near q (curvature < 0 or cos(alpha) <= 0 somewhere close)."""
-        return True
-
 
 def _segments(scene, step_segment, method_name, budget=None):
     """The event loop shared by the peers: ``step_segment(y0, t0, s, sigma)`` integrates one segment.

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from symvib.symbolic.derive import derive
+from symvib.symbolic.derive import derive as derive_curve
 from symvib.symbolic.symbols import g as g_sym
 from symvib.symbolic.symbols import mu as mu_sym
 
@@ -52,7 +52,7 @@ ROUTE_SECONDS = 2.0
 
 
 class _Model:
-    def __init__(self, scene, dps):
+    def __init__(self, scene, dps, derive=derive_curve):
         self.dps = dps
         d = derive(scene.shape.curve(), seconds=ROUTE_SECONDS)
         c = d.curve
@@ -106,15 +106,32 @@ class _Model:
         return G
 
 
-def phase_reference(scene, *, dps: int = 30, max_events: int | None = None) -> list:
+def phase_reference(scene, *, dps: int = 30, max_events: int | None = None, derive=derive_curve) -> list:
     """Events of ``scene`` computed at ``dps`` digits (see the module docstring).
 
     Stops at arrest, rest, ``max_events`` events, or ``scene.t_max``; a Zeno
     accumulation is not summed (cap it with ``max_events``).
+
+    Parameters
+    ----------
+    scene : symvib.numeric.scene.Scene
+    dps : int
+        Working precision, decimal digits.
+    max_events : int, optional
+        Event cap (default: the scene's ``max_events``).
+    derive : callable, optional
+        ``derive(curve, seconds=...)`` returning the curve's
+        :class:`~symvib.symbolic.derive.Derivation` (default
+        :func:`symvib.symbolic.derive.derive`).  A caller that runs many scenes
+        on few curves passes a memoized one (``symvib bench``).
+
+    Returns
+    -------
+    list of RefEvent
     """
     max_events = scene.max_events if max_events is None else max_events
     with mpmath.workdps(dps):
-        M = _Model(scene, dps)
+        M = _Model(scene, dps, derive)
         mp = mpmath.mpf
         q = mp(repr(scene.q0))
         w = (M.h(q) * mp(repr(scene.qdot0))) ** 2

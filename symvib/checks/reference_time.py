@@ -28,7 +28,7 @@ physics.md's (impact ``qdot -> -k qdot``; at rest: arrest when
 downhill).
 
 It is slow (about 10 ms per step at 30 digits); results used by the
-benchmarks are cached in ``docs/benchmarks/time_reference.json`` (see
+benchmarks ship in ``symvib/checks/data/time_reference.json`` (see
 :mod:`symvib.checks.bench`, ``symvib bench reference``).
 
 Examples
@@ -47,8 +47,8 @@ import time
 import mpmath
 import sympy as sp
 
-from symvib.symbolic.derive import coefficients
 from symvib.checks.reference import RefEvent
+from symvib.symbolic.derive import coefficients
 from symvib.symbolic.symbols import g as g_sym
 from symvib.symbolic.symbols import mu as mu_sym
 from symvib.symbolic.symbols import sigma as sigma_sym

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cache
 
 from symvib.numeric.scene import scene_from_dict
 
@@ -446,7 +446,8 @@ def cases() -> list:
              lambda s: _from_reference(s, "max_events")),
         Case("looping", "looping a full circle, no limiter",
              _circle(0.02, 11.0, max_events=8),
-             "phidot0 = 11 on R = 0.5 goes over the top three times (N < 0 near it from the second pass) before it swings back; mpmath phase reference",
+             "phidot0 = 11 on R = 0.5 goes over the top three times (N < 0 near it from the second pass) "
+             "before it swings back; mpmath phase reference",
              lambda s: _from_reference(s, "max_events")),
     ]
     return out
@@ -469,7 +470,7 @@ def case(name: str) -> Case:
     raise ValueError(f"stability case: unknown name {name!r}; known: {', '.join(c.name for c in cases())}")
 
 
-@lru_cache(maxsize=None)
+@cache
 def expected(name: str) -> Expected:
     """The right outcome of case ``name`` (computed once per process; mpmath, seconds)."""
     c = case(name)

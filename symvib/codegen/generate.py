@@ -54,12 +54,12 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-from symvib.codegen import gauss
 from symvib import provenance
+from symvib.codegen import gauss
+from symvib.numeric.kernels import DIGEST_PREFIX, verify_text
 from symvib.symbolic.curve import CurveError
 from symvib.symbolic.derive import Derivation, derive
-from symvib.numeric.kernels import DIGEST_PREFIX, verify_text
-from symvib.symbolic.symbols import C, g, m, mu
+from symvib.symbolic.symbols import C, g, mu
 
 __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
            "DIGEST_PREFIX"]
@@ -488,8 +488,8 @@ def generate(curve, out_dir, *, name: str | None = None, source: dict | None = N
     ``curve`` is a catalogue name, a :class:`~symvib.shapes.Shape` or a
     :class:`~symvib.symbolic.curve.Curve` (then give ``source``, its defining data).
     """
-    from symvib.symbolic.integrals import ROUTE_SECONDS
     from symvib.shapes import Shape, shape
+    from symvib.symbolic.integrals import ROUTE_SECONDS
 
     if isinstance(curve, str):
         curve = shape(curve)
@@ -531,8 +531,8 @@ def generate_catalogue(out_dir, *, names=None, processes: int | None = None) -> 
     """
     import multiprocessing as mproc
 
-    from symvib.symbolic.budget import worker_pool
     from symvib.shapes import CATALOGUE
+    from symvib.symbolic.budget import worker_pool
 
     names = sorted(CATALOGUE) if names is None else list(names)
     jobs = [(n, str(out_dir)) for n in names]

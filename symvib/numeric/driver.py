@@ -63,9 +63,7 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 

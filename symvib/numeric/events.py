@@ -227,7 +227,8 @@ class Result:
     def event_table(self, coordinate: str = "q") -> str:
         """A readable table of the events and a summary."""
         qd = coordinate + "dot"
-        head = f"{'#':>5} {'kind':<19} {'t [s]':>18} {coordinate:>14} {qd + ' before':>14} {qd + ' after':>14} {'E [J]':>14}"
+        head = (f"{'#':>5} {'kind':<19} {'t [s]':>18} {coordinate:>14} {qd + ' before':>14} {qd + ' after':>14} "
+                f"{'E [J]':>14}")
         lines = [head, "-" * len(head)]
         for i, e in enumerate(self.events, 1):
             lines.append(f"{i:>5} {e.kind.value:<19} {e.t:>18.12f} {e.q:>14.9f} {e.qdot_before:>14.8f} "

@@ -15,12 +15,11 @@ Files are drawn on backend-free :class:`matplotlib.figure.Figure` objects
 """
 from __future__ import annotations
 
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from symvib.numeric.engine.laws import impact
 from symvib.numeric.events import EventKind
 from symvib.paths import UserPathError, check_output_dir, inside, safe_stem
 
@@ -63,6 +62,31 @@ def _intervals(result):
         yield sel, sign
 
 
+#: Colour, marker and legend label of each event kind in the phase portrait.
+EVENT_STYLES = {
+    EventKind.IMPACT: ("k", "|", "impact"),
+    EventKind.REVERSAL: ("tab:green", "o", "reversal"),
+    EventKind.ARREST: ("tab:red", "*", "arrest"),
+    EventKind.REST_ON_LIMITER: ("tab:red", "s", "rest on limiter"),
+    EventKind.NORMAL_SIGN_CHANGE: ("tab:purple", "x", "$N$ changes sign"),
+    EventKind.LEFT_CURVE: ("tab:brown", "v", "leaves the curve"),
+}
+#: Colour and marker of an event kind without a style of its own (labelled with its name).
+DEFAULT_EVENT_STYLE = ("0.3", "D")
+
+
+def event_style(kind) -> tuple:
+    """``(colour, marker, label)`` of an event kind; a kind added to the vocabulary
+    without a style is drawn with :data:`DEFAULT_EVENT_STYLE` and its name.
+
+    >>> event_style(EventKind.REVERSAL)
+    ('tab:green', 'o', 'reversal')
+    """
+    if kind in EVENT_STYLES:
+        return EVENT_STYLES[kind]
+    return (*DEFAULT_EVENT_STYLE, kind.value.replace("_", " "))
+
+
 def phase_portrait(result, ax=None):
     """The phase portrait of a run in ``(q, qdot)``."""
     ax = ax or plt.subplots(figsize=FIGSIZE, dpi=DPI)[1]
@@ -72,21 +96,18 @@ def phase_portrait(result, ax=None):
     for sel, sign in _intervals(result):
         label = None
         if sign not in seen:
-            label = f"branch $v {'>' if sign > 0 else '<'} 0$ (upper sign)" if sign > 0 else "branch $v < 0$ (lower sign)"
+            label = ("branch $v > 0$ (upper sign)" if sign > 0 else "branch $v < 0$ (lower sign)")
             seen.add(sign)
         ax.plot(S.q[sel], S.qdot[sel], color=BRANCH_COLOURS[sign], lw=1.3, label=label)
-    marks = {EventKind.IMPACT: [], EventKind.REVERSAL: [], EventKind.ARREST: [], EventKind.REST_ON_LIMITER: [],
-             EventKind.NORMAL_SIGN_CHANGE: []}
+    marks = {}
     for e in result.events:
-        marks[e.kind].append(e)
+        marks.setdefault(e.kind, []).append(e)
         if e.kind is EventKind.IMPACT:
             ax.plot([e.q, e.q], [e.qdot_before, e.qdot_after], "k--", lw=0.8)
-    style = {EventKind.IMPACT: ("k", "|", "impact"), EventKind.REVERSAL: ("tab:green", "o", "reversal"),
-             EventKind.ARREST: ("tab:red", "*", "arrest"), EventKind.REST_ON_LIMITER: ("tab:red", "s", "rest on limiter"),
-             EventKind.NORMAL_SIGN_CHANGE: ("tab:purple", "x", "$N$ changes sign")}
-    for kind, events in marks.items():
+    for kind in EventKind:  # every kind of the vocabulary, in its order
+        events = marks.get(kind)
         if events:
-            c, mk, label = style[kind]
+            c, mk, label = event_style(kind)
             ax.plot([e.q for e in events], [e.qdot_before for e in events], mk, color=c, ms=7 if mk != "|" else 12,
                     label=label, ls="none")
     for side in ("left", "right"):
@@ -136,8 +157,8 @@ def energy_vs_t(result, ax=None):
     loss = np.zeros_like(t)
     for e in result.events:
         if e.kind is EventKind.IMPACT:
-            jump = 0.5 * result.scene.m * (1 - result.scene.k ** 2) * (
-                (e.qdot_before * _h(result, e.q)) ** 2)
+            _, _, jump = impact(e.qdot_before, (e.qdot_before * _h(result, e.q)) ** 2, result.scene.k,
+                                result.scene.m)
             loss[t >= e.t] += jump
     ax.stackplot(t, E, Wf, loss, labels=["mechanical energy $E$", "friction work", "impact losses"],
                  colors=["tab:blue", "tab:orange", "tab:gray"], alpha=0.75)

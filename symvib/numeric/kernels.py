@@ -39,8 +39,8 @@ from pathlib import Path
 from symvib import provenance
 from symvib.shapes import CATALOGUE, Shape
 
-__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "check_text", "verify_text", "KernelError",
-           "DIGEST_PREFIX"]
+__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "check_text", "verify_text", "check_interface",
+           "KernelError", "DIGEST_PREFIX"]
 
 #: Environment variable naming the cache folder for user curves.
 CACHE_ENV = "SYMVIB_CACHE"
@@ -146,6 +146,48 @@ def verify_text(text: str, origin) -> None:
                 refuse(node, f"assigning to {node.id!r}")
         elif isinstance(node, ast.Attribute) and not _attribute_allowed(node, numpy):
             refuse(node, f"the attribute {node.attr!r}")
+    check_interface(tree, origin)
+
+
+def check_interface(tree, origin) -> None:
+    """Check that a curve's generated module provides the engine's kernels with the declared arguments.
+
+    A curve's module (one that assigns ``PARAMS`` or defines any kernel; the
+    Gauss-rule module does neither) must define, for every entry of
+    :data:`symvib.numeric.engine.state.KERNEL_INTERFACE`, the function taking the
+    declared leading arguments followed by the curve's parameters (its ``PARAMS``).
+
+    Raises
+    ------
+    KernelError
+        Naming ``origin`` and the first kernel missing or with other arguments.
+    """
+    import ast
+
+    from symvib.numeric.engine.state import KERNEL_INTERFACE
+
+    params, functions = None, {}
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            functions[node.name] = tuple(a.arg for a in node.args.args)
+        elif (isinstance(node, ast.Assign) and len(node.targets) == 1
+              and isinstance(node.targets[0], ast.Name) and node.targets[0].id == "PARAMS"):
+            try:
+                params = tuple(ast.literal_eval(node.value))
+            except ValueError:
+                params = None
+    assigned = {n.targets[0].id for n in tree.body if isinstance(n, ast.Assign) and len(n.targets) == 1
+                and isinstance(n.targets[0], ast.Name)}
+    if "PARAMS" not in assigned and not {f for f, _, _ in KERNEL_INTERFACE.values()} & set(functions):
+        return  # not a curve's module (the Gauss rules)
+    if params is None or not all(isinstance(p, str) for p in params):
+        raise KernelError(f"{origin}: no PARAMS tuple of parameter names; regenerate it")
+    for engine_name, (function, leading, _) in KERNEL_INTERFACE.items():
+        want = tuple(leading) + params
+        if functions.get(function) != want:
+            got = "missing" if function not in functions else f"takes {functions[function]}"
+            raise KernelError(f"{origin}: kernel {function} (the engine's {engine_name}) must take {want}, "
+                              f"{got}; regenerate it")
 
 
 def check_text(text: str, origin, input_hash: str | None = None) -> None:
@@ -214,7 +256,7 @@ def cache_dir() -> Path:
     return Path(root) if root else Path.home() / ".cache" / "symvib" / "kernels"
 
 
-def _module_name(name: str) -> str:
+def module_name(name: str) -> str:
     """A module (and cache file) name for a curve name: ASCII letters, digits and ``_`` only
     (:func:`symvib.paths.safe_stem`, so a hostile or very long name stays one short file
     name inside the cache folder, and distinct names stay distinct)."""
@@ -314,13 +356,13 @@ def _load(curve: Shape, check: bool):
     source = curve.source()
     want = provenance.input_hash(source)
     if curve.in_catalogue:
-        module = load_generated(_module_name(curve.module))
+        module = load_generated(module_name(curve.module))
         path = module.__file__
         if check and module.INPUT_HASH != want:
             warnings.warn(f"{path} is stale (the shape or the generator changed); run `symvib generate`",
                           stacklevel=2)
         return module
-    name = f"{_module_name(curve.module)}_{want[:16]}"
+    name = f"{module_name(curve.module)}_{want[:16]}"
     path = cache_dir() / f"{name}.py"
     key = f"symvib.generated.{name}"
     if key in sys.modules and getattr(sys.modules[key], "__file__", None) == str(path):

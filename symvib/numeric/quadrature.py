@@ -1,12 +1,11 @@
 """Gauss-Legendre rules with cumulative integration for the driver (NumPy only).
 
-A :class:`ChebRule` holds, for ``n`` Gauss-Legendre points on ``[-1, 1]``
+A :class:`GaussRule` holds, for ``n`` Gauss-Legendre points on ``[-1, 1]``
 (interior points: an integrand may be 0/0 at an end), the quadrature weights
 (exact to degree ``2n - 1``), the cumulative-integration matrix ``S`` with
 ``(S @ f)[j] = Integral_{-1}^{x_j} f`` for the degree ``n - 1`` interpolant of
 ``f``, its weighted twin ``W`` with ``(W @ f)[j] = Integral_{-1}^{x_j} (x + 1) f``
-(no loss of relative accuracy near ``x = -1``), and the map from values to
-Legendre coefficients.  The cumulative form
+(no loss of relative accuracy near ``x = -1``).  The cumulative form
 lets the driver rebuild ``G = C - 2 g F`` at the nodes from an anchor without
 cancellation (its integrand ``G'`` is smooth); totals use the Gauss weights,
 which converge twice as fast near the square-root singularity of the other
@@ -24,12 +23,11 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
-from numpy.polynomial import legendre as _leg
 
-__all__ = ["ChebRule", "rule", "MAX_NODES"]
+__all__ = ["GaussRule", "rule", "MAX_NODES"]
 
 #: Name of the table module in the generated folder (as :data:`symvib.codegen.gauss.TABLE_MODULE`).
 TABLE_MODULE = "gauss_rules"
@@ -38,20 +36,19 @@ MAX_NODES = 64
 
 
 @dataclass(frozen=True)
-class ChebRule:
+class GaussRule:
     """Quadrature data for ``n`` Gauss-Legendre points on ``[-1, 1]`` (ascending)."""
 
     n: int
     x: np.ndarray
     weights: np.ndarray
     cumulative: np.ndarray
-    to_coeffs: np.ndarray
     cumulative_weighted: np.ndarray
 
 
-@lru_cache(maxsize=None)
-def rule(n: int) -> ChebRule:
-    """The :class:`ChebRule` with ``n`` nodes (cached; arrays read-only).
+@cache
+def rule(n: int) -> GaussRule:
+    """The :class:`GaussRule` with ``n`` nodes (cached; arrays read-only).
 
     Nodes, weights and both integration matrices are correctly rounded (see
     :mod:`symvib.codegen.gauss` for why the last ulp matters): read from the generated
@@ -69,8 +66,6 @@ def rule(n: int) -> ChebRule:
 
         data = rule_mp(n)
     x, weights, cumulative, weighted = (np.array(a, dtype=float) for a in data)
-    vander = _leg.legvander(x, n - 1)
-    to_coeffs = np.linalg.solve(vander, np.eye(n))
-    for a in (x, weights, cumulative, to_coeffs, weighted):
+    for a in (x, weights, cumulative, weighted):
         a.setflags(write=False)
-    return ChebRule(n, x, weights, cumulative, to_coeffs, weighted)
+    return GaussRule(n, x, weights, cumulative, weighted)

@@ -51,8 +51,8 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 from pathlib import Path
 
 from symvib import expr as _expr
@@ -114,7 +114,7 @@ def _curve_dict(sh: Shape) -> dict:
     return {k: source[k] for k in _CURVE_KEYS if source.get(k) is not None}
 
 
-def _friction_dict(s: "Scene") -> dict:
+def _friction_dict(s: Scene) -> dict:
     """``{"alpha0": ...}`` when the scene's ``mu`` is ``tan(alpha0)``, else ``{"mu": ...}``."""
     if s.alpha0 is not None:
         try:
@@ -206,7 +206,7 @@ class Scene:
     def param_dict(self) -> dict:
         return dict(self.params)
 
-    def replace(self, **changes) -> "Scene":
+    def replace(self, **changes) -> Scene:
         """A copy with fields changed (validated again).
 
         ``params`` may be given as a dict of the names to change.
@@ -349,7 +349,7 @@ class SceneNumbers:
         self.params, self.kinds, self._domain = params, kinds, domain
 
     @classmethod
-    def of(cls, s: Scene) -> "SceneNumbers":
+    def of(cls, s: Scene) -> SceneNumbers:
         """The numbers of scene ``s`` (its domain computed on first use)."""
         return cls(params=dict(s.params), kinds=dict(s.shape.params), domain=lambda: declared_domain(s),
                    g=s.g, m=s.m, mu=s.mu, k=s.k, has_left=s.left is not None, left=s.left,
@@ -363,7 +363,7 @@ class SceneNumbers:
             self._domain = self._domain()
         return self._domain
 
-    def row(self, i: int) -> "SceneNumbers":
+    def row(self, i: int) -> SceneNumbers:
         """The numbers of scene ``i`` of columns (single values are shared by every row)."""
         def pick(v):
             return v[i] if hasattr(v, "__len__") and not isinstance(v, str) else v

@@ -30,16 +30,16 @@ from __future__ import annotations
 import random
 import re
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import mpmath
 import sympy as sp
 
 from symvib.symbolic.curve import CHECK_DIGITS, identity_holds, sample_points
-from symvib.symbolic.derive import coefficients, derive
+from symvib.symbolic.derive import coefficients, derive, pm_latex
 from symvib.symbolic.symbols import C, g, m, mu, sigma
 
-__all__ = ["Printed", "Verdict", "PRINTED", "audit", "errata_markdown"]
+__all__ = ["Printed", "Verdict", "PRINTED", "audit", "derivation", "errata_markdown"]
 
 pm = sp.Symbol("pm")
 #: Points at which numeric comparisons are made.
@@ -85,10 +85,6 @@ class Verdict:
     corrected_tex: str
 
 
-def _phi(c):
-    return c.q, c.qdot, c.qddot
-
-
 def _par(c, name):
     return next(p for p in c.params if p.name == name)
 
@@ -131,7 +127,8 @@ def _entries():
         r"F_{N,i} = mg\cos\phi + mp\cos^3\phi\left(-\frac{g}{p\cos^2\phi} + C_ie^{\mp 2\mu\phi}\right)",
         lambda c: m * g * sp.cos(c.q) + m * _par(c, "p") * sp.cos(c.q) ** 3 * _parabola_W(c))
     add("parabola.P_mu", "parabola", "P_mu", "energy", "P_mu",
-        r"P_{\mu,i} = -\mu m p\left(g\cos\varphi + p\cos^3\varphi(\ldots)\right)\sqrt{-\frac{g}{p\cos^2\varphi} + C_ie^{\mp 2\mu\varphi}}",
+        r"P_{\mu,i} = -\mu m p\left(g\cos\varphi + p\cos^3\varphi(\ldots)\right)\sqrt{-\frac{g}{p\cos^2"
+        r"\varphi} + C_ie^{\mp 2\mu\varphi}}",
         lambda c: -mu * m * _par(c, "p") * (g * sp.cos(c.q) + _par(c, "p") * sp.cos(c.q) ** 3 * _parabola_W(c))
         * sp.sqrt(_parabola_W(c)),
         formula=lambda c: -mu * m * (g * sp.cos(c.q) + _par(c, "p") * c.qdot**2 / sp.cos(c.q) ** 3)
@@ -148,11 +145,13 @@ def _entries():
         lambda c: m * _par(c, "p") ** 2 * _parabola_W(c) / 2 + m * g * _par(c, "p") / (2 * sp.cos(c.q) ** 2))
     # Cycloid, q = phi (rolling angle).
     add("eq5", "cycloid", "(5)", "eom", "equation of motion",
-        r"\ddot\phi - \dot\phi^2\left(\frac12 tg\frac\phi2 \mp \mu\right) + \left(tg\frac\phi2 \pm \mu\right)\frac{g}{2R} = 0",
+        r"\ddot\phi - \dot\phi^2\left(\frac12 tg\frac\phi2 \mp \mu\right) + \left(tg\frac\phi2 \pm \mu\right)"
+        r"\frac{g}{2R} = 0",
         lambda c: c.qddot - c.qdot**2 * (sp.tan(c.q / 2) / 2 - pm * mu)
         + (sp.tan(c.q / 2) + pm * mu) * g / (2 * _par(c, "R")))
     add("eq6", "cycloid", "(6)", "phase", "phase trajectory",
-        r"\dot\phi^2 = -\frac{g/2R}{1+4\mu^2}\frac{1}{\cos^2\frac\phi2}\left[(\pm 3\mu)\sin\phi - (1-2\mu^2)\cos\phi + \frac{1+4\mu^2}{2} + Ce^{\mp 2\mu\phi}\right]",
+        r"\dot\phi^2 = -\frac{g/2R}{1+4\mu^2}\frac{1}{\cos^2\frac\phi2}\left[(\pm 3\mu)\sin\phi - (1-2\mu^2)"
+        r"\cos\phi + \frac{1+4\mu^2}{2} + Ce^{\mp 2\mu\phi}\right]",
         _cycloid_Y, note="unnumbered in the text; the paper cites it as (6)")
     add("cycloid.F_N", "cycloid", "F_N", "energy", "F_N",
         r"F_{N,i} = mg\cos\frac\phi2 + m2R\cos\frac\phi2\,\dot\phi_i^2(\phi)\ \text{(eq. 6 inserted)}",
@@ -181,7 +180,8 @@ def _entries():
         lambda c: c.qddot + pm * c.qdot**2 * mu
         + g / (_par(c, "R") * sp.cos(sp.atan(mu))) * sp.sin(c.q + pm * sp.atan(mu)))
     add("eq8", "circle", "(8)", "phase", "phase trajectory",
-        r"\dot\phi^2 = \frac{2g}{(1+4tg^2\alpha_0)R\cos\alpha_0}\left[\cos(\phi\pm\alpha_0) - 2tg\alpha_0\sin(\phi\pm\alpha_0)\right] + Ce^{\mp 2\phi tg\alpha_0}",
+        r"\dot\phi^2 = \frac{2g}{(1+4tg^2\alpha_0)R\cos\alpha_0}\left[\cos(\phi\pm\alpha_0) - 2tg\alpha_0\sin("
+        r"\phi\pm\alpha_0)\right] + Ce^{\mp 2\phi tg\alpha_0}",
         _circle_Z)
     add("circle.F_N", "circle", "F_N", "energy", "F_N",
         r"F_{N,i} = mg\cos\varphi + mR\,\dot\varphi_i^2(\varphi)\ \text{(eq. 8 inserted)}",
@@ -208,17 +208,29 @@ PRINTED = _entries()
 
 
 # --- comparisons --------------------------------------------------------------------------
-@lru_cache(maxsize=None)
-def _derivation(name):
+@cache
+def derivation(name: str):
+    """The :class:`~symvib.symbolic.derive.Derivation` of catalogue shape ``name``, derived once per process.
+
+    The audit and the paper report (:mod:`symvib.paper`) share it, so the
+    report does not derive a curve the audit already derived.
+
+    Parameters
+    ----------
+    name : str
+        A catalogue shape name (``"parabola"``, ``"cycloid"``, ``"circle"``, ...).
+
+    Returns
+    -------
+    symvib.symbolic.derive.Derivation
+    """
     return derive(name)
 
 
 def _tex(d, e):
-    from symvib.symbolic.derive import _pm
-
     names = d.curve.latex_names()
     names[pm] = r"\pm"
-    return _pm(sp.latex(e, symbol_names=names))
+    return pm_latex(sp.latex(e, symbol_names=names))
 
 
 def _split_eom(expr, c):
@@ -441,9 +453,11 @@ def _general_entries():
         "eq2", "general", "(2)", ok2, "identical" if ok2 else "differs",
         "for a graph z = f(x) with f undefined, the printed xdot^2(x) (integrals left unevaluated) "
         "solves the derived equation of motion xddot + A xdot^2 + B = 0 identically",
-        r"\dot x^2 = e^{-\int\frac{2}{\sqrt{1+z'^2}}\left[\frac{d}{dx}\sqrt{1+z'^2} \pm \mu\frac{z''}{\sqrt{1+z'^2}}\right]dx}"
+        r"\dot x^2 = e^{-\int\frac{2}{\sqrt{1+z'^2}}\left[\frac{d}{dx}\sqrt{1+z'^2} \pm \mu\frac{z''}{"
+        r"\sqrt{1+z'^2}}\right]dx}"
         r"\left[-2g\int\frac{z' \pm \mu}{1+z'^2}e^{\int\ldots dx}dx + C\right]",
-        r"w(q) = e^{-2\sigma\mu\alpha}\left[C - 2gF_\sigma(q)\right],\ F_\sigma = \int e^{2\sigma\mu\alpha}(z' + \sigma\mu x')\,dq"))
+        r"w(q) = e^{-2\sigma\mu\alpha}\left[C - 2gF_\sigma(q)\right],\ F_\sigma = \int e^{2\sigma\mu\alpha}(z'"
+        r" + \sigma\mu x')\,dq"))
     return verdicts
 
 
@@ -457,7 +471,7 @@ def audit(shapes=("parabola", "cycloid", "circle"), *, general: bool = True) -> 
     judges = {"eom": _judge_eom, "phase": _judge_phase, "energy": _judge_energy}
     for entry in PRINTED:
         if entry.shape in shapes:
-            verdicts.append(judges[entry.kind](entry, _derivation(entry.shape)))
+            verdicts.append(judges[entry.kind](entry, derivation(entry.shape)))
     return tuple(verdicts)
 
 
@@ -497,7 +511,7 @@ def errata_markdown(verdicts=None) -> str:
     lines = [
         "# Errata of the paper's printed equations",
         "",
-        "Generated by `python -m symvib.symbolic.audit` from `symvib/audit.py`, which transcribes every",
+        "Generated by `python -m symvib.symbolic.audit` from `symvib/symbolic/audit.py`, which transcribes every",
         "printed equation and compares it with `symvib.symbolic.derive` (tests: `tests/test_audit.py`).",
         "Equal up to a rescaled integration constant or a shifted potential-energy level counts",
         "as equal. Upper signs are for `v > 0`; `tg alpha0 = mu`.",

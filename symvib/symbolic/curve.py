@@ -135,7 +135,7 @@ class Curve:
     q_scale: sp.Expr
     source: tuple = field(default=(), compare=False)
 
-    # --- derived geometry (physics.md table) ---------------------------------
+    # --- derived geometry (physics.md, "Geometry") ---------------------------------
     @cached_property
     def xp(self) -> sp.Expr:
         """``x'(q)``."""
@@ -165,10 +165,6 @@ class Curve:
     def coordinate(self) -> str:
         return self.q.name
 
-    @property
-    def param_names(self) -> tuple:
-        return tuple(p.name for p in self.params)
-
     @cached_property
     def qdot(self) -> sp.Symbol:
         """The generalized velocity symbol (``phidot`` for ``q = phi``)."""
@@ -184,8 +180,8 @@ class Curve:
         base = _greek(self.q.name)
         return {
             self.q: base,
-            self.qdot: r"\dot{%s}" % base,
-            self.qddot: r"\ddot{%s}" % base,
+            self.qdot: rf"\dot{{{base}}}",
+            self.qddot: rf"\ddot{{{base}}}",
             **{p: _greek(p.name) for p in self.params},
         }
 
@@ -314,7 +310,7 @@ def _parse_all(texts: dict, q: sp.Symbol, declared, field_prefix: str) -> tuple:
         # against the declared parameters below, with a message that says so.
         parsed[key] = _parse_inferring(text, q.name, f"{field_prefix}{key}")
     names = set()
-    for key, value in parsed.items():
+    for value in parsed.values():
         if isinstance(value, sp.Basic):
             names |= {s.name for s in value.free_symbols}
         else:

@@ -14,7 +14,7 @@ with ``F_s`` from :mod:`symvib.symbolic.integrals`.  The paper's "double" equati
 the pair ``s = +1`` (upper signs, ``v > 0``) and ``s = -1``, written for a
 positive normal force; where ``N < 0`` the branch with ``s = -sigma`` applies.
 
-Energies (physics.md table): ``Ek = m w / 2``, ``Ep = m g z``, ``E = Ek + Ep``,
+Energies (physics.md, "Energies"): ``Ek = m w / 2``, ``Ep = m g z``, ``E = Ek + Ep``,
 ``F_N = m (kappa w + g cos alpha)``, ``P_mu = -mu |F_N| |v|``.
 
 Examples
@@ -37,7 +37,7 @@ from symvib.symbolic.curve import Curve, identity_holds
 from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivative
 from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
 
-__all__ = ["Branch", "Derivation", "derive", "coefficients"]
+__all__ = ["Branch", "Derivation", "derive", "coefficients", "pm_latex"]
 
 
 def _simplest(expr: sp.Expr) -> sp.Expr:
@@ -131,7 +131,7 @@ class Derivation:
         N = c.kappa * c.h**2 * c.qdot**2 + g * sp.cos(c.alpha)
         return (-g * sp.sin(c.alpha) - mu * sp.sign(c.qdot) * sp.Abs(N) - c.hp * c.qdot**2) / c.h
 
-    # --- energies (physics.md table) -----------------------------------------------------
+    # --- energies (physics.md, "Energies") -----------------------------------------------------
     @cached_property
     def energies(self) -> dict:
         """``Ek, Ep, E, F_N, P_mu`` as functions of the state ``(q, qdot)``."""
@@ -186,20 +186,20 @@ class Derivation:
         names[shown] = r"\pm" if pm else r"\sigma"
 
         def tex(e):
-            return _pm(sp.latex(e.subs(sigma, shown), symbol_names=names, order="none"))
+            return pm_latex(sp.latex(e.subs(sigma, shown), symbol_names=names, order="none"))
 
         lhs = c.qddot + self.A * c.qdot**2 + self.B
         Fs = sp.Symbol("F_sigma")
         names[Fs] = r"F_{\pm}" if pm else r"F_{\sigma}"
         phase_rhs = sp.exp(-2 * sigma * mu * c.alpha) * (C - 2 * g * Fs) / c.h**2
         out = {
-            "geometry": r"h = %s,\quad \alpha = %s,\quad \kappa = %s" % (tex(c.h), tex(c.alpha), tex(c.kappa)),
+            "geometry": rf"h = {tex(c.h)},\quad \alpha = {tex(c.alpha)},\quad \kappa = {tex(c.kappa)}",
             "eom": tex(_collect(lhs, c)) + " = 0",
-            "phase": r"%s^{2} = %s" % (names[c.qdot], tex(phase_rhs)),
+            "phase": rf"{names[c.qdot]}^{{2}} = {tex(phase_rhs)}",
         }
         for s, label in ((1, "F+"), (-1, "F-")):
             F = self.branches[s].F
-            out[label] = (r"F_{%s} = %s" % ("+" if s > 0 else "-", tex(F.expr)))
+            out[label] = rf"F_{{{'+' if s > 0 else '-'}}} = {tex(F.expr)}"
         for key, value in self.energies.items():
             out[key] = tex(value)
         return out
@@ -225,7 +225,27 @@ class Derivation:
         return self.markdown()
 
 
-def _pm(text: str) -> str:
+def pm_latex(text: str) -> str:
+    r"""LaTeX ``text`` with the branch sign ``\pm`` written as printed: ``- \pm`` becomes ``\mp``.
+
+    SymPy prints a product with the branch-sign symbol as ``- \pm`` or
+    ``+ \pm``; the paper writes ``\mp`` and ``\pm``.  Used by
+    :meth:`Derivation.latex` and the audit (:mod:`symvib.symbolic.audit`).
+
+    Parameters
+    ----------
+    text : str
+        LaTeX in which the branch-sign symbol is printed as ``\pm``.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> pm_latex(r"a - \pm b + \pm c - 2 \pm d")
+    'a \\mp b \\pm c \\mp 2 d'
+    """
     text = re.sub(r"- (\d+) \\pm", r"\\mp \1", text)
     return text.replace(r"- \pm", r"\mp").replace(r"+ \pm", r"\pm").replace(r"-\pm", r"\mp")
 

@@ -46,7 +46,7 @@ import mpmath
 import sympy as sp
 
 from symvib.symbolic import budget
-from symvib.symbolic.curve import CHECK_DIGITS, CHECK_TOLERANCE, Curve, identity_holds, numeric_zero, sample_points
+from symvib.symbolic.curve import CHECK_DIGITS, CHECK_TOLERANCE, Curve, numeric_zero, sample_points
 from symvib.symbolic.symbols import mu
 
 __all__ = ["Attempt", "Antiderivative", "antiderivative", "integrand", "ROUTES", "ROUTE_SECONDS",
@@ -315,7 +315,7 @@ def antiderivative(curve: Curve, s: int, *, seconds: float = ROUTE_SECONDS,
     return result
 
 
-def _with_q_ref(result: "Antiderivative", q_ref: sp.Expr, q: sp.Symbol) -> "Antiderivative":
+def _with_q_ref(result: Antiderivative, q_ref: sp.Expr, q: sp.Symbol) -> Antiderivative:
     """``result`` measured from ``q_ref`` (a numeric route integrates from it)."""
     if result.q_ref == q_ref:
         return result

@@ -366,8 +366,7 @@ def regular_shape(scene):
     import dataclasses
     import json
 
-    from symvib.numeric.scene import SceneError
-    from symvib.numeric.scene import declared_domain
+    from symvib.numeric.scene import SceneError, declared_domain
 
     shape = scene.shape
     source = json.dumps(shape.source(), sort_keys=True)

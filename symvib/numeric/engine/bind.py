@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import hashlib
 import types
-from functools import lru_cache, partial
+from functools import cache, partial
 from pathlib import Path
 from typing import NamedTuple
 
@@ -161,7 +161,7 @@ def _state_module():
     return state
 
 
-@lru_cache(maxsize=None)
+@cache
 def _compiled_engine(ncp: int) -> dict:
     """The engine's entry points compiled for ``ncp`` curve parameters.
 

@@ -70,7 +70,7 @@ def finite_state(t, q, w, Wf, Wimp):
 
 
 def nsign_of(q, w, g, K, cp):
-    """The sign of the normal force ``N = kappa w + g cos alpha`` (physics.md, "Normal force");
+    """The sign of the normal force ``N = kappa w + g cos alpha`` (physics.md, eq. 1);
     where ``N = 0`` exactly, the sign of ``x'`` (the side gravity pulls to)."""
     n = K.N_w(q, w, g, *cp)
     if n == 0.0:

@@ -44,8 +44,17 @@ from symvib.numeric.engine.laws import (
 from symvib.numeric.engine.scan import CRIT_STEP, End, locate, map_new
 from symvib.numeric.engine.state import Kernels, Outcome, Setup, Zeno
 from symvib.numeric.engine.timing import WORK_ROWS, quad, root_time, samples
-from symvib.numeric.layout import EventCode, EventColumn, IntervalColumn, SceneRow, StatusCode, Summary
-from symvib.numeric.layout import EVENT_COLUMNS, INTERVAL_COLUMNS, SUMMARY_COLUMNS
+from symvib.numeric.layout import (
+    EVENT_COLUMNS,
+    INTERVAL_COLUMNS,
+    SUMMARY_COLUMNS,
+    EventCode,
+    EventColumn,
+    IntervalColumn,
+    SceneRow,
+    StatusCode,
+    Summary,
+)
 
 __all__ = ["run", "params_of", "setup_of", "simulate_scene", "sample_scene", "sweep_scenes"]
 

@@ -51,9 +51,19 @@ Examples
 """
 from __future__ import annotations
 
-from symvib.numeric.sweep.limits import (DEFAULT_CHUNK, DEFAULT_NODES, MAX_CHUNK_BYTES, MAX_CHUNKS,
-                                         MAX_EVENT_LOG_BYTES, MAX_LIST_VALUES, MAX_LOG_EVENTS, MAX_MANIFEST_BYTES,
-                                         MAX_SCENES, NODES_RANGE, SweepError)
+from symvib.numeric.sweep.limits import (
+                                         DEFAULT_CHUNK,
+                                         DEFAULT_NODES,
+                                         MAX_CHUNK_BYTES,
+                                         MAX_CHUNKS,
+                                         MAX_EVENT_LOG_BYTES,
+                                         MAX_LIST_VALUES,
+                                         MAX_LOG_EVENTS,
+                                         MAX_MANIFEST_BYTES,
+                                         MAX_SCENES,
+                                         NODES_RANGE,
+                                         SweepError,
+)
 from symvib.numeric.sweep.lock import LOCK_GRACE, WriterLock
 from symvib.numeric.sweep.progress import Progress
 from symvib.numeric.sweep.result import SweepResult

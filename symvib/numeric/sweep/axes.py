@@ -148,7 +148,7 @@ class Axis:
         return head | {"low": self.low, "high": self.high}
 
     @classmethod
-    def from_dict(cls, data, label: str) -> "Axis":
+    def from_dict(cls, data, label: str) -> Axis:
         """An axis from a manifest's definition (types and sizes checked; ``label`` names it)."""
         if not isinstance(data, dict) or not isinstance(data.get("key"), str) \
                 or not isinstance(data.get("field"), str):
@@ -184,7 +184,8 @@ def parse_axis(scene: Scene, key: str, spec, random: bool) -> Axis:
     """An :class:`Axis` from ``"start:stop:count"``, ``"start:stop"``, ``"a,b,c"`` or a sequence.
 
     Sizes are checked before anything of that size is built: a count beyond
-    :data:`~symvib.numeric.sweep.limits.MAX_SCENES`, or more than :data:`~symvib.numeric.sweep.limits.MAX_LIST_VALUES` listed values, is refused.
+    :data:`~symvib.numeric.sweep.limits.MAX_SCENES`, or more than
+    :data:`~symvib.numeric.sweep.limits.MAX_LIST_VALUES` listed values, is refused.
     """
     fld = canonical_field(scene, key)
     label = f"vary.{key}"
@@ -228,7 +229,8 @@ def parse_axis(scene: Scene, key: str, spec, random: bool) -> Axis:
         raise SceneError(label, "a random sweep takes a range start:stop, not a list of values")
     if isinstance(spec, str):
         if spec.count(",") >= limits.MAX_LIST_VALUES:
-            raise SceneError(label, f"more than {limits.MAX_LIST_VALUES} listed values (symvib.numeric.sweep.limits.MAX_LIST_VALUES); "
+            raise SceneError(label, f"more than {limits.MAX_LIST_VALUES} listed values "
+                                    "(symvib.numeric.sweep.limits.MAX_LIST_VALUES); "
                                     f"use start:stop:count")
         items = spec.split(",")
     else:

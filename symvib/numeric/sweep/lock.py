@@ -83,7 +83,7 @@ class WriterLock:
             return False
         return False
 
-    def acquire(self) -> "WriterLock":
+    def acquire(self) -> WriterLock:
         """Take the lock, or raise :class:`SweepError` naming the folder and the holder."""
         for _ in range(3):
             try:

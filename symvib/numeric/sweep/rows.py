@@ -16,7 +16,7 @@ Examples
 >>> scene_rows(base, axes, [np.array([0.5, 1.5])])
 Traceback (most recent call last):
 ...
-symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5 (sweep row 1 of its chunk)
+symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), ...
 """
 from __future__ import annotations
 
@@ -73,7 +73,8 @@ def scene_rows(scene, axes, values) -> tuple:
 
 
 def _friction_coefficients(alpha0: np.ndarray, field: str) -> np.ndarray:
-    """``mu = tan(alpha0)`` per row, by the scene's own conversion (:func:`~symvib.numeric.scene.friction_coefficient`)."""
+    """``mu = tan(alpha0)`` per row, by the scene's own conversion
+    (:func:`~symvib.numeric.scene.friction_coefficient`)."""
     out = np.empty_like(alpha0)
     for i, a in enumerate(alpha0):
         try:

@@ -65,7 +65,7 @@ class SweepSpec:
                 "nodes": self.nodes}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "SweepSpec":
+    def from_dict(cls, data: dict) -> SweepSpec:
         """The spec of a definition (:meth:`to_dict`), checked as :func:`make_spec` checks one.
 
         A definition comes from a manifest or a Dask task: every type and size
@@ -200,7 +200,8 @@ def check_sizes(spec: SweepSpec, prefix: str = "") -> None:
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
             raise SceneError(prefix + label, f"must be an integer >= {least}, got {value!r}")
     if spec.nodes > limits.NODES_RANGE[1]:
-        raise SceneError(prefix + "nodes", f"must be in [{limits.NODES_RANGE[0]}, {limits.NODES_RANGE[1]}], got {spec.nodes}")
+        lo, hi = limits.NODES_RANGE
+        raise SceneError(prefix + "nodes", f"must be in [{lo}, {hi}], got {spec.nodes}")
     if isinstance(spec.count, bool) or not isinstance(spec.count, int) or spec.count < 1:
         raise SceneError(prefix + "count", f"must be a positive integer, got {spec.count!r}")
     if spec.mode == "grid" and spec.count != math.prod(a.size for a in spec.axes):
@@ -212,14 +213,16 @@ def check_sizes(spec: SweepSpec, prefix: str = "") -> None:
                          f"symvib.numeric.sweep.limits.MAX_SCENES)")
     if spec.chunks > limits.MAX_CHUNKS:
         raise SceneError(prefix + "chunk", f"{spec.chunk} scenes per chunk makes {spec.chunks} chunk files, more "
-                                           f"than {limits.MAX_CHUNKS} (symvib.numeric.sweep.limits.MAX_CHUNKS): choose a larger --chunk")
+                                           f"than {limits.MAX_CHUNKS} (symvib.numeric.sweep.limits.MAX_CHUNKS): "
+                                           "choose a larger --chunk")
     if spec.log_events > limits.MAX_LOG_EVENTS:
         raise SceneError(prefix + "log_events", f"{spec.log_events} events per scene is more than "
                                                 f"{limits.MAX_LOG_EVENTS} (symvib.numeric.sweep.limits.MAX_LOG_EVENTS)")
     if spec.chunk_bytes() > limits.MAX_CHUNK_BYTES:
         raise SceneError(prefix + "chunk", f"a chunk of {min(spec.chunk, spec.count)} scenes with --log-events "
                                            f"{spec.log_events} takes {spec.chunk_bytes()} bytes, more than "
-                                           f"{limits.MAX_CHUNK_BYTES} (symvib.numeric.sweep.limits.MAX_CHUNK_BYTES): choose a smaller "
+                                           f"{limits.MAX_CHUNK_BYTES} (symvib.numeric.sweep.limits.MAX_CHUNK_BYTES): "
+                                           "choose a smaller "
                                            f"--chunk or --log-events")
     log_bytes = spec.count * spec.log_events * EVENT_WIDTH * ITEM
     if log_bytes > limits.MAX_EVENT_LOG_BYTES:

@@ -1,0 +1,78 @@
+"""House rules of the package: every ``__all__`` name exists, and no module imports another's private names."""
+import ast
+import importlib
+import pkgutil
+from pathlib import Path
+
+import pytest
+
+import symvib
+
+PACKAGE = Path(symvib.__file__).resolve().parent
+#: Every module of the package (the generated kernel modules included: they are imported, not scanned).
+MODULES = sorted(m.name for m in pkgutil.walk_packages(symvib.__path__, "symvib."))
+#: Private imports allowed across modules: ``(importing file, imported module, name)``; none.
+PENDING_PRIVATE_IMPORTS: set = set()
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_every_name_in_all_exists(name):
+    module = importlib.import_module(name)
+    missing = [n for n in getattr(module, "__all__", ()) if not hasattr(module, n)]
+    assert not missing, f"{name}.__all__ names what the module does not define: {missing}"
+
+
+def test_star_import_of_the_code_generator():
+    namespace = {}
+    exec("from symvib.codegen.generate import *", namespace)  # noqa: S102 - the import is the test
+    assert "generate" in namespace and "KERNEL_FUNCTIONS" in namespace
+
+
+def _sources():
+    """The package's own source files (the generated kernel modules live outside ``symvib/``)."""
+    return sorted(p for p in PACKAGE.rglob("*.py") if "generated" not in p.relative_to(PACKAGE).parts)
+
+
+def _private_imports(path: Path, root: Path = PACKAGE) -> list:
+    """``(line, imported module, name)`` of every ``from M import _name`` in ``path`` (a file of the
+    package folder ``root``) with M another module."""
+    rel = path.relative_to(root)
+    own = ".".join(("symvib", *rel.with_suffix("").parts)).removesuffix(".__init__")
+    package = own if rel.name == "__init__.py" else own.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+        if not isinstance(node, ast.ImportFrom) or node.module == "__future__":
+            continue
+        if node.level:
+            base = package.split(".")
+            base = base[:len(base) - node.level + 1]
+            module = ".".join(base + ([node.module] if node.module else []))
+        else:
+            module = node.module or ""
+        if module == own:
+            continue
+        for alias in node.names:
+            if alias.name.startswith("_") and not alias.name.startswith("__"):
+                out.append((node.lineno, module, alias.name))
+    return out
+
+
+def test_the_scan_finds_a_private_import(tmp_path):
+    """The scan itself: absolute and relative private imports are found, a private alias is not."""
+    fake = tmp_path / "symvib" / "checks"
+    fake.mkdir(parents=True)
+    (fake / "x.py").write_text("from symvib.symbolic.derive import _pm\nfrom ..paper import _y as y\n"
+                               "from symvib.symbolic import curve as _curve\n", encoding="utf-8")
+    assert _private_imports(fake / "x.py", tmp_path / "symvib") == [(1, "symvib.symbolic.derive", "_pm"),
+                                                                    (2, "symvib.paper", "_y")]
+
+
+def test_no_module_imports_private_names_of_another():
+    found = []
+    for path in _sources():
+        rel = path.relative_to(PACKAGE).as_posix()
+        for line, module, name in _private_imports(path):
+            if (rel, module, name) not in PENDING_PRIVATE_IMPORTS:
+                found.append(f"symvib/{rel}:{line}: from {module} import {name}")
+    assert not found, ("private names imported across modules (make them public, documented, or move them):\n"
+                       + "\n".join(found))
