@@ -40,3 +40,22 @@ def test_numba_matches_python(scene):
 def test_unknown_backend():
     with pytest.raises(ValueError, match="unknown backend"):
         backend_available("cuda")
+
+
+@pytest.mark.slow  # compiles the shared engine (about 40 s)
+def test_the_shared_engine_gives_the_events_of_the_specialized_one():
+    # bind(..., shared=True): the engine compiled once per number of parameters, the kernels
+    # as first-class functions; the same floating-point operations, so the same events.
+    from symvib.numeric import driver
+    from symvib.numeric.engine import bind
+    from symvib.numeric.kernels import load
+    from symvib.numeric.scene import resolve_scene
+
+    for name in ("paper-parabola", "paper-circle-7"):
+        scene = resolve_scene(name)
+        mod = load(scene.shape)
+        row, cp, R = driver.scene_row(scene), tuple(scene.param_values), driver.rules(driver.NODES)
+        a = bind(mod, "numba").simulate(cp, row, R, False)
+        b = bind(mod, "numba", shared=True).simulate(cp, row, R, False)
+        assert a.status == b.status and a.n_events == b.n_events > 0
+        assert a.events[:a.n_events].tobytes() == b.events[:b.n_events].tobytes()

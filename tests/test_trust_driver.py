@@ -395,3 +395,16 @@ def test_narrow_normal_force_dip_between_scan_nodes_is_found(qdot):
         assert first.q > 2 * math.pi  # N stays positive over the top; it changes sign on a later lap
     else:
         assert abs(first.q - phi_ref) < LEAVE_TOL
+
+
+def test_checked_status_of_one_run_is_that_of_a_sweep_row():
+    # The scalar path (simulate) and the array path (sweeps) of checked_status agree.
+    rng = np.random.default_rng(7)
+    cases = [(int(StatusCode.T_MAX), 1.0, 0.0, 0.0, 4.9, 0.0, 4.9 * (1 + f), 0.0) for f in (0, 1e-12, 2e-9, -2e-9)]
+    cases += [(int(StatusCode.ARRESTED), 1.0, 0.0, math.inf, 4.9, 0.0, 4.9, 0.0),
+              (int(StatusCode.NON_FINITE), 1.0, 0.0, 0.0, 4.9, 0.0, 1.0, 0.0),
+              (int(StatusCode.ARRESTED), 1.0, 0.0, 0.0, 1e308, -1e308, 0.0, 0.0)]
+    cases += [(int(StatusCode.ARRESTED), *rng.normal(size=4), *(rng.normal(size=3) * 10.0 ** rng.integers(-3, 3)))
+              for _ in range(50)]
+    columns = [np.array(c) for c in zip(*cases)]
+    assert list(driver.checked_status(*columns)) == [driver.checked_status(*c) for c in cases]

@@ -158,7 +158,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         return _non_finite(scene, exc)
     status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
     detail = "plastic" if scene.k == 0.0 else ""
-    events = [Event(kind_of(r[0]), r[1], r[2], r[3], r[4], r[5], detail if r[0] == EventCode.IMPACT else "")
+    impact = int(EventCode.IMPACT)
+    events = [Event(kind_of(r[0]), r[1], r[2], r[3], r[4], r[5], detail if r[0] == impact else "")
               for r in out.events[:out.n_events].tolist()]
     zeno = out.zeno
     zinfo = None
@@ -229,7 +230,13 @@ def checked_status(status, t_final, q_final, qdot_final, E0, E_final, friction_w
     >>> checked_status(StatusCode.ARRESTED, math.nan, 0.0, 0.0, 4.9, 0.0, 4.9, 0.0) == StatusCode.NON_FINITE
     True
     """
-    scalar = np.ndim(status) == 0
+    if np.ndim(status) == 0:  # one run: the same test in plain floats (no array machinery)
+        values = [float(v) for v in (t_final, q_final, qdot_final, E0, E_final, friction_work, impact_loss)]
+        if not all(math.isfinite(v) for v in values):
+            return int(StatusCode.NON_FINITE)
+        e0, e1, wf, wi = values[3:]
+        closes = abs(e0 - e1 - wf - wi) <= BUDGET_RTOL * max(abs(e0), abs(e1), abs(wf), abs(wi))
+        return int(status) if closes or int(status) in ERROR_CODES else int(StatusCode.ENERGY_BUDGET_MISMATCH)
     code = np.asarray(status, dtype=np.int64)
     E0, E_final, Wf, Wimp = (np.asarray(v, dtype=float) for v in (E0, E_final, friction_work, impact_loss))
     finite = np.ones(code.shape, dtype=bool)
@@ -241,7 +248,7 @@ def checked_status(status, t_final, q_final, qdot_final, E0, E_final, friction_w
         closes = residual <= BUDGET_RTOL * scale
     out = np.where(~finite, StatusCode.NON_FINITE, np.where(closes | np.isin(code, ERROR_CODES), code,
                                                        StatusCode.ENERGY_BUDGET_MISMATCH))
-    return int(out) if scalar else out.astype(np.int64)
+    return out.astype(np.int64)
 
 
 def guarded_sweep(sweep_fn):

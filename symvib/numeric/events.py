@@ -60,14 +60,22 @@ MESSAGES = {
 assert set(MESSAGES) == set(Status), "every status needs a message in MESSAGES"
 
 
+#: Statuses and event kinds indexed by their engine codes (lookups of a run's every event).
+_STATUS_BY_CODE = tuple(Status[c.name] if c != StatusCode.RUNNING else None for c in sorted(StatusCode))
+_KIND_BY_CODE = tuple(EventKind[c.name] for c in sorted(EventCode))
+
+
 def status_of(code) -> Status:
     """The :class:`Status` of an engine status code."""
-    return Status[StatusCode(int(code)).name]
+    status = _STATUS_BY_CODE[int(code)]
+    if status is None:
+        raise ValueError("status code RUNNING never ends a run")
+    return status
 
 
 def kind_of(code) -> EventKind:
     """The :class:`EventKind` of an engine event code."""
-    return EventKind[EventCode(int(code)).name]
+    return _KIND_BY_CODE[int(code)]
 
 
 class Event(NamedTuple):

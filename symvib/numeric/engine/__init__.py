@@ -10,7 +10,10 @@ Modules, each one concept (physics.md, "Events", for the algorithm):
 * :mod:`~symvib.numeric.engine.timing`: times and friction work by quadrature;
 * :mod:`~symvib.numeric.engine.loop`: the event loop and its entry points;
 * :mod:`~symvib.numeric.engine.bind`: the engine bound to a curve's kernels,
-  as plain Python or compiled by numba.
+  as plain Python or compiled by numba;
+* :mod:`~symvib.numeric.engine.static`, :mod:`~symvib.numeric.engine.compiled`:
+  the kernels as numba sees them (a compile-time constant of one curve, or a
+  structure of function pointers for the shared engine).
 """
 from symvib.numeric.engine.bind import Engine, bind
 

@@ -7,13 +7,18 @@ no source text is pasted or executed.
 
 * ``python``: the engine's functions as they are, the kernels the generated
   module's ``*_scalar`` functions.
-* ``numba``: each kernel is compiled with its signature from
-  :data:`~symvib.numeric.engine.state.KERNEL_INTERFACE` (per curve: a few
-  seconds), and the engine is compiled once per number of curve parameters,
-  with the kernels as first-class function arguments, and cached on disk
-  (``cache=True``): a new curve with a known number of parameters reuses it.
-  Every engine function is compiled from its own code object with its calls
-  bound to its compiled siblings (:func:`_compiled_functions`).
+* ``numba`` (default): the engine specialized to the curve.  The kernels are
+  compiled with their signatures from
+  :data:`~symvib.numeric.engine.state.KERNEL_INTERFACE` and reach the engine as
+  a compile-time constant (:mod:`~symvib.numeric.engine.static`), so numba
+  inlines them; the compiled entry points are named after the curve's module
+  and input hash and cached on disk.
+* ``numba`` with ``shared=True``: the engine compiled once per number of curve
+  parameters, with the kernels as first-class functions in one numba structure
+  (:mod:`~symvib.numeric.engine.compiled`); a new curve costs its kernels only.
+
+Either way every engine function is compiled from its own code object with its
+calls bound to its compiled siblings (:func:`_compiled_functions`).
 
 Examples
 --------
@@ -32,7 +37,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from symvib.numeric.engine import laws, loop, roots, scan, timing
-from symvib.numeric.engine.state import KERNEL_INTERFACE, Rules
+from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
 __all__ = ["Engine", "bind", "kernel_functions", "ENGINE_MODULES", "ENTRY_POINTS"]
 
@@ -60,16 +65,29 @@ def kernel_functions(module) -> tuple:
     return tuple(getattr(module, name) for name, _, _ in KERNEL_INTERFACE.values())
 
 
-def bind(module, backend: str) -> Engine:
-    """The engine bound to the kernels of a generated ``module`` on ``backend``."""
+def bind(module, backend: str, *, shared: bool = False) -> Engine:
+    """The engine bound to the kernels of a generated ``module`` on ``backend``.
+
+    On numba, the default is an engine specialized to the curve (its kernels
+    inlined; compiled on first use, about 10 s per entry point, then cached on
+    disk under the curve's module and input hash).  ``shared=True`` takes the
+    engine compiled once per number of curve parameters, with the kernels as
+    first-class functions (a new curve costs its kernels only, about a second;
+    runs are about 12 % slower).
+    """
     if backend == "python":
-        k = kernel_functions(module)
+        k = Kernels(*kernel_functions(module))
         return Engine(partial(loop.simulate_scene, k), partial(loop.sample_scene, k),
                       partial(loop.sweep_scenes, k))
     if backend != "numba":
         raise ValueError(f"unknown backend {backend!r}; use 'numba' or 'python'")
     ncp = len(module.PARAMS)
-    k = _compiled_kernels(module, ncp)
+    if not shared:
+        entries = _specialized_engine(module, ncp)
+        return Engine(entries["simulate_bound"], entries["sample_bound"], _balanced(entries["sweep_bound"]))
+    from symvib.numeric.engine.compiled import kernels_box
+
+    k = kernels_box(_compiled_kernels(module, ncp), _signatures(ncp))
     entries = _compiled_engine(ncp)
     return Engine(partial(entries["simulate_scene"], k), partial(entries["sample_scene"], k),
                   _balanced(partial(entries["sweep_scenes"], k)))
@@ -92,10 +110,11 @@ def _signatures(ncp: int) -> dict:
     return out
 
 
-def _rebound(fn, namespace: dict):
-    """``fn``'s code with ``namespace`` as its globals (its calls bound to compiled siblings)."""
+def _rebound(fn, namespace: dict, qualname: str | None = None):
+    """``fn``'s code with ``namespace`` as its globals (its calls bound to compiled siblings);
+    ``qualname`` names it (numba's disk cache is keyed by the name)."""
     new = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
-    new.__qualname__, new.__module__, new.__doc__ = fn.__qualname__, fn.__module__, fn.__doc__
+    new.__qualname__, new.__module__, new.__doc__ = qualname or fn.__qualname__, fn.__module__, fn.__doc__
     return new
 
 
@@ -118,12 +137,13 @@ def _compiled_functions(modules, extra: dict, keep) -> dict:
                     raise RuntimeError(f"engine function {name!r} is defined twice ({mod.__name__})")
                 functions[name] = (fn, namespace)
     compiled = {}
+    qualnames = extra.get("_qualnames", {})
     for name, (fn, namespace) in functions.items():
         options = extra.get("_options", {}).get(name, {})
-        compiled[name] = numba.njit(**options)(_rebound(fn, namespace))
+        compiled[name] = numba.njit(**options)(_rebound(fn, namespace, qualnames.get(name)))
     for namespace in spaces:
         namespace.update(compiled)
-        namespace.update({k: v for k, v in extra.items() if k != "_options"})
+        namespace.update({k: v for k, v in extra.items() if not k.startswith("_")})
     return compiled
 
 
@@ -149,16 +169,12 @@ def _compiled_kernels(module, ncp: int) -> tuple:
 
 def engine_digest() -> str:
     """SHA-256 (hex, 20 digits) of the engine's source files, for cache invalidation."""
+    from symvib.numeric.engine import compiled, state
+
     digest = hashlib.sha256()
-    for mod in ENGINE_MODULES + (_state_module(),):
+    for mod in (*ENGINE_MODULES, state, compiled):
         digest.update(Path(mod.__file__).read_bytes())
     return digest.hexdigest()[:20]
-
-
-def _state_module():
-    from symvib.numeric.engine import state
-
-    return state
 
 
 @cache
@@ -172,11 +188,11 @@ def _compiled_engine(ncp: int) -> dict:
     from numba import types as nt
     from numba.np.unsafe.ndarray import to_fixed_tuple
 
+    from symvib.numeric.engine.compiled import kernels_type
     from symvib.numeric.kernels import cache_dir
 
     f64 = nt.float64
-    sigs = _signatures(ncp)
-    k_type = nt.Tuple([nt.FunctionType(sigs[name]) for name in KERNEL_INTERFACE])
+    k_type = kernels_type(_signatures(ncp))
     cp_type = nt.Tuple([f64] * ncp)
     vec, mat = f64[::1], f64[:, ::1]
     rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat], Rules)
@@ -187,7 +203,7 @@ def _compiled_engine(ncp: int) -> dict:
     options = {name: {"cache": True} for name in ENTRY_POINTS}
     options["sweep_scenes"] = {"cache": True, "parallel": True}
     extra = {"prange": numba.prange, "_options": options}
-    compiled = _compiled_functions(ENGINE_MODULES, extra, lambda n: True)
+    compiled = _compiled_functions(ENGINE_MODULES, extra, lambda n: not n.endswith("_bound"))
     # The loop's globals (shared by its compiled functions) get the static-length version.
     compiled["sweep_scenes"].py_func.__globals__["params_of"] = numba.njit(params_of)
     marker = cache_dir() / "engines" / f"engine-{engine_digest()}"
@@ -206,6 +222,56 @@ def _compiled_engine(ncp: int) -> dict:
         compiled[name].disable_compile()
     marker.parent.mkdir(parents=True, exist_ok=True)
     marker.touch()
+    return compiled
+
+
+#: Entry points of an engine specialized to one curve (:func:`_specialized_engine`).
+BOUND_ENTRIES = ("simulate_bound", "sample_bound", "sweep_bound")
+
+
+def _specialized_engine(module, ncp: int) -> dict:
+    """The engine compiled for one curve's kernels (cached per module in this process).
+
+    Each engine function is compiled from its own code with its calls bound to its
+    compiled siblings and the global ``BOUND_KERNELS`` set to the curve's compiled
+    kernels as a compile-time constant (:mod:`~symvib.numeric.engine.static`), so
+    numba inlines them.  The entry points get a name of their own per
+    curve (module name and input hash): numba's disk cache is keyed by that name and
+    the argument types, so each curve's compiled engine is found again by later
+    processes, and a regenerated module (a new input hash) is compiled anew.
+    """
+    cached = getattr(module, "_symvib_specialized_engine", None)
+    if cached is not None:
+        return cached
+    import re
+
+    import numba
+    from numba.np.unsafe.ndarray import to_fixed_tuple
+
+    from symvib.numeric.kernels import cache_dir
+
+    kernels = _compiled_kernels(module, ncp)
+    tag = re.sub(r"\W", "_", f"{module.__name__.rsplit('.', 1)[-1]}_{module.INPUT_HASH[:16]}")
+
+    def params_of(row, n):
+        return to_fixed_tuple(row, ncp)
+
+    options = {name: {"cache": True} for name in BOUND_ENTRIES}
+    options["sweep_scenes"] = {"parallel": True}
+    options["sweep_bound"] = {"cache": True, "parallel": True}
+    from symvib.numeric.engine.static import StaticKernels
+
+    extra = {"prange": numba.prange, "_options": options, "BOUND_KERNELS": StaticKernels(tag, Kernels(*kernels)),
+             "_qualnames": {name: f"{name}__{tag}" for name in BOUND_ENTRIES}}
+    compiled = _compiled_functions(ENGINE_MODULES, extra, lambda n: True)
+    compiled["sweep_scenes"].py_func.__globals__["params_of"] = numba.njit(params_of)
+    marker = cache_dir() / "engines" / f"engine-{engine_digest()}-{tag}"
+    if not marker.exists():  # the engine's sources changed since this curve's entries were cached
+        for name in BOUND_ENTRIES:
+            compiled[name]._cache.flush()
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.touch()
+    module._symvib_specialized_engine = compiled
     return compiled
 
 

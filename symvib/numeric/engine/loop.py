@@ -12,8 +12,9 @@ the end of the search window (the motion goes on).
 
 Entry points (what the driver calls, compiled by numba or run as plain Python
 by :mod:`symvib.numeric.engine.bind`): :func:`simulate_scene`,
-:func:`sample_scene` and :func:`sweep_scenes`.  Each takes the kernels as a
-tuple (``k``, in :data:`~symvib.numeric.engine.state.KERNEL_INTERFACE` order),
+:func:`sample_scene` and :func:`sweep_scenes`.  Each takes the kernels ``K``
+(a :class:`~symvib.numeric.engine.state.Kernels`, or its numba structure
+:class:`~symvib.numeric.engine.compiled.KernelsType`: the same field names),
 the curve's parameter values and the scene as a row of floats
 (:class:`~symvib.numeric.layout.SceneRow`).
 
@@ -42,7 +43,7 @@ from symvib.numeric.engine.laws import (
     zeno_series,
 )
 from symvib.numeric.engine.scan import CRIT_STEP, End, locate, map_new
-from symvib.numeric.engine.state import Kernels, Outcome, Setup, Zeno
+from symvib.numeric.engine.state import Outcome, Setup, Zeno
 from symvib.numeric.engine.timing import WORK_ROWS, quad, root_time, samples
 from symvib.numeric.layout import (
     EVENT_COLUMNS,
@@ -285,21 +286,19 @@ def setup_of(row, K, cp):
                  row[SceneRow.right], lo, hi, K.q_scale(*cp), row[SceneRow.unilateral] != 0.0)
 
 
-def simulate_scene(k, cp, row, R, keep):
+def simulate_scene(K, cp, row, R, keep):
     """Entry point: run the scene ``row`` (keeping its intervals when ``keep``); an Outcome."""
-    K = Kernels(*k)
     S = setup_of(row, K, cp)
     return run(S, K, cp, R, row[SceneRow.q0], row[SceneRow.qdot0], row[SceneRow.t_max],
                int(row[SceneRow.max_events]), keep)
 
 
-def sample_scene(k, cp, row, R, ivs, ni):
+def sample_scene(K, cp, row, R, ivs, ni):
     """Entry point: node samples (t, q, w, N) of the logged intervals of a run of ``row``."""
-    K = Kernels(*k)
     return samples(ivs, ni, setup_of(row, K, cp), K, cp, R)
 
 
-def sweep_scenes(k, rows, cp_rows, R, max_log):
+def sweep_scenes(K, rows, cp_rows, R, max_log):
     """Entry point: run many scenes of one curve (rows of :class:`~symvib.numeric.layout.SceneRow`
     values and of parameter values).
 
@@ -307,7 +306,6 @@ def sweep_scenes(k, rows, cp_rows, R, max_log):
     when ``max_log > 0``, the first ``max_log`` events of each scene.  Scenes run in
     parallel threads on the numba backend (``prange``).
     """
-    K = Kernels(*k)
     n = rows.shape[0]
     out = np.zeros((n, SUMMARY_WIDTH))
     logs = np.zeros((n, max(max_log, 1), EVENT_WIDTH))
@@ -344,3 +342,24 @@ def sweep_scenes(k, rows, cp_rows, R, max_log):
         out[i, Summary.E_final] = o.E_final
         out[i, Summary.zeno_ratio] = o.zeno.ratio
     return out, logs
+
+
+#: The kernels of the curve a compiled engine is specialized to: a global of the entries
+#: below, which :mod:`symvib.numeric.engine.bind` sets in each curve's compiled copy (so
+#: numba inlines the kernels and caches the copy on disk under the curve's name).
+BOUND_KERNELS = None
+
+
+def simulate_bound(cp, row, R, keep):
+    """:func:`simulate_scene` with the bound curve's kernels."""
+    return simulate_scene(BOUND_KERNELS, cp, row, R, keep)
+
+
+def sample_bound(cp, row, R, ivs, ni):
+    """:func:`sample_scene` with the bound curve's kernels."""
+    return sample_scene(BOUND_KERNELS, cp, row, R, ivs, ni)
+
+
+def sweep_bound(rows, cp_rows, R, max_log):
+    """:func:`sweep_scenes` with the bound curve's kernels."""
+    return sweep_scenes(BOUND_KERNELS, rows, cp_rows, R, max_log)
