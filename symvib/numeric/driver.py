@@ -1,40 +1,19 @@
 """The thin event-driven driver: ``simulate(scene)`` (physics.md, "Events").
 
-Within one motion interval the branch ``s = sigma * sign(N)`` is fixed and the
-phase trajectory (eq. 2) holds in closed form,
+``simulate`` turns a scene into the engine's row of floats (:func:`scene_row`),
+runs the engine bound to the curve's kernels (:mod:`symvib.numeric.engine`:
+events found in ``q`` on the closed-form phase trajectory, :mod:`~.engine.scan`;
+times and friction work by quadrature, :mod:`~.engine.timing`; the laws of
+impact, rest and Zeno accumulation, :mod:`~.engine.laws`), and returns typed
+records (:mod:`symvib.numeric.events`).
 
-    G(q) = C - 2 g F_s(q) = w(q) exp(2 s mu alpha(q)),
-
-so events are found in ``q``, not by stepping in time: walking in the
-direction of motion over pieces on which ``G`` is monotone (split where
-``F_s' = 0``, the edge of the friction cone), the limiter ahead is hit iff
-``G`` stays positive up to it; otherwise the first root of ``G`` is the
-turning point.  There the particle is arrested when ``|tan alpha| <= mu``
-and reverses otherwise; an impact maps ``v -> -k v``; where the normal force
-can change sign, its first zero ends the interval too.
-
-Times come from ``t = Integral h dq / sqrt(w)``.  Each interval is split at
-its midpoint and each half is anchored at its outer end, where ``G`` is known
-exactly (the state, or 0 at a turning point).  ``G`` at the Gauss nodes is
-rebuilt from the anchor by integrating ``G' = -2 g F_s'`` with a cumulative
-Gauss-Legendre matrix, so it keeps full relative accuracy where it is small;
-near a (real or virtual) root at distance ``delta`` behind the anchor the
-variable ``r = sqrt(xi)``, ``xi`` the distance from that root, removes the
-inverse square root, with panels graded geometrically from ``sqrt(delta)``
-(grazing impacts).
-
-Hard cases: grazing, a turning point on the cone edge (arrest within
-``CONE_RTOL``), Zeno accumulation at a limiter (bounces summed as a geometric
-series once below ``ZENO_W``), plastic impacts, ``mu = 0`` with ``k = 1``
-(bounded by ``t_max``/``max_events``), the normal force changing sign, and the
-ends of the curve's regular domain.
-
-Where ``N`` may change sign (outside the region where ``kappa >= 0`` and
-``x' > 0``), it is scanned at the Gauss nodes of the interval and at its end,
-and around every local minimum of the scanned values a golden-section search
-looks for a dip below 0 between nodes.  With ``physics.contact = "unilateral"``
-the first zero of ``N`` ends the run (status ``left_curve``); with the default
-``"bilateral"`` the branch flips and the motion goes on.
+Hard cases the engine handles: grazing, a turning point on the cone edge
+(arrest within ``laws.CONE_RTOL``), Zeno accumulation at a limiter (bounces
+summed as a geometric series once below ``laws.ZENO_W``), plastic impacts,
+``mu = 0`` with ``k = 1`` (bounded by ``t_max``/``max_events``), the normal
+force changing sign (bilateral contact: the branch flips; ``physics.contact =
+"unilateral"``: the run ends ``left_curve``), and the ends of the curve's
+regular domain.
 
 Every result is checked (:func:`checked_status`): a state that stops being
 finite ends the run at once with status ``non_finite`` (on the plain-Python
@@ -43,9 +22,8 @@ in ``stats["error"]``), and a run whose energy budget misses by more than
 :data:`BUDGET_RTOL` ends ``energy_budget_mismatch``; ``Result.success`` is then
 False and ``symvib run`` exits with status 3.
 
-The loop itself is :mod:`symvib.numeric.engine`, run compiled by numba when it is
-installed (``pip install symvib[fast]``) and as plain Python otherwise; both
-give the same events.
+The engine runs compiled by numba when it is installed (``pip install
+symvib[fast]``) and as plain Python otherwise; both give the same events.
 
 Examples
 --------
