@@ -345,28 +345,23 @@ def test_big_integer_curve_simulates_on_numba(z, cache):
 
 @pytest.mark.slow
 @pytest.mark.skipif(not NUMBA, reason="no numba")
-def test_tampered_numba_engine_file_is_rewritten_before_it_runs(cache, tmp_path, monkeypatch):
+def test_the_compiled_engine_is_named_by_its_kernel_module(cache):
+    # No engine source is written to the cache any more (the engine binds checked kernel
+    # modules); numba's disk cache of a curve's engine is keyed by the entry points' names,
+    # which carry the kernel module's input hash: a regenerated (or different) module never
+    # meets another module's compiled engine.
     from symvib.numeric import driver
     from symvib.numeric.scene import scene_from_dict
 
-    marker = tmp_path / MARKER_NAME
     scene = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
                              "physics": {"alpha0": 0.05, "restitution": 0.8}, "initial": {"q": -0.6, "qdot": 0.0},
                              "limiters": {"right": 0.3}})
-    monkeypatch.setattr(driver, "_BOUND", {})
-    driver.engine.cache_clear()
-    first = driver.simulate(scene, backend="numba")
-    (engine_file,) = (cache / "engines").glob("engine_parabola_numba_*.py")
-    good = engine_file.read_text(encoding="utf-8")
-    engine_file.write_text(_append_payload(good, marker), encoding="utf-8")
-    for name in [n for n in sys.modules if n.startswith("symvib_engine_")]:
-        monkeypatch.delitem(sys.modules, name)
-    driver._BOUND.clear()
-    driver.engine.cache_clear()
-    again = driver.simulate(scene, backend="numba")
-    assert not marker.exists()
-    assert engine_file.read_text(encoding="utf-8") == good
-    assert [e.t for e in again.events] == [e.t for e in first.events]
+    assert driver.simulate(scene, backend="numba").success
+    module, _ = driver.bound_engine(scene.shape, "numba")
+    entries = module._symvib_specialized_engine
+    for name in ("simulate_bound", "sample_bound", "sweep_bound"):
+        assert entries[name].py_func.__qualname__ == f"{name}__parabola_{module.INPUT_HASH[:16]}"
+    assert not list(cache.glob("engines/*.py"))
 
 
 def test_generate_writes_only_modules_that_pass_the_whitelist(tmp_path, monkeypatch):
