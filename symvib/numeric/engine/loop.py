@@ -67,6 +67,9 @@ INTERVAL_LOG_START = 64
 EVENT_LOG_SPARE = 4
 #: Columns of the event log, the interval log and the sweep summary.
 EVENT_WIDTH, INTERVAL_WIDTH, SUMMARY_WIDTH = len(EVENT_COLUMNS), len(INTERVAL_COLUMNS), len(SUMMARY_COLUMNS)
+#: Column indices as plain ints (numpy indexes faster with an int than with an IntEnum).
+E_KIND, E_T, E_Q, E_BEFORE, E_AFTER, E_ENERGY = (int(c) for c in EventColumn)
+I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W = (int(c) for c in IntervalColumn)
 #: ``prange`` on the plain-Python engine; :mod:`symvib.numeric.engine.bind` gives the
 #: compiled engine numba's parallel range.
 prange = range
@@ -78,12 +81,12 @@ def put_event(events, ne, kind, t, q, before, after, e):
         new = np.zeros((2 * events.shape[0], EVENT_WIDTH))
         new[:ne] = events[:ne]
         events = new
-    events[ne, EventColumn.kind] = kind.value
-    events[ne, EventColumn.t] = t
-    events[ne, EventColumn.q] = q
-    events[ne, EventColumn.qdot_before] = before
-    events[ne, EventColumn.qdot_after] = after
-    events[ne, EventColumn.energy] = e
+    events[ne, E_KIND] = kind.value
+    events[ne, E_T] = t
+    events[ne, E_Q] = q
+    events[ne, E_BEFORE] = before
+    events[ne, E_AFTER] = after
+    events[ne, E_ENERGY] = e
     return events, ne + 1
 
 
@@ -93,15 +96,15 @@ def put_interval(ivs, ni, qa, qb, Ga, Gb, s, sigma, t0, T, Wi):
         new = np.zeros((2 * ivs.shape[0], INTERVAL_WIDTH))
         new[:ni] = ivs[:ni]
         ivs = new
-    ivs[ni, IntervalColumn.qa] = qa
-    ivs[ni, IntervalColumn.qb] = qb
-    ivs[ni, IntervalColumn.Ga] = Ga
-    ivs[ni, IntervalColumn.Gb] = Gb
-    ivs[ni, IntervalColumn.s] = s
-    ivs[ni, IntervalColumn.sigma] = sigma
-    ivs[ni, IntervalColumn.t0] = t0
-    ivs[ni, IntervalColumn.T] = T
-    ivs[ni, IntervalColumn.W_friction] = Wi
+    ivs[ni, I_QA] = qa
+    ivs[ni, I_QB] = qb
+    ivs[ni, I_GA] = Ga
+    ivs[ni, I_GB] = Gb
+    ivs[ni, I_S] = s
+    ivs[ni, I_SIGMA] = sigma
+    ivs[ni, I_T0] = t0
+    ivs[ni, I_T] = T
+    ivs[ni, I_W] = Wi
     return ivs, ni + 1
 
 
@@ -178,9 +181,9 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
                     Wf += w_fric
                     simulated = 0
                     for j in range(ne - 1, -1, -1):
-                        if int(events[j, EventColumn.kind]) == EventCode.IMPACT and events[j, EventColumn.q] == q:
+                        if int(events[j, E_KIND]) == EventCode.IMPACT and events[j, E_Q] == q:
                             simulated += 1
-                        elif int(events[j, EventColumn.kind]) != EventCode.REVERSAL:
+                        elif int(events[j, E_KIND]) != EventCode.REVERSAL:
                             break
                     t += remaining
                     zeno = Zeno(ratio, float(simulated), remaining, float(side))

@@ -80,6 +80,9 @@ class Region(enum.IntEnum):
 
 #: Entries of the region array.
 REGION_SIZE = len(Region)
+#: The entries' indices as plain ints (numpy indexes faster with an int than with an IntEnum).
+(X_LO, X_HI, FP_LO, FM_LO, FP_HI, FM_HI, SAFE_LO, SAFE_HI, SAFE_LO_OPEN, SAFE_HI_OPEN, K_LO, K_HI, LO_IN,
+ HI_IN) = (int(r) for r in Region)
 
 
 def crit_f(x, p):
@@ -121,24 +124,24 @@ def map_new(q0, lo, hi, mu, K, cp, step):
     hi_in = hi - EDGE_RTOL * max(1.0, abs(hi)) if math.isfinite(hi) else math.inf
     k0 = math.floor(q0 / step)
     x0 = min(max(k0 * step, lo_in), hi_in)
-    region[Region.x_lo] = x0
-    region[Region.x_hi] = x0
+    region[X_LO] = x0
+    region[X_HI] = x0
     zp, xp = K.dz(x0, *cp), K.dx(x0, *cp)
-    region[Region.fp_lo] = region[Region.fp_hi] = zp + mu * xp
-    region[Region.fm_lo] = region[Region.fm_hi] = zp - mu * xp
+    region[FP_LO] = region[FP_HI] = zp + mu * xp
+    region[FM_LO] = region[FM_HI] = zp - mu * xp
     safe = xp > 0.0 and K.kappa(x0, *cp) >= 0.0 and is_safe(q0, K, cp)
-    region[Region.safe_lo] = region[Region.safe_hi] = x0
-    region[Region.safe_lo_open] = region[Region.safe_hi_open] = 1.0 if safe else 0.0
+    region[SAFE_LO] = region[SAFE_HI] = x0
+    region[SAFE_LO_OPEN] = region[SAFE_HI_OPEN] = 1.0 if safe else 0.0
     if not safe:
-        region[Region.safe_lo] = region[Region.safe_hi] = q0
-    region[Region.k_lo] = region[Region.k_hi] = k0
-    region[Region.lo_in] = lo_in
-    region[Region.hi_in] = hi_in
+        region[SAFE_LO] = region[SAFE_HI] = q0
+    region[K_LO] = region[K_HI] = k0
+    region[LO_IN] = lo_in
+    region[HI_IN] = hi_in
     roots = np.empty((2, ROOTS_CAPACITY))
     count = np.zeros(2, dtype=np.int64)
-    if region[Region.fp_lo] == 0.0:
+    if region[FP_LO] == 0.0:
         roots = add_root(roots, count, 0, x0)
-    if region[Region.fm_lo] == 0.0:
+    if region[FM_LO] == 0.0:
         roots = add_root(roots, count, 1, x0)
     return region, roots, count
 
@@ -163,34 +166,34 @@ def crossing(roots, count, row, x_old, x_new, f_old, f_new, mu, K, cp):
 
 def map_extend(region, roots, count, target, mu, K, cp, step):
     """Scan the lattice outward until target is covered (or the domain ends)."""
-    while target > region[Region.x_hi] and region[Region.x_hi] < region[Region.hi_in]:
-        k = region[Region.k_hi] + 1.0
-        x = min(k * step, region[Region.hi_in])
+    while target > region[X_HI] and region[X_HI] < region[HI_IN]:
+        k = region[K_HI] + 1.0
+        x = min(k * step, region[HI_IN])
         zp, xp = K.dz(x, *cp), K.dx(x, *cp)
         fp, fm = zp + mu * xp, zp - mu * xp
-        a = region[Region.x_hi]
-        roots = crossing(roots, count, 0, a, x, region[Region.fp_hi], fp, mu, K, cp)
-        roots = crossing(roots, count, 1, a, x, region[Region.fm_hi], fm, mu, K, cp)
-        if region[Region.safe_hi_open] != 0.0:
+        a = region[X_HI]
+        roots = crossing(roots, count, 0, a, x, region[FP_HI], fp, mu, K, cp)
+        roots = crossing(roots, count, 1, a, x, region[FM_HI], fm, mu, K, cp)
+        if region[SAFE_HI_OPEN] != 0.0:
             if xp > 0.0 and K.kappa(x, *cp) >= 0.0:
-                region[Region.safe_hi] = x
+                region[SAFE_HI] = x
             else:
-                region[Region.safe_hi_open] = 0.0
-        region[Region.x_hi], region[Region.fp_hi], region[Region.fm_hi], region[Region.k_hi] = x, fp, fm, k
-    while target < region[Region.x_lo] and region[Region.x_lo] > region[Region.lo_in]:
-        k = region[Region.k_lo] - 1.0
-        x = max(k * step, region[Region.lo_in])
+                region[SAFE_HI_OPEN] = 0.0
+        region[X_HI], region[FP_HI], region[FM_HI], region[K_HI] = x, fp, fm, k
+    while target < region[X_LO] and region[X_LO] > region[LO_IN]:
+        k = region[K_LO] - 1.0
+        x = max(k * step, region[LO_IN])
         zp, xp = K.dz(x, *cp), K.dx(x, *cp)
         fp, fm = zp + mu * xp, zp - mu * xp
-        b = region[Region.x_lo]
-        roots = crossing(roots, count, 0, b, x, region[Region.fp_lo], fp, mu, K, cp)
-        roots = crossing(roots, count, 1, b, x, region[Region.fm_lo], fm, mu, K, cp)
-        if region[Region.safe_lo_open] != 0.0:
+        b = region[X_LO]
+        roots = crossing(roots, count, 0, b, x, region[FP_LO], fp, mu, K, cp)
+        roots = crossing(roots, count, 1, b, x, region[FM_LO], fm, mu, K, cp)
+        if region[SAFE_LO_OPEN] != 0.0:
             if xp > 0.0 and K.kappa(x, *cp) >= 0.0:
-                region[Region.safe_lo] = x
+                region[SAFE_LO] = x
             else:
-                region[Region.safe_lo_open] = 0.0
-        region[Region.x_lo], region[Region.fp_lo], region[Region.fm_lo], region[Region.k_lo] = x, fp, fm, k
+                region[SAFE_LO_OPEN] = 0.0
+        region[X_LO], region[FP_LO], region[FM_LO], region[K_LO] = x, fp, fm, k
     return roots
 
 def next_crit(roots, count, s, a, b, sigma):
@@ -270,7 +273,7 @@ def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X):
         ahead = a + sigma * CHUNK * step
         target = min(ahead, bound) if sigma > 0 else max(ahead, bound)
         roots = map_extend(region, roots, count, target, mu, K, cp, step)
-        edge = min(region[Region.x_hi], bound) if sigma > 0 else max(region[Region.x_lo], bound)
+        edge = min(region[X_HI], bound) if sigma > 0 else max(region[X_LO], bound)
         c = next_crit(roots, count, s, a, edge, sigma)
         b = edge if math.isnan(c) else c
         if b == a:
@@ -288,8 +291,8 @@ def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X):
             break
         a, Gq = b, Gb
     # An earlier zero of N on [q, qe] ends the interval there instead.
-    safe_lo = region[Region.safe_lo]
-    safe_hi = region[Region.safe_hi]
+    safe_lo = region[SAFE_LO]
+    safe_hi = region[SAFE_HI]
     if safe_lo <= min(q, qe) and max(q, qe) <= safe_hi:
         return kind_out, qe, Ge, roots
     # N is scanned at the Gauss nodes and at qe (its sign can change after the last node);
