@@ -327,3 +327,17 @@ def test_run_chunk_is_a_pure_function_of_its_definition():
     assert list(a["row"]) == [2, 3]
     for name in a:
         assert np.array_equal(a[name], b[name])
+
+
+@pytest.mark.parametrize("backend, noted", [("python", True), ("auto", False)])
+def test_a_sweep_on_the_slow_path_says_so_before_it_starts(backend, noted, tmp_path, capsys, monkeypatch):
+    from symvib.cli import main as cli_main
+    from symvib.numeric import driver
+
+    if backend == "auto" and not driver.backend_available("numba"):
+        pytest.skip("the auto backend is the plain one without numba")
+    monkeypatch.delenv("SYMVIB_BACKEND", raising=False)
+    args = ["sweep", "paper-parabola", "--vary", "qdot=6:7:2", "-o", str(tmp_path / "o"), "--backend", backend]
+    assert cli_main(args) == 0
+    err = capsys.readouterr().err
+    assert ("plain-Python engine" in err and 'pip install "symvib[fast]"' in err) is noted

@@ -18,6 +18,7 @@ Examples
 """
 from __future__ import annotations
 
+import sys
 import time
 
 import numpy as np
@@ -140,11 +141,24 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
         lock.release()
 
 
+def _say_slow_path(backend: str) -> None:
+    """Before a sweep on the plain-Python engine computes: say so, and the remedy (one line, stderr)."""
+    from symvib.numeric.driver import resolve_backend
+
+    if resolve_backend(backend) == "python":
+        why = "as asked" if backend == "python" else "numba is not installed"
+        print(f"symvib sweep: note: the plain-Python engine runs this sweep ({why}); it is 50 to 200 times "
+              "slower than the compiled one (benchmarks/bench_sweep.py): pip install \"symvib[fast]\" adds numba",
+              file=sys.stderr, flush=True)
+
+
 def _run(spec, definition, ident, out, lock, done, discarded, scheduler, progress, backend) -> SweepResult:
     """Compute the chunks not in ``done``: into ``out`` (under ``lock``), or in memory."""
     finished = set(done)
     todo = [i for i in range(spec.chunks) if i not in finished]
     store: dict = {}
+    if progress and todo:
+        _say_slow_path(backend)
     bar = Progress(spec.count, enabled=progress,
                    initial=sum(len(spec.rows(i)[0]) for i in done) if done else 0)
     start = time.perf_counter()
