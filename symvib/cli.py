@@ -175,7 +175,7 @@ def _cmd_run(args) -> int:
         changes["max_events"] = args.max_events
     if changes:
         scene = scene.replace(**changes)
-    result = simulate(scene)
+    result = simulate(scene, backend=args.backend)
     print(f"scene {scene.name}: {scene.shape.name}, mu = {scene.mu:.6g}, k = {scene.k:g}, "
           f"limiters {scene.left} .. {scene.right}, {scene.shape.q}0 = {scene.q0:.6g}, "
           f"{scene.shape.q}dot0 = {scene.qdot0:.6g}")
@@ -298,6 +298,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--restitution", type=float, help="override physics.restitution")
     p.add_argument("--t-max", type=float, help="override run.t_max")
     p.add_argument("--max-events", type=int, help="override run.max_events")
+    p.add_argument("--backend", default="auto", choices=("auto", "numba", "python"),
+                   help="auto (default): the compiled engine where it is on disk, else plain Python; "
+                        "numba: compile it on first use (about 20 s, once per curve)")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("generate", help="write the numeric kernel modules (generated/)")

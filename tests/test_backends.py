@@ -59,3 +59,20 @@ def test_the_shared_engine_gives_the_events_of_the_specialized_one():
         b = bind(mod, "numba", shared=True).simulate(cp, row, R, False)
         assert a.status == b.status and a.n_events == b.n_events > 0
         assert a.events[:a.n_events].tobytes() == b.events[:b.n_events].tobytes()
+
+
+def test_the_first_numba_run_leaves_its_marker_and_auto_then_takes_it(tmp_path, monkeypatch):
+    from symvib.numeric import driver
+    from symvib.numeric.engine.bind import is_compiled
+    from symvib.numeric.kernels import load
+
+    monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
+    monkeypatch.delenv("SYMVIB_BACKEND", raising=False)
+    scene = load_scene(SCENES / "paper-circle-7.toml")
+    assert simulate(scene, samples=False).stats["backend"] == "python"
+    assert not is_compiled(load(scene.shape))
+    first = simulate(scene, samples=False, backend="numba")
+    assert is_compiled(load(scene.shape))
+    again = simulate(scene, samples=False)
+    assert again.stats["backend"] == "numba" and again.events == first.events
+    driver._BOUND.clear()

@@ -266,3 +266,29 @@ def test_numeric_route_curve_matches_reference():
     result = simulate(s)
     assert_matches_reference(result, phase_reference(s, max_events=2))
     assert result.energy_budget.relative_residual < BUDGET_TOL
+
+
+def test_a_single_run_never_waits_for_a_compiler(tmp_path, monkeypatch):
+    # "auto" takes the compiled engine only where it is on disk already; an explicit
+    # backend and $SYMVIB_BACKEND are obeyed (issue 15).
+    from symvib.numeric import driver
+    from symvib.numeric.engine.bind import compiled_marker
+    from symvib.numeric.kernels import load
+
+    monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
+    monkeypatch.delenv("SYMVIB_BACKEND", raising=False)
+    shape = load_scene(SCENES / "paper-parabola.toml").shape
+    assert driver.run_backend(shape, "auto") == "python"
+    assert driver.run_backend(shape, "python") == "python"
+    monkeypatch.setenv("SYMVIB_BACKEND", "python")
+    assert driver.run_backend(shape, "auto") == "python"
+    if driver.backend_available("numba"):
+        monkeypatch.delenv("SYMVIB_BACKEND")
+        marker = compiled_marker(load(shape), "simulate_bound")
+        assert marker.parent.parent == tmp_path
+        marker.parent.mkdir(parents=True)
+        marker.touch()  # as the first numba run leaves it
+        assert driver.run_backend(shape, "auto") == "numba"
+        assert driver.run_backend(shape, "numba") == "numba"
+    result = simulate(load_scene(SCENES / "paper-parabola.toml"), backend="python", samples=False)
+    assert result.stats["backend"] == "python"

@@ -52,7 +52,8 @@ from symvib.numeric.kernels import load
 from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, IntervalColumn, SceneRow, StatusCode, Summary
 from symvib.numeric.quadrature import rule
 
-__all__ = ["simulate", "NODES", "backend_available", "resolve_backend", "checked_status", "guarded_sweep",
+__all__ = ["simulate", "NODES", "backend_available", "resolve_backend", "run_backend", "checked_status",
+           "guarded_sweep",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
 
 #: Gauss-Legendre nodes per quadrature panel (the accuracy knob of the times).
@@ -105,6 +106,24 @@ def bound_engine(shape, backend: str = "auto"):
     return entry[1], entry[2]
 
 
+def run_backend(shape, backend: str = "auto") -> str:
+    """The backend one run of ``shape`` takes: a single scene never waits for a compiler.
+
+    ``"auto"`` is numba only where the curve's compiled engine is already on disk
+    (compiled by an earlier ``backend="numba"`` run; :func:`symvib.numeric.engine.bind.is_compiled`),
+    and the plain-Python engine otherwise (milliseconds per paper scene, where a
+    first compilation takes about 20 s).  ``$SYMVIB_BACKEND`` and an explicit
+    backend are obeyed.  Sweeps compile (:func:`sweep_function`).
+    """
+    if backend != "auto" or os.environ.get(BACKEND_ENV):
+        return resolve_backend(backend)
+    if not backend_available("numba"):
+        return "python"
+    from symvib.numeric.engine.bind import is_compiled
+
+    return "numba" if is_compiled(load(shape)) else "python"
+
+
 def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto") -> Result:
     """Simulate ``scene`` event by event until arrest, rest, ``t_max`` or ``max_events``.
 
@@ -116,14 +135,17 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     samples : bool
         Keep per-interval samples for plotting.
     backend : {"auto", "numba", "python"}
-        ``"auto"`` compiles with numba when it is installed (or as ``$SYMVIB_BACKEND`` says).
+        ``"auto"``: the compiled engine where it is on disk already, else the plain one
+        (:func:`run_backend`); ``"numba"`` compiles it on first use (about 20 s, once).
 
     Returns
     -------
     Result
         Status, events, samples and energy budget.
     """
-    mod, eng = bound_engine(_run_shape(scene), backend)
+    shape = _run_shape(scene)
+    backend = run_backend(shape, backend)
+    mod, eng = bound_engine(shape, backend)
     R = rules(nodes)
     cp = tuple(float(v) for v in scene.param_values)
     row = scene_row(scene)
@@ -157,7 +179,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
             return _non_finite(scene, exc)
     return Result(scene=scene, status=status_of(status), events=tuple(events), samples=S,
                   energy_budget=budget, t_final=float(out.t), q_final=float(out.q), qdot_final=float(out.qdot),
-                  zeno=zinfo, stats={"intervals": int(out.n_intervals) if samples else None})
+                  zeno=zinfo, stats={"intervals": int(out.n_intervals) if samples else None, "backend": backend})
 
 
 #: Messages of the exceptions Python's ``math`` raises where compiled code returns inf or NaN.

@@ -39,7 +39,7 @@ from typing import NamedTuple
 from symvib.numeric.engine import laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
-__all__ = ["Engine", "bind", "kernel_functions", "ENGINE_MODULES", "ENTRY_POINTS"]
+__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "ENGINE_MODULES", "ENTRY_POINTS"]
 
 #: The engine's modules, in import order.
 ENGINE_MODULES = (laws, roots, scan, timing, loop)
@@ -84,7 +84,8 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
     ncp = len(module.PARAMS)
     if not shared:
         entries = _specialized_engine(module, ncp)
-        return Engine(entries["simulate_bound"], entries["sample_bound"], _balanced(entries["sweep_bound"]))
+        return Engine(_marking(entries["simulate_bound"], compiled_marker(module, "simulate_bound")),
+                      entries["sample_bound"], _balanced(entries["sweep_bound"]))
     from symvib.numeric.engine.compiled import kernels_box
 
     k = kernels_box(_compiled_kernels(module, ncp), _signatures(ncp))
@@ -229,6 +230,41 @@ def _compiled_engine(ncp: int) -> dict:
 BOUND_ENTRIES = ("simulate_bound", "sample_bound", "sweep_bound")
 
 
+def _tag(module) -> str:
+    """The name of a curve's compiled engine: its module's name and input hash (an identifier)."""
+    import re
+
+    return re.sub(r"\W", "_", f"{module.__name__.rsplit('.', 1)[-1]}_{module.INPUT_HASH[:16]}")
+
+
+def compiled_marker(module, entry: str) -> Path:
+    """The file that says a curve's compiled ``entry`` is in numba's disk cache (for this engine)."""
+    from symvib.numeric.kernels import cache_dir
+
+    return cache_dir() / "engines" / f"compiled-{engine_digest()}-{_tag(module)}-{entry}"
+
+
+def is_compiled(module, entry: str = "simulate_bound") -> bool:
+    """Whether the curve's compiled ``entry`` was compiled before (and so loads from disk, not compiles)."""
+    return compiled_marker(module, entry).exists()
+
+
+def _marking(fn, marker: Path):
+    """``fn`` that leaves ``marker`` after its first call (numba has compiled and cached it then)."""
+    done = [marker.exists()]
+
+    def call(*args):
+        out = fn(*args)
+        if not done[0]:
+            marker.parent.mkdir(parents=True, exist_ok=True)
+            marker.touch()
+            done[0] = True
+        return out
+
+    call.__wrapped__ = fn
+    return call
+
+
 def _specialized_engine(module, ncp: int) -> dict:
     """The engine compiled for one curve's kernels (cached per module in this process).
 
@@ -243,15 +279,13 @@ def _specialized_engine(module, ncp: int) -> dict:
     cached = getattr(module, "_symvib_specialized_engine", None)
     if cached is not None:
         return cached
-    import re
-
     import numba
     from numba.np.unsafe.ndarray import to_fixed_tuple
 
     from symvib.numeric.kernels import cache_dir
 
     kernels = _compiled_kernels(module, ncp)
-    tag = re.sub(r"\W", "_", f"{module.__name__.rsplit('.', 1)[-1]}_{module.INPUT_HASH[:16]}")
+    tag = _tag(module)
 
     def params_of(row, n):
         return to_fixed_tuple(row, ncp)
