@@ -68,6 +68,7 @@ def test_the_first_numba_run_leaves_its_marker_and_auto_then_takes_it(tmp_path, 
 
     monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
     monkeypatch.delenv("SYMVIB_BACKEND", raising=False)
+    monkeypatch.setattr(driver, "_BOUND", {})  # engines bound under another cache folder
     scene = load_scene(SCENES / "paper-circle-7.toml")
     assert simulate(scene, samples=False).stats["backend"] == "python"
     assert not is_compiled(load(scene.shape))
@@ -75,4 +76,3 @@ def test_the_first_numba_run_leaves_its_marker_and_auto_then_takes_it(tmp_path, 
     assert is_compiled(load(scene.shape))
     again = simulate(scene, samples=False)
     assert again.stats["backend"] == "numba" and again.events == first.events
-    driver._BOUND.clear()

@@ -292,3 +292,17 @@ def test_a_single_run_never_waits_for_a_compiler(tmp_path, monkeypatch):
         assert driver.run_backend(shape, "numba") == "numba"
     result = simulate(load_scene(SCENES / "paper-parabola.toml"), backend="python", samples=False)
     assert result.stats["backend"] == "python"
+
+
+def test_samples_are_computed_on_first_use_and_once():
+    # simulate() costs its events; the samples come when asked (issue 15), and are the same
+    # as computed at once.
+    scene = load_scene(SCENES / "paper-circle-7.toml")
+    result = simulate(scene, backend="python")
+    assert "samples" not in result._memo
+    first = result.samples
+    assert result._memo["samples"] is first and result.samples is first
+    assert len(first.t) > 0 and result.error is None
+    assert simulate(scene, backend="python", samples=False).samples is None
+    again = simulate(scene, backend="python").to_dict(samples=True)["samples"]
+    assert again["t"] == first.t.tolist()

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 import os
-from functools import lru_cache
+from functools import lru_cache, partial
 
 import numpy as np
 
@@ -133,7 +133,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     nodes : int
         Gauss-Legendre nodes per quadrature panel.
     samples : bool
-        Keep per-interval samples for plotting.
+        Keep what the samples need (the motion intervals); :attr:`Result.samples`
+        computes them on first use, so a run costs its events only.
     backend : {"auto", "numba", "python"}
         ``"auto"``: the compiled engine where it is on disk already, else the plain one
         (:func:`run_backend`); ``"numba"`` compiles it on first use (about 20 s, once).
@@ -169,17 +170,23 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         events[-1] = events[-1]._replace(
             detail=f"Zeno accumulation: geometric series of bounces, ratio {zeno.ratio:.9g}")
     budget = EnergyBudget(float(out.E0), float(out.E_final), float(out.W_friction), float(out.W_impacts))
-    S = None
+    sampler = None
     if samples and status != StatusCode.NON_FINITE:
-        try:
-            S = _samples(eng, cp, row, out.intervals, out.n_intervals, R, scene, mod)
-        except (ArithmeticError, ValueError) as exc:
-            if not _math_error(exc):
-                raise
-            return _non_finite(scene, exc)
-    return Result(scene=scene, status=status_of(status), events=tuple(events), samples=S,
+        sampler = partial(_lazy_samples, eng, cp, row, out.intervals, out.n_intervals, R, scene, mod)
+    return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=sampler,
                   energy_budget=budget, t_final=float(out.t), q_final=float(out.q), qdot_final=float(out.qdot),
                   zeno=zinfo, stats={"intervals": int(out.n_intervals) if samples else None, "backend": backend})
+
+
+def _lazy_samples(eng, cp, row, ivs, ni, R, scene, mod):
+    """``(samples, None)``, or ``(None, message)`` where the plain-Python engine overflowed."""
+    try:
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return _samples(eng, cp, row, ivs, ni, R, scene, mod), None
+    except (ArithmeticError, ValueError) as exc:
+        if not _math_error(exc):
+            raise
+        return None, f"{type(exc).__name__}: {exc}"
 
 
 #: Messages of the exceptions Python's ``math`` raises where compiled code returns inf or NaN.
@@ -202,7 +209,7 @@ def _non_finite(scene, exc: BaseException) -> Result:
     ``stats["error"]``.
     """
     nan = math.nan
-    return Result(scene=scene, status=Status.NON_FINITE, events=(), samples=None,
+    return Result(scene=scene, status=Status.NON_FINITE, events=(),
                   energy_budget=EnergyBudget(nan, nan, nan, nan), t_final=nan, q_final=nan, qdot_final=nan,
                   stats={"intervals": None, "error": f"{type(exc).__name__}: {exc}"})
 

@@ -187,13 +187,31 @@ class Result:
     scene: object
     status: Status
     events: tuple
-    samples: Samples | None
     energy_budget: EnergyBudget
     t_final: float
     q_final: float
     qdot_final: float
     zeno: ZenoInfo | None = None
     stats: dict = field(default_factory=dict, compare=False)
+    #: Computes the samples on first use of :attr:`samples`: a function returning
+    #: ``(Samples or None, error message or None)``; None for a run without samples.
+    sampler: object = field(default=None, repr=False, compare=False)
+    _memo: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def samples(self) -> Samples | None:
+        """Node samples of every motion interval, computed on first use (the run itself
+        costs only its events); None when the run kept none or sampling failed
+        (:attr:`error` says why)."""
+        if "samples" not in self._memo:
+            samples, error = self.sampler() if self.sampler is not None else (None, None)
+            self._memo["samples"], self._memo["error"] = samples, error
+        return self._memo["samples"]
+
+    @property
+    def error(self) -> str | None:
+        """Why the run or its sampling failed on the plain-Python engine (an overflow), if it did."""
+        return self.stats.get("error") or self._memo.get("error")
 
     @property
     def message(self) -> str:
@@ -220,12 +238,13 @@ class Result:
             "events": [e.to_dict() for e in self.events],
             "energy_budget": self.energy_budget.to_dict(),
         }
-        if self.stats.get("error"):
-            out["error"] = self.stats["error"]
+        kept = self.samples if samples else None
+        if self.error:
+            out["error"] = self.error
         if self.zeno is not None:
             out["zeno"] = {k: getattr(self.zeno, k) for k in self.zeno.__dataclass_fields__}
-        if samples and self.samples is not None:
-            out["samples"] = {k: getattr(self.samples, k).tolist() for k in self.samples.__dataclass_fields__}
+        if kept is not None:
+            out["samples"] = {k: getattr(kept, k).tolist() for k in kept.__dataclass_fields__}
         return out
 
     def to_json(self, **kwargs) -> str:
