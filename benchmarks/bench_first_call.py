@@ -1,0 +1,115 @@
+"""First calls as a new user meets them: empty caches, fresh processes, wall time.
+
+Run from the project folder, in the environment to measure (the main install
+``pip install .``, or with ``[fast]`` for numba)::
+
+    python benchmarks/bench_first_call.py [--sweep-scenes 200000] [--plain-scenes 2000]
+
+Every measurement runs the ``symvib`` command in a new process with its own
+empty kernel cache (``$SYMVIB_CACHE``) and numba cache (``$NUMBA_CACHE_DIR``),
+start-up included, and reports the wall time beside issue 15's target:
+
+* ``symvib run`` of each paper scene (target <= 2 s each);
+* the README's ``bowl`` curve, first run: derivation, generation and the run
+  (target <= 10 s);
+* the first sweep of ``--sweep-scenes`` scenes of the paper parabola, compilation
+  included (target <= 15 s for 200,000);
+* the plain-Python engine's sweep speed on ``--plain-scenes`` scenes (the main
+  install's path; target >= 10,000 scenes/s).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
+#: The README's own curve ("Your own curve"), as a scene file.
+BOWL = """
+[curve]
+name = "bowl"
+z = "R - sqrt(R**2 - x**2)"
+domain = ["-R", "R"]
+
+[parameters]
+R = 0.5
+
+[physics]
+alpha0 = 0.05
+restitution = 0.8
+
+[limiters]
+left = -0.2
+right = 0.35
+
+[initial]
+q = 0.1
+qdot = 3.0
+"""
+
+
+def timed(args: list, backend: str | None = None) -> tuple:
+    """Wall time of ``symvib ARGS`` in a fresh process with empty caches, and its output."""
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, SYMVIB_CACHE=str(Path(tmp) / "kernels"), NUMBA_CACHE_DIR=str(Path(tmp) / "numba"))
+        env.pop("SYMVIB_BACKEND", None)
+        if backend:
+            env["SYMVIB_BACKEND"] = backend
+        start = time.perf_counter()
+        out = subprocess.run([sys.executable, "-m", "symvib.cli", *args], capture_output=True, text=True, env=env,
+                             cwd=tmp)
+        wall = time.perf_counter() - start
+    if out.returncode != 0:
+        raise SystemExit(f"symvib {' '.join(args)} failed ({out.returncode}):\n{out.stderr[-2000:]}")
+    return wall, out.stdout + out.stderr
+
+
+def grid(n: int) -> tuple:
+    """``--vary`` options for about ``n`` scenes of the paper parabola (phidot0 x mu)."""
+    a = max(2, round(math.sqrt(n * 5 / 4)))
+    b = max(2, round(n / a))
+    return ("--vary", f"qdot=3:12:{a}", "--vary", f"mu=0.01:0.2:{b}"), a * b
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sweep-scenes", type=int, default=200_000)
+    ap.add_argument("--plain-scenes", type=int, default=2_000)
+    args = ap.parse_args(argv)
+    try:
+        import numba  # noqa: F401
+
+        fast = True
+    except ImportError:
+        fast = False
+    print(f"# first calls, empty caches, fresh processes; numba installed: {fast}")
+    print(f"{'what':48s} {'wall':>9s}   target")
+    for name in SCENES:
+        wall, _ = timed(["run", str(ROOT / "symvib" / "scenes" / f"{name}.toml")])
+        print(f"{'symvib run ' + name:48s} {wall:8.2f}s   <= 2 s")
+    with tempfile.TemporaryDirectory() as tmp:
+        bowl = Path(tmp) / "bowl.toml"
+        bowl.write_text(BOWL, encoding="utf-8")
+        wall, _ = timed(["run", str(bowl)])
+    print(f"{'symvib run bowl.toml (derive, generate, run)':48s} {wall:8.2f}s   <= 10 s")
+    vary, n = grid(args.sweep_scenes)
+    with tempfile.TemporaryDirectory() as tmp:
+        wall, _ = timed(["sweep", "paper-parabola", *vary, "-o", str(Path(tmp) / "s"), "--quiet"])
+    print(f"{f'first sweep, {n:,} scenes (compile included)':48s} {wall:8.2f}s   <= 15 s for 200,000")
+    vary, n = grid(args.plain_scenes)
+    with tempfile.TemporaryDirectory() as tmp:
+        wall, _ = timed(["sweep", "paper-parabola", *vary, "-o", str(Path(tmp) / "s"), "--quiet",
+                         "--backend", "python"])
+    print(f"{f'plain-Python sweep, {n:,} scenes':48s} {wall:8.2f}s   {n / wall:,.0f} scenes/s "
+          "(start-up included; target >= 10,000 scenes/s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
