@@ -166,19 +166,18 @@ def check_interface(tree, origin) -> None:
 
     from symvib.numeric.engine.state import KERNEL_INTERFACE
 
-    params, functions = None, {}
+    params, functions, has_params = None, {}, False
     for node in tree.body:
         if isinstance(node, ast.FunctionDef):
             functions[node.name] = tuple(a.arg for a in node.args.args)
-        elif (isinstance(node, ast.Assign) and len(node.targets) == 1
-              and isinstance(node.targets[0], ast.Name) and node.targets[0].id == "PARAMS"):
-            try:
-                params = tuple(ast.literal_eval(node.value))
-            except ValueError:
-                params = None
-    assigned = {n.targets[0].id for n in tree.body if isinstance(n, ast.Assign) and len(n.targets) == 1
-                and isinstance(n.targets[0], ast.Name)}
-    if "PARAMS" not in assigned and not {f for f, _, _ in KERNEL_INTERFACE.values()} & set(functions):
+        elif isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
+            if node.targets[0].id == "PARAMS":
+                has_params = True
+                try:
+                    params = tuple(ast.literal_eval(node.value))
+                except ValueError:
+                    params = None
+    if not has_params and not {f for f, _, _ in KERNEL_INTERFACE.values()} & set(functions):
         return  # not a curve's module (the Gauss rules)
     if params is None or not all(isinstance(p, str) for p in params):
         raise KernelError(f"{origin}: no PARAMS tuple of parameter names; regenerate it")

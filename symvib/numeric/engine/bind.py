@@ -119,15 +119,19 @@ def _rebound(fn, namespace: dict, qualname: str | None = None):
     return new
 
 
-def _compiled_functions(modules, extra: dict, keep) -> dict:
+def _compiled_functions(modules, keep, *, names=None, options=None, qualnames=None) -> dict:
     """numba dispatchers of the functions defined in ``modules`` whose names pass ``keep``.
 
     Each function gets a copy of its module's globals in which every such name is
-    the compiled function (names must be unique across the modules), plus ``extra``.
-    Dispatchers are lazy (compiled on first call, or by the caller with a signature).
+    the compiled function (names must be unique across the modules), then ``names``
+    (globals that replace or add to those: ``prange``, a static-length ``params_of``).
+    ``options`` (name -> ``numba.njit`` options) and ``qualnames`` (name -> the name
+    numba's disk cache files it under) apply per function.  Dispatchers are lazy
+    (compiled on first call, or by the caller with a signature).
     """
     import numba
 
+    options, qualnames = options or {}, qualnames or {}
     functions, spaces = {}, []
     for mod in modules:
         namespace = dict(vars(mod))
@@ -137,14 +141,11 @@ def _compiled_functions(modules, extra: dict, keep) -> dict:
                 if name in functions:
                     raise RuntimeError(f"engine function {name!r} is defined twice ({mod.__name__})")
                 functions[name] = (fn, namespace)
-    compiled = {}
-    qualnames = extra.get("_qualnames", {})
-    for name, (fn, namespace) in functions.items():
-        options = extra.get("_options", {}).get(name, {})
-        compiled[name] = numba.njit(**options)(_rebound(fn, namespace, qualnames.get(name)))
+    compiled = {name: numba.njit(**options.get(name, {}))(_rebound(fn, namespace, qualnames.get(name)))
+                for name, (fn, namespace) in functions.items()}
     for namespace in spaces:
         namespace.update(compiled)
-        namespace.update({k: v for k, v in extra.items() if not k.startswith("_")})
+        namespace.update(names or {})
     return compiled
 
 
@@ -156,9 +157,8 @@ def _compiled_kernels(module, ncp: int) -> tuple:
     sigs = _signatures(ncp)
     wanted = {fname for fname, _, _ in KERNEL_INTERFACE.values()}
     # Every function the interface kernels may call: the module's float-only functions.
-    compiled = _compiled_functions(
-        [module], {"_options": {f: {"cache": True} for f in wanted}},
-        lambda n: n.endswith("_scalar") or n in wanted)
+    compiled = _compiled_functions([module], lambda n: n.endswith("_scalar") or n in wanted,
+                                   options={f: {"cache": True} for f in wanted})
     out = []
     for name, (fname, _, _) in KERNEL_INTERFACE.items():
         dispatcher = compiled[fname]
@@ -168,14 +168,38 @@ def _compiled_kernels(module, ncp: int) -> tuple:
     return module._symvib_compiled_kernels
 
 
+@cache
 def engine_digest() -> str:
-    """SHA-256 (hex, 20 digits) of the engine's source files, for cache invalidation."""
+    """SHA-256 (hex, 20 digits) of the engine's source files, for cache invalidation (read once)."""
     from symvib.numeric.engine import compiled, state
 
     digest = hashlib.sha256()
     for mod in (*ENGINE_MODULES, state, compiled):
         digest.update(Path(mod.__file__).read_bytes())
     return digest.hexdigest()[:20]
+
+
+@cache
+def _params_of(ncp: int):
+    """``loop.params_of`` for the compiled engine: ``ncp`` is fixed at compile time
+    (numba builds tuples of a static length only)."""
+    import numba
+    from numba.np.unsafe.ndarray import to_fixed_tuple
+
+    def params_of(row, n):
+        return to_fixed_tuple(row, ncp)
+
+    return numba.njit(params_of)
+
+
+def _flush_if_stale(dispatchers, marker: Path) -> None:
+    """Empty the disk cache of ``dispatchers`` unless ``marker`` (named by :func:`engine_digest`)
+    exists, then leave it: numba checks only an entry point's own file, not the modules it calls."""
+    if not marker.exists():
+        for dispatcher in dispatchers:
+            dispatcher._cache.flush()
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.touch()
 
 
 @cache
@@ -187,7 +211,6 @@ def _compiled_engine(ncp: int) -> dict:
     """
     import numba
     from numba import types as nt
-    from numba.np.unsafe.ndarray import to_fixed_tuple
 
     from symvib.numeric.engine.compiled import kernels_type
     from symvib.numeric.kernels import cache_dir
@@ -198,19 +221,11 @@ def _compiled_engine(ncp: int) -> dict:
     vec, mat = f64[::1], f64[:, ::1]
     rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat], Rules)
 
-    def params_of(row, n):
-        return to_fixed_tuple(row, ncp)
-
     options = {name: {"cache": True} for name in ENTRY_POINTS}
     options["sweep_scenes"] = {"cache": True, "parallel": True}
-    extra = {"prange": numba.prange, "_options": options}
-    compiled = _compiled_functions(ENGINE_MODULES, extra, lambda n: not n.endswith("_bound"))
-    # The loop's globals (shared by its compiled functions) get the static-length version.
-    compiled["sweep_scenes"].py_func.__globals__["params_of"] = numba.njit(params_of)
-    marker = cache_dir() / "engines" / f"engine-{engine_digest()}"
-    if not marker.exists():
-        for name in ENTRY_POINTS:
-            compiled[name]._cache.flush()
+    compiled = _compiled_functions(ENGINE_MODULES, lambda n: not n.endswith("_bound") and n != "params_of",
+                                   names={"prange": numba.prange, "params_of": _params_of(ncp)}, options=options)
+    _flush_if_stale([compiled[name] for name in ENTRY_POINTS], cache_dir() / "engines" / f"engine-{engine_digest()}")
     signatures = {
         "simulate_scene": (k_type, cp_type, vec, rules_type, nt.boolean),
         "sample_scene": (k_type, cp_type, vec, rules_type, mat, nt.int64),
@@ -221,8 +236,6 @@ def _compiled_engine(ncp: int) -> dict:
         # Locked to its signature: a call with the kernels' dispatchers converts them to
         # function pointers instead of compiling a specialization (slow, not cacheable).
         compiled[name].disable_compile()
-    marker.parent.mkdir(parents=True, exist_ok=True)
-    marker.touch()
     return compiled
 
 
@@ -280,31 +293,20 @@ def _specialized_engine(module, ncp: int) -> dict:
     if cached is not None:
         return cached
     import numba
-    from numba.np.unsafe.ndarray import to_fixed_tuple
 
+    from symvib.numeric.engine.static import StaticKernels
     from symvib.numeric.kernels import cache_dir
 
-    kernels = _compiled_kernels(module, ncp)
     tag = _tag(module)
-
-    def params_of(row, n):
-        return to_fixed_tuple(row, ncp)
-
     options = {name: {"cache": True} for name in BOUND_ENTRIES}
     options["sweep_scenes"] = {"parallel": True}
     options["sweep_bound"] = {"cache": True, "parallel": True}
-    from symvib.numeric.engine.static import StaticKernels
-
-    extra = {"prange": numba.prange, "_options": options, "BOUND_KERNELS": StaticKernels(tag, Kernels(*kernels)),
-             "_qualnames": {name: f"{name}__{tag}" for name in BOUND_ENTRIES}}
-    compiled = _compiled_functions(ENGINE_MODULES, extra, lambda n: True)
-    compiled["sweep_scenes"].py_func.__globals__["params_of"] = numba.njit(params_of)
-    marker = cache_dir() / "engines" / f"engine-{engine_digest()}-{tag}"
-    if not marker.exists():  # the engine's sources changed since this curve's entries were cached
-        for name in BOUND_ENTRIES:
-            compiled[name]._cache.flush()
-        marker.parent.mkdir(parents=True, exist_ok=True)
-        marker.touch()
+    names = {"prange": numba.prange, "params_of": _params_of(ncp),
+             "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
+    compiled = _compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,
+                                   qualnames={name: f"{name}__{tag}" for name in BOUND_ENTRIES})
+    _flush_if_stale([compiled[name] for name in BOUND_ENTRIES],
+                    cache_dir() / "engines" / f"engine-{engine_digest()}-{tag}")
     module._symvib_specialized_engine = compiled
     return compiled
 
