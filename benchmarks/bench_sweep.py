@@ -17,7 +17,11 @@ to arrest.  The script reports
   ``atol = 1e-12``) over a random subsample of ``--sample`` scenes of the grid;
 * on that subsample, both methods' event sequences and largest event-time
   error against the 30-digit reference :func:`symvib.checks.reference.phase_reference`
-  (mpmath; it does not share the driver's code path).
+  (mpmath; it does not share the driver's code path);
+* the anchor: a hand-written kernel of this one curve in closed forms
+  (``benchmarks/parabola_anchor.py``), on one thread over the same grid, with the
+  ratio of symvib's one-thread speed to it, and its agreement with symvib (event and
+  impact counts of every scene, final times).
 
 The ratio is the sweep's scenes per second over the solve_ivp loop's.
 """
@@ -35,6 +39,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))  # parabola_anchor
 
 from symvib.checks.peers import solve_ivp_events  # noqa: E402
 from symvib.checks.reference import phase_reference  # noqa: E402
@@ -60,6 +65,25 @@ def best(fn, repeat):
         out = fn()
         best_t = min(best_t, time.perf_counter() - start)
     return best_t, out
+
+
+def anchor(base, res, n, t_one, repeat):
+    """The hand-written parabola kernel on the same grid, one thread, beside symvib's one-thread time."""
+    import parabola_anchor
+
+    qdot0, mu = np.asarray(res["initial.qdot"], float), np.asarray(res["physics.mu"], float)
+    args = (qdot0, mu, base.k, base.left, base.right, base.g, dict(base.params)["p"], base.q0, base.max_events)
+    start = time.perf_counter()
+    parabola_anchor.sweep(*args)
+    compile_s = time.perf_counter() - start
+    t_anchor, out = best(lambda: parabola_anchor.sweep(*args), repeat)
+    same = np.array_equal(out[:, 1], res["events"]) and np.array_equal(out[:, 2], res["impacts"])
+    rel = np.abs(out[:, 3] - res["t_final"]) / res["t_final"]
+    print(f"hand-written parabola kernel:  {n / t_anchor:12,.0f} scenes/s {out[:, 1].sum() / t_anchor:14,.0f} events/s "
+          f"({t_anchor:.3f} s, one thread; compiled in {compile_s:.1f} s)")
+    print(f"symvib one thread / hand-written kernel: {t_anchor / t_one:.2f} (scenes/s ratio); event and impact counts "
+          f"{'identical' if same else 'DIFFER'} on all {n} scenes; final times: median relative difference "
+          f"{np.median(rel):.1e}, max {rel.max():.1e}")
 
 
 def main(argv=None):
@@ -104,6 +128,8 @@ def main(argv=None):
         print(f"symvib sweep, one thread:      {n / t_one:12,.0f} scenes/s {events / t_one:14,.0f} events/s "
               f"({t_one:.3f} s)")
 
+    if t_one is not None:
+        anchor(base, res, n, t_one, args.repeat)
     if args.sample <= 0:
         return
     rng = np.random.default_rng(args.seed)

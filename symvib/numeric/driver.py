@@ -22,8 +22,8 @@ in ``stats["error"]``), and a run whose energy budget misses by more than
 :data:`BUDGET_RTOL` ends ``energy_budget_mismatch``; ``Result.success`` is then
 False and ``symvib run`` exits with status 3.
 
-The engine runs compiled by numba when it is installed (``pip install
-symvib[fast]``) and as plain Python otherwise; both give the same events.
+The engine runs compiled by numba (a main dependency) where it is compiled
+already, and as plain Python otherwise; both give the same events.
 
 Examples
 --------
@@ -92,7 +92,8 @@ def resolve_backend(backend: str) -> str:
     if backend == "auto":
         return "numba" if backend_available("numba") else "python"
     if not backend_available(backend):
-        raise ValueError(f"backend {backend!r} is not available here (install symvib[fast] for numba)")
+        raise ValueError(f"backend {backend!r} is not available here (pip install numba: symvib depends on it; "
+                         "where numba cannot be installed the plain engine runs)")
     return backend
 
 

@@ -148,7 +148,8 @@ def _say_slow_path(backend: str) -> None:
     if resolve_backend(backend) == "python":
         why = "as asked" if backend == "python" else "numba is not installed"
         print(f"symvib sweep: note: the plain-Python engine runs this sweep ({why}); it is 50 to 200 times "
-              "slower than the compiled one (benchmarks/bench_sweep.py): pip install \"symvib[fast]\" adds numba",
+              "slower than the compiled one (benchmarks/bench_sweep.py): pip install numba (symvib's dependency) "
+              "restores it",
               file=sys.stderr, flush=True)
 
 
