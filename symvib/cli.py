@@ -346,7 +346,7 @@ def _sweep_file(path) -> dict:
     from symvib.paths import read_user_toml
 
     data = read_user_toml(path, "sweep file")
-    known = {"scene", "vary", "random", "seed", "chunk", "log_events", "nodes", "out"}
+    known = set(_SWEEP_FILE_TYPES)
     for key in data:
         if key not in known:
             raise SceneError(f"{path.name}:{key}", f"unknown key; known: {', '.join(sorted(known))}")
