@@ -118,11 +118,11 @@ def dataset(spec, columns: dict, ident: str, *, table: bool = False, store: bool
     if spec.mode == "grid" and not (table or store):
         dims, shape = tuple(names[a.field] for a in spec.axes), spec.shape
         for a in spec.axes:
-            coords[names[a.field]] = (names[a.field], np.asarray(a.values), field_attrs(scene, a.field))
+            coords[names[a.field]] = (names[a.field], a.at(np.arange(a.size)), field_attrs(scene, a.field))
     else:
         dims, shape = ("row",), (spec.count,)
         if not store:
-            coords["row"] = ("row", np.asarray(columns["row"]), ROW_ATTRS)
+            coords["row"] = ("row", columns["row"], ROW_ATTRS)
         for a in spec.axes:
             coords[names[a.field]] = ("row", columns[a.field], field_attrs(scene, a.field))
     data = {}
@@ -215,5 +215,5 @@ def open_sweep(out):
             dtype = np.int64 if name == "row" or name in INTEGER_COLUMNS else np.float64
             pieces[name].append(da.from_delayed(part[name], shape=(n,) + tails.get(name, ()), dtype=dtype))
     columns = {name: da.concatenate(p) for name, p in pieces.items()}
-    columns["row"] = np.arange(spec.count, dtype=np.int64)
+    columns["row"] = da.arange(spec.count, dtype=np.int64, chunks=spec.chunk)
     return dataset(spec, columns, ident)

@@ -173,8 +173,9 @@ class ZarrChunks:
         except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
             raise SweepError(str(path), f"not a chunk marker ({type(exc).__name__}); run the same sweep again "
                                         "to recompute the chunk") from None
-        if not isinstance(marker, dict) or marker.get("sweep_id") != self.ident or marker.get("chunk") != index \
-                or not isinstance(marker.get("sha256"), dict):
+        ok = isinstance(marker, dict) and marker.get("sweep_id") == self.ident \
+            and isinstance(marker.get("sha256"), dict)
+        if not ok or type(marker.get("chunk")) is not int or marker["chunk"] != index:
             raise SweepError(str(path), "made by another sweep, or not the marker of this chunk; run the same "
                                         "sweep again to recompute it")
         return marker
