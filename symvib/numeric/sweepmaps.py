@@ -48,6 +48,8 @@ MAPS = {
 }
 #: Quantities that are counts (drawn with one colour per value).
 INTEGER_MAPS = ("impacts",)
+#: Quantities whose label leaves out the symbol (a formula too long for a colour bar).
+NO_SYMBOL = ("impact_share",)
 FIGSIZE = (6.4, 4.8)
 DPI = 120
 
@@ -58,7 +60,7 @@ def _values(res, name):
 
 def _value_label(scene, name):
     """``long name $symbol$ [units]`` of a mapped quantity (title text as the long name)."""
-    return label(column_attrs(scene, name) | {"long_name": MAPS[name]})
+    return label(column_attrs(scene, name) | {"long_name": MAPS[name]}, symbol=name not in NO_SYMBOL)
 
 
 def _at(scene, axis):
