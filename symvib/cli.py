@@ -346,7 +346,7 @@ def _sweep_file(path) -> dict:
     from symvib.paths import read_user_toml
 
     data = read_user_toml(path, "sweep file")
-    known = {"scene", "vary", "random", "seed", "chunk", "log_events", "nodes", "out"}
+    known = set(_SWEEP_FILE_TYPES)
     for key in data:
         if key not in known:
             raise SceneError(f"{path.name}:{key}", f"unknown key; known: {', '.join(sorted(known))}")
@@ -361,7 +361,7 @@ def _sweep_file(path) -> dict:
 #: Types of the keys of a sweep file (``vary`` is a table; integers are checked by
 #: :func:`symvib.numeric.sweep.make_spec`).
 _SWEEP_FILE_TYPES = {"scene": str, "out": str, "vary": dict, "random": int, "seed": int, "chunk": int,
-                     "log_events": int, "nodes": int}
+                     "log_events": int, "nodes": int, "format": str}
 
 
 def _check_sweep_file(data: dict, path) -> None:
@@ -397,6 +397,9 @@ def build_sweep_parser() -> argparse.ArgumentParser:
     ap.add_argument("--nodes", type=int, help="Gauss-Legendre nodes per quadrature panel (default 16)")
     ap.add_argument("-o", "--out", help="output folder (resumed if it holds the same sweep)")
     ap.add_argument("--overwrite", action="store_true", help="replace a different sweep in the output folder")
+    ap.add_argument("--format", choices=("npz", "zarr"), default=None,
+                    help="chunk storage: npz files (default) or one Zarr store that xarray.open_zarr opens "
+                         "(extra symvib[xarray])")
     ap.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address (tcp://...)")
     ap.add_argument("--backend", default="auto", choices=("auto", "numba", "python"))
     ap.add_argument("--plot", action="store_true", help="write maps over the first two varied fields")
@@ -445,7 +448,8 @@ def _cmd_sweep(args) -> int:
 
     res = sweep(scene, vary, random=pick("random", None), seed=pick("seed", 0), chunk=pick("chunk", DEFAULT_CHUNK),
                 log_events=pick("log_events", 0), nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite,
-                scheduler=args.scheduler, progress=not args.quiet, backend=args.backend)
+                scheduler=args.scheduler, progress=not args.quiet, backend=args.backend,
+                storage=pick("format", "npz"))
     names = res.status_names()
     status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in STATUSES if np.any(names == s))
     events = int(np.sum(res["events"]))

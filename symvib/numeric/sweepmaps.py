@@ -8,8 +8,11 @@ image on a grid sweep (with more axes, at the first value of the others, said
 in the title),
 as coloured points on a random sweep, as a line over a one-field sweep.
 
-Maps are drawn on backend-free :class:`matplotlib.figure.Figure` objects (no
-screen needed, the caller's backend untouched).
+Axes and colour bars are labelled with the quantity's name, symbol and SI
+units (``initial speed $\\dot{\\varphi}_0$ [rad/s]``, ``friction coefficient
+$\\mu$ [-]``: :mod:`symvib.numeric.sweep.labels`).  Maps are drawn on
+backend-free :class:`matplotlib.figure.Figure` objects (no screen needed, the
+caller's backend untouched).
 
 Examples
 --------
@@ -31,17 +34,22 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
+from symvib.numeric.sweep.labels import axis_label, column_attrs, field_attrs, label, unit_text
+
 __all__ = ["sweep_maps", "MAPS"]
 
-#: Mapped quantities: column (or SweepResult attribute) -> (label, unit).
+#: Mapped quantities: column (or SweepResult attribute) -> title (the colour bar's label, with the
+#: symbol and units, is :func:`symvib.numeric.sweep.labels.column_attrs`').
 MAPS = {
-    "impacts": ("number of impacts", ""),
-    "t_final": ("arrest (or rest) time", "s"),
-    "q_final": ("arrest (or rest) position", None),
-    "impact_share": ("share of the energy lost to impacts", ""),
+    "impacts": "number of impacts",
+    "t_final": "arrest (or rest) time",
+    "q_final": "arrest (or rest) position",
+    "impact_share": "share of the energy lost to impacts",
 }
 #: Quantities that are counts (drawn with one colour per value).
 INTEGER_MAPS = ("impacts",)
+#: Quantities whose label leaves out the symbol (a formula too long for a colour bar).
+NO_SYMBOL = ("impact_share",)
 FIGSIZE = (6.4, 4.8)
 DPI = 120
 
@@ -50,12 +58,16 @@ def _values(res, name):
     return res.impact_share if name == "impact_share" else np.asarray(res[name], dtype=float)
 
 
-def _label(res, fld):
-    scene = res.spec.scene
-    unit = {"initial.q": scene.shape.unit, "initial.qdot": f"{scene.shape.unit}/s", "physics.g": "m/s²",
-            "physics.m": "kg", "limiters.left": scene.shape.unit, "limiters.right": scene.shape.unit,
-            "run.t_max": "s"}.get(fld, "")
-    return f"{fld} [{unit}]" if unit else fld
+def _value_label(scene, name):
+    """``long name $symbol$ [units]`` of a mapped quantity (title text as the long name)."""
+    return label(column_attrs(scene, name) | {"long_name": MAPS[name]}, symbol=name not in NO_SYMBOL)
+
+
+def _at(scene, axis):
+    """``$\\mu$ = 0.05`` (with units unless a pure number): where a map holds a further axis."""
+    attrs = field_attrs(scene, axis.field)
+    unit = unit_text(attrs["units"])
+    return f"{attrs['latex']} = {axis.first:g}" + (f" {unit}" if unit not in ("-", "") else "")
 
 
 def _at_first(res, others):
@@ -75,12 +87,9 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
     shown = spread[:2]
     scene = res.spec.scene
     others = [a for a in res.spec.axes if a not in shown]
-    note = " at " + ", ".join(f"{a.field} = {a.first:g}" for a in others) if others else ""
+    note = " at " + ", ".join(_at(scene, a) for a in others) if others else ""
     paths = []
     for name in names:
-        label, unit = MAPS[name]
-        if unit is None:
-            unit = scene.shape.unit
         values = _values(res, name)
         fig = Figure(figsize=FIGSIZE, dpi=DPI)
         ax = fig.subplots()
@@ -94,8 +103,8 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
             sel = _at_first(res, others)
             order = np.argsort(x[sel])
             ax.plot(x[sel][order], values[sel][order], ".-")
-            ax.set_xlabel(_label(res, shown[0].field))
-            ax.set_ylabel(f"{label} [{unit}]" if unit else label)
+            ax.set_xlabel(axis_label(scene, shown[0].field))
+            ax.set_ylabel(_value_label(scene, name))
         else:
             xf, yf = shown[0].field, shown[1].field
             if res.spec.mode == "grid":
@@ -107,13 +116,13 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
             else:
                 mesh = ax.scatter(res[xf], res[yf], c=values, s=8, **colour)
             bar = fig.colorbar(mesh, ax=ax)
-            bar.set_label(f"{label} [{unit}]" if unit else label)
-            ax.set_xlabel(_label(res, xf))
-            ax.set_ylabel(_label(res, yf))
+            bar.set_label(_value_label(scene, name))
+            ax.set_xlabel(axis_label(scene, xf))
+            ax.set_ylabel(axis_label(scene, yf))
         varied = {a.field for a in res.spec.axes}
         fixed = "" if "physics.restitution" in varied else f", k = {scene.k:g}"
         fixed += "" if varied & {"physics.mu", "physics.alpha0"} else f", $\\mu$ = {scene.mu:.4g}"
-        ax.set_title(f"{scene.name}: {label}{note}\n({res.count} scenes{fixed})", fontsize=10)
+        ax.set_title(f"{scene.name}: {MAPS[name]}{note}\n({res.count} scenes{fixed})", fontsize=10)
         fig.tight_layout()
         path = out / f"{name}.png"
         fig.savefig(path)

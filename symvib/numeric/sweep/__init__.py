@@ -29,6 +29,9 @@ The modules, one concept each:
 * :mod:`~symvib.numeric.sweep.spec` - the definition (:func:`make_spec`, :class:`SweepSpec`);
 * :mod:`~symvib.numeric.sweep.rows` - a chunk's scene rows, checked by the scene's own checks;
 * :mod:`~symvib.numeric.sweep.store` - folder, manifest, chunk files, :func:`load_sweep`;
+* :mod:`~symvib.numeric.sweep.zarrstore` - the chunks in one Zarr store (``storage="zarr"``);
+* :mod:`~symvib.numeric.sweep.labels` - readable names, units (SI), LaTeX symbols of the columns;
+* :mod:`~symvib.numeric.sweep.labelled` - ``to_xarray``, ``to_dataframe``, :func:`open_sweep` (lazy);
 * :mod:`~symvib.numeric.sweep.lock` - the one writer of a folder (:class:`WriterLock`);
 * :mod:`~symvib.numeric.sweep.result` - :class:`SweepResult`;
 * :mod:`~symvib.numeric.sweep.progress` - the progress bar;
@@ -51,6 +54,7 @@ Examples
 """
 from __future__ import annotations
 
+from symvib.numeric.sweep.labelled import open_sweep
 from symvib.numeric.sweep.limits import (
                                          DEFAULT_CHUNK,
                                          DEFAULT_NODES,
@@ -69,9 +73,10 @@ from symvib.numeric.sweep.progress import Progress
 from symvib.numeric.sweep.result import SweepResult
 from symvib.numeric.sweep.runner import run_chunk, sweep
 from symvib.numeric.sweep.spec import SweepSpec, make_spec
-from symvib.numeric.sweep.store import FORMAT, load_sweep, sweep_id
+from symvib.numeric.sweep.store import FORMAT, STORAGES, load_sweep, sweep_id
 
 __all__ = ["SweepSpec", "SweepResult", "SweepError", "WriterLock", "Progress", "make_spec", "sweep", "load_sweep",
+           "open_sweep", "STORAGES",
            "run_chunk", "sweep_id", "FORMAT", "DEFAULT_CHUNK", "DEFAULT_NODES", "MAX_SCENES", "MAX_CHUNKS",
            "MAX_LIST_VALUES", "MAX_LOG_EVENTS", "MAX_CHUNK_BYTES", "MAX_EVENT_LOG_BYTES", "MAX_MANIFEST_BYTES",
            "NODES_RANGE", "LOCK_GRACE"]

@@ -15,6 +15,8 @@ Examples
 ((3,), ['arrested', 'arrested', 'arrested'], False)
 >>> res.events(0)[0][0]
 'reversal'
+>>> res.to_xarray()["impacts"].dims, res.to_dataframe().index.name
+(('qdot0',), 'row')
 """
 from __future__ import annotations
 
@@ -101,6 +103,38 @@ class SweepResult:
         total = self.columns["friction_work"] + self.columns["impact_loss"]
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(total > 0, self.columns["impact_loss"] / total, np.nan)
+
+    @property
+    def sweep_id(self) -> str:
+        """The sweep's identity (:func:`symvib.numeric.sweep.store.sweep_id` of its definition)."""
+        from symvib.numeric.sweep.store import sweep_id
+
+        return sweep_id(self.spec.to_dict())
+
+    def to_xarray(self):
+        """The sweep as an ``xarray.Dataset`` (extra ``symvib[xarray]``).
+
+        A grid sweep has one dimension and coordinate per varied field, named
+        readably (``qdot0``, ``mu``; :mod:`symvib.numeric.sweep.labels`), so
+        ``ds[name]`` equals :meth:`grid`; a random sweep has the dimension
+        ``row`` and the varied fields as coordinates along it.  Data variables:
+        the summary columns, ``impact_share`` and ``event_log`` (if logged),
+        each with ``units`` (SI), ``long_name`` and ``latex`` attributes; the
+        Dataset's attributes hold ``sweep_id`` and the definition
+        (:func:`symvib.numeric.sweep.labelled.dataset`).
+        """
+        from symvib.numeric.sweep.labelled import dataset
+
+        return dataset(self.spec, self.columns, self.sweep_id)
+
+    def to_dataframe(self):
+        """The sweep as a ``pandas.DataFrame``, one row per scene (index ``row``), columns named as in
+        :meth:`to_xarray`, ``status`` a categorical of the status names (extra ``symvib[xarray]``)."""
+        from symvib.numeric.sweep.labelled import dataframe
+
+        return dataframe(self.spec, self.columns, self.sweep_id)
+
+    to_pandas = to_dataframe
 
 
 def join_chunks(spec: SweepSpec, parts: list) -> dict:

@@ -32,7 +32,7 @@ from symvib.numeric.sweep.lock import WriterLock
 from symvib.numeric.sweep.progress import Progress
 from symvib.numeric.sweep.result import INTEGER_COLUMNS, SweepResult, join_chunks
 from symvib.numeric.sweep.spec import SweepSpec, make_spec
-from symvib.numeric.sweep.store import check_out, load_sweep, prepare, sweep_id, write_chunk
+from symvib.numeric.sweep.store import check_out, check_storage, load_sweep, prepare, sweep_id, write_chunk
 
 __all__ = ["sweep", "run_chunk", "DASK_INFLIGHT"]
 
@@ -89,7 +89,7 @@ def _refuse_singular_domain(scene: Scene) -> None:
 
 def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0, chunk: int = limits.DEFAULT_CHUNK,
           log_events: int = 0, nodes: int = limits.DEFAULT_NODES, out=None, overwrite: bool = False, scheduler=None,
-          progress: bool = False, backend: str = "auto") -> SweepResult:
+          progress: bool = False, backend: str = "auto", storage: str = "npz") -> SweepResult:
     """Run ``scene`` for every combination (or random sample) of the ``vary`` fields.
 
     Parameters
@@ -114,6 +114,10 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
     progress : bool
         Draw a progress bar on stderr.
     backend : {"auto", "numba", "python"}
+    storage : {"npz", "zarr"}
+        How ``out`` stores the chunks: NumPy ``.npz`` files, or one Zarr store
+        that ``xarray.open_zarr`` opens (extra ``symvib[xarray]``;
+        :mod:`~symvib.numeric.sweep.zarrstore`).
 
     Returns
     -------
@@ -126,6 +130,7 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
         an unusable folder, a folder another sweep writes, or a chunk that
         cannot be written.
     """
+    check_storage(storage)
     _refuse_singular_domain(scene)
     spec = make_spec(scene, vary, random=random, seed=seed, chunk=chunk, log_events=log_events, nodes=nodes)
     definition = spec.to_dict()
@@ -135,8 +140,8 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
     out = check_out(out)
     lock = WriterLock(out).acquire()
     try:
-        done, discarded = prepare(out, spec, ident, overwrite)
-        return _run(spec, definition, ident, out, lock, done, discarded, scheduler, progress, backend)
+        done, discarded = prepare(out, spec, ident, overwrite, storage)
+        return _run(spec, definition, ident, out, lock, done, discarded, scheduler, progress, backend, storage)
     finally:
         lock.release()
 
@@ -153,7 +158,8 @@ def _say_slow_path(backend: str) -> None:
               file=sys.stderr, flush=True)
 
 
-def _run(spec, definition, ident, out, lock, done, discarded, scheduler, progress, backend) -> SweepResult:
+def _run(spec, definition, ident, out, lock, done, discarded, scheduler, progress, backend,
+         storage="npz") -> SweepResult:
     """Compute the chunks not in ``done``: into ``out`` (under ``lock``), or in memory."""
     finished = set(done)
     todo = [i for i in range(spec.chunks) if i not in finished]
@@ -167,7 +173,7 @@ def _run(spec, definition, ident, out, lock, done, discarded, scheduler, progres
     def take(index, columns):
         if out is not None:
             lock.verify()
-            write_chunk(out, index, columns, ident)
+            write_chunk(out, index, columns, ident, storage)
         else:
             store[index] = columns
         bar.update(len(columns["row"]))

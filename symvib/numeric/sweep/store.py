@@ -10,6 +10,11 @@ checked (sizes, types, identity) before it is used: a chunk that is truncated
 or another sweep's is refused with a one-line :class:`SweepError` naming it.
 One writer at a time: :class:`symvib.numeric.sweep.lock.WriterLock`.
 
+With ``storage="zarr"`` (``symvib sweep --format zarr``, extra ``symvib[xarray]``)
+the chunks go into one Zarr store ``DIR/sweep.zarr`` instead, with a marker
+``DIR/chunks/chunk-NNNNNN.json`` per written chunk
+(:mod:`symvib.numeric.sweep.zarrstore`); the manifest's ``storage`` says which.
+
 Examples
 --------
 >>> import tempfile
@@ -41,8 +46,9 @@ from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
 from symvib.numeric.sweep.result import INTEGER_COLUMNS, SweepResult, join_chunks
 from symvib.numeric.sweep.spec import SweepSpec
 
-__all__ = ["FORMAT", "OLD_FORMATS", "sweep_id", "load_sweep", "manifest", "read_manifest", "column_names",
-           "chunk_path", "chunk_files", "write_chunk", "read_chunk", "check_out", "prepare"]
+__all__ = ["FORMAT", "OLD_FORMATS", "STORAGES", "sweep_id", "load_sweep", "manifest", "read_manifest",
+           "column_names", "chunk_path", "chunk_files", "write_chunk", "read_chunk", "check_rows", "check_out",
+           "check_storage", "prepare", "reader", "missing_chunks"]
 
 #: Identifier of the on-disk layout (manifest key ``format``).  Version 2 added the
 #: sweep identity (``sweep_id``) to the manifest and to every chunk.
@@ -51,6 +57,9 @@ FORMAT = "symvib-sweep/2"
 OLD_FORMATS = ("symvib-sweep/1",)
 #: Hex digits of the sweep identity (a SHA-256 of the format and definition).
 _ID_DIGITS = 32
+#: How the chunks are stored (manifest key ``storage``; a manifest without it is ``npz``):
+#: NumPy ``.npz`` files (no extra dependency), or one Zarr store (extra ``symvib[xarray]``).
+STORAGES = ("npz", "zarr")
 
 
 def sweep_id(definition: dict) -> str:
@@ -65,10 +74,18 @@ def sweep_id(definition: dict) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:_ID_DIGITS]
 
 
-def manifest(spec: SweepSpec, ident: str) -> dict:
+def check_storage(storage) -> str:
+    """``storage`` if it is one of :data:`STORAGES`, else a :class:`SweepError` naming the option."""
+    if storage not in STORAGES:
+        raise SweepError("storage", f"must be one of {', '.join(STORAGES)}, got {storage!r}")
+    return storage
+
+
+def manifest(spec: SweepSpec, ident: str, storage: str = "npz") -> dict:
     from symvib import __version__
 
-    return {"format": FORMAT, "sweep_id": ident, "definition": spec.to_dict(), "chunks": spec.chunks,
+    return {"format": FORMAT, "sweep_id": ident, "storage": storage, "definition": spec.to_dict(),
+            "chunks": spec.chunks,
             "columns": column_names(spec),
             "status_names": list(STATUSES), "event_names": list(EVENT_KINDS),
             "event_log_columns": list(EVENT_COLUMNS),
@@ -83,8 +100,18 @@ def chunk_path(out: Path, index: int) -> Path:
     return out / "chunks" / f"chunk-{index:06d}.npz"
 
 
-def write_chunk(out: Path, index: int, columns: dict, ident: str) -> None:
-    """Write a chunk with its sweep's identity: to a temporary name, then renamed (atomic)."""
+#: The Zarr store the running sweep writes, opened (and checked) by :func:`prepare`: ``(out, ident, ZarrChunks)``.
+_zarr_writer: list = []
+
+
+def write_chunk(out: Path, index: int, columns: dict, ident: str, storage: str = "npz") -> None:
+    """Write a chunk with its sweep's identity: to a temporary name, then renamed (atomic); or into the
+    Zarr store that :func:`prepare` opened, then marked."""
+    if storage == "zarr":
+        if not _zarr_writer or _zarr_writer[0][:2] != (Path(out), ident):
+            raise SweepError(str(out), "the Zarr store was not prepared for this sweep")
+        _zarr_writer[0][2].write(index, columns)
+        return
     path = chunk_path(out, index)
     tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
     try:
@@ -135,13 +162,20 @@ def read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
         raise
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
         raise _bad_chunk(path, f"truncated or unreadable ({type(exc).__name__})") from None
+    check_rows(path, spec, index, columns)
+    return columns
+
+
+def check_rows(where, spec: SweepSpec, index: int, columns: dict) -> None:
+    """Refuse (naming ``where``) a chunk whose rows or varied values are not chunk ``index``'s, or whose
+    status codes are out of range."""
+    rows, values = spec.rows(index)
     if not np.array_equal(columns["row"], rows) or not all(
             np.array_equal(columns[a.field], v) for a, v in zip(spec.axes, values)):
-        raise _bad_chunk(path, f"rows or varied values are not those of chunk {index}")
+        raise _bad_chunk(where, f"rows or varied values are not those of chunk {index}")
     status = columns["status"]
     if status.size and (status.min() < 0 or status.max() >= len(STATUSES)):
-        raise _bad_chunk(path, "status codes out of range")
-    return columns
+        raise _bad_chunk(where, "status codes out of range")
 
 
 def _check_header(path: Path, data, name: str, ok, expected: str) -> None:
@@ -229,6 +263,8 @@ def read_manifest(out: Path) -> tuple:
     ident = sweep_id(definition)
     if manifest.get("sweep_id") != ident:
         raise SweepError(str(path), "sweep_id does not match the definition (the manifest was edited)")
+    if manifest.setdefault("storage", "npz") not in STORAGES:
+        raise SweepError(str(path), f"unknown storage {manifest['storage']!r}; expected one of {', '.join(STORAGES)}")
     return manifest, spec, ident
 
 
@@ -244,44 +280,55 @@ def chunk_files(out: Path) -> set:
         return set()
 
 
-def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool) -> tuple:
-    """Open ``out`` for the sweep ``ident`` (the caller holds its lock).
+def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool, storage: str = "npz") -> tuple:
+    """Open ``out`` for the sweep ``ident`` stored as ``storage`` (the caller holds its lock).
 
     Returns ``(done, discarded)``: chunks complete and valid there, and chunks
-    removed because they were truncated, unreadable or another sweep's.
+    removed because they were truncated, unreadable or another sweep's.  A
+    folder holding the same sweep in the other storage is refused (or, with
+    ``overwrite``, replaced).
     """
+    check_storage(storage)
     path = out / "manifest.json"
-    old = None
+    old = old_storage = None
     if path.exists():
         try:
-            old = read_manifest(out)[2]
+            old_manifest, _, old = read_manifest(out)
+            old_storage = old_manifest["storage"]
         except SweepError as exc:
             if not overwrite:
                 raise SweepError(exc.field, f"{exc.reason}; --overwrite replaces it with this sweep") from None
     if old is not None and old != ident and not overwrite:
         raise SweepError("out", f"{out} holds a different sweep; choose another folder or overwrite it")
+    if old == ident and old_storage != storage and not overwrite:
+        raise SweepError("out", f"{out} holds this sweep stored as {old_storage}; run it with --format "
+                                f"{old_storage} (storage={old_storage!r}), or --overwrite to store it as {storage}")
     files = chunk_files(out)
-    if old != ident:
+    if old != ident or old_storage != storage:
         for name in files:
             if name.startswith("chunk-"):
                 (out / "chunks" / name).unlink(missing_ok=True)
         files = set()
+        from symvib.numeric.sweep import zarrstore
+
+        zarrstore.remove(out)
     for name in files:
-        if name.endswith(".tmp.npz"):
+        if name.endswith((".tmp.npz", ".tmp.json")):
             (out / "chunks" / name).unlink(missing_ok=True)  # a killed writer's partial file
+    chunks = _open_zarr(out, spec, ident, files) if storage == "zarr" else None
     tmp = path.with_suffix(".json.tmp")
     try:
-        tmp.write_text(json.dumps(manifest(spec, ident), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        tmp.write_text(json.dumps(manifest(spec, ident, storage), indent=1, allow_nan=False) + "\n", encoding="utf-8")
         os.replace(tmp, path)
     except OSError as exc:
         raise SweepError(str(path), f"cannot write the manifest: {exc.strerror or exc}") from None
     done, discarded = [], []
     for i in range(spec.chunks):
-        chunk = chunk_path(out, i)
+        chunk = chunk_path(out, i) if chunks is None else marker_path(out, i)
         if chunk.name not in files:
             continue
         try:
-            read_chunk(chunk, spec, ident, i)
+            read_chunk(chunk, spec, ident, i) if chunks is None else chunks.read(i)
             done.append(i)
         except SweepError:
             chunk.unlink(missing_ok=True)
@@ -289,11 +336,55 @@ def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool) -> tuple:
     return done, discarded
 
 
+def _open_zarr(out: Path, spec: SweepSpec, ident: str, files: set):
+    """The sweep's Zarr store for writing: the one there if it is this sweep's, else a new one (whose
+    markers are removed from ``files``)."""
+    from symvib.numeric.sweep import zarrstore
+
+    _zarr_writer.clear()
+    try:
+        chunks = zarrstore.ZarrChunks(out, spec, ident, mode="r+")
+    except SweepError:
+        for name in [n for n in files if n.startswith("chunk-")]:
+            (out / "chunks" / name).unlink(missing_ok=True)
+            files.discard(name)
+        zarrstore.create(out, spec, ident)
+        chunks = zarrstore.ZarrChunks(out, spec, ident, mode="r+")
+    _zarr_writer.append((Path(out), ident, chunks))
+    return chunks
+
+
+def marker_path(out: Path, index: int) -> Path:
+    from symvib.numeric.sweep.zarrstore import marker_path as path
+
+    return path(out, index)
+
+
+def missing_chunks(out: Path, manifest: dict, spec: SweepSpec) -> None:
+    """Raise :class:`SweepError` naming ``out`` if any chunk of the sweep is not there (incomplete)."""
+    files = chunk_files(out)
+    where = chunk_path if manifest["storage"] == "npz" else marker_path
+    missing = [i for i in range(spec.chunks) if where(out, i).name not in files]
+    if missing:
+        raise SweepError(str(out), f"sweep is incomplete: {len(missing)} of {spec.chunks} chunks missing "
+                                   f"(first: {missing[0]}); run the same sweep again to resume")
+
+
+def reader(out: Path, manifest: dict, spec: SweepSpec, ident: str):
+    """A function ``index -> columns`` reading the checked chunks of the sweep in ``out`` (either storage)."""
+    if manifest["storage"] == "zarr":
+        from symvib.numeric.sweep.zarrstore import ZarrChunks
+
+        return ZarrChunks(out, spec, ident).read
+    return lambda index: read_chunk(chunk_path(out, index), spec, ident, index)
+
+
 def load_sweep(out) -> SweepResult:
-    """Read a sweep folder (manifest and chunks) into a :class:`SweepResult`.
+    """Read a sweep folder (manifest and chunks, either storage) into a :class:`SweepResult`.
 
     Every chunk is checked against the manifest (:func:`read_chunk`: the
-    sweep's identity, column names, dtypes, shapes and rows).
+    sweep's identity, column names, dtypes, shapes and rows; a Zarr chunk:
+    its marker's identity and the digests of its bytes).
 
     Raises
     ------
@@ -302,13 +393,8 @@ def load_sweep(out) -> SweepResult:
         sweep is incomplete), a truncated chunk or one of another sweep.
     """
     out = Path(out)
-    _, spec, ident = read_manifest(out)
-    files = chunk_files(out)
-    missing = [i for i in range(spec.chunks) if chunk_path(out, i).name not in files]
-    if missing:
-        raise SweepError(str(out), f"sweep is incomplete: {len(missing)} of {spec.chunks} chunks missing "
-                                   f"(first: {missing[0]}); run the same sweep again to resume")
-    parts = [read_chunk(chunk_path(out, i), spec, ident, i) for i in range(spec.chunks)]
+    manifest_, spec, ident = read_manifest(out)
+    missing_chunks(out, manifest_, spec)
+    read = reader(out, manifest_, spec, ident)
+    parts = [read(i) for i in range(spec.chunks)]
     return SweepResult(spec, join_chunks(spec, parts), out=str(out))
-
-

@@ -1,0 +1,221 @@
+"""A sweep's chunks in one Zarr store (``symvib sweep --format zarr``), checked like the ``.npz`` chunks.
+
+Layout: ``OUT/sweep.zarr`` is a Zarr group that ``xarray.open_zarr`` opens in
+one call: one array per column, named as :func:`symvib.numeric.sweep.labelled.dataset`
+names them (``qdot0``, ``mu``, ``impacts``, ...), along the dimension ``row``,
+with their ``units``, ``long_name`` and ``latex`` and the sweep's identity
+(``sweep_id``) in the group's attributes.  A Zarr chunk of every array is one
+sweep chunk, so each sweep chunk writes whole Zarr chunks of its own (no two
+writers ever share one).  The store is created (metadata only) before the
+first chunk runs.
+
+Written chunks are marked: after chunk ``i``'s region is written,
+``OUT/chunks/chunk-NNNNNN.json`` records the sweep's identity, the chunk
+number and the SHA-256 of every column's bytes (written under a temporary
+name and renamed).  A chunk counts as written only when its marker is there
+and holds this sweep's identity and the digests of what the store holds: a
+chunk whose write was interrupted (no marker), whose files were truncated or
+replaced by another sweep's (digests differ), or whose marker is another
+sweep's, is computed again on resume and refused on load.
+
+Examples
+--------
+>>> import tempfile, xarray
+>>> from symvib.numeric.scene import resolve_scene
+>>> from symvib.numeric.sweep import sweep
+>>> out = tempfile.mkdtemp()
+>>> res = sweep(resolve_scene("paper-parabola"), {"qdot": "3:12:3"}, chunk=2, out=out, storage="zarr",
+...             backend="python")
+>>> ds = xarray.open_zarr(f"{out}/sweep.zarr")
+>>> dict(ds.sizes), ds.attrs["sweep_id"] == res.sweep_id, ds["qdot0"].values.tolist()
+({'row': 3}, True, [3.0, 7.5, 12.0])
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
+
+__all__ = ["STORE", "MAX_MARKER_BYTES", "store_path", "marker_path", "create", "remove", "ZarrChunks", "digests"]
+
+#: The Zarr store's name in a sweep folder.
+STORE = "sweep.zarr"
+#: Largest chunk marker read, in bytes (a marker holds one digest per column).
+MAX_MARKER_BYTES = 2**16
+
+
+def store_path(out: Path) -> Path:
+    return Path(out) / STORE
+
+
+def marker_path(out: Path, index: int) -> Path:
+    return Path(out) / "chunks" / f"chunk-{index:06d}.json"
+
+
+def _zarr():
+    from symvib.numeric.sweep.labelled import require
+
+    return require("zarr", "a sweep stored as Zarr")
+
+
+def digests(columns: dict) -> dict:
+    """SHA-256 of every column's bytes (C order, little-endian), by column name."""
+    out = {}
+    for name, values in columns.items():
+        arr = np.ascontiguousarray(values)
+        arr = arr.astype(arr.dtype.newbyteorder("<"), copy=False)
+        out[name] = hashlib.sha256(arr.tobytes()).hexdigest()
+    return out
+
+
+def remove(out: Path) -> None:
+    """Remove the Zarr store of ``out`` (a symbolic link in its place is unlinked, never followed)."""
+    path = store_path(out)
+    if path.is_symlink() or path.is_file():
+        path.unlink()
+    elif path.is_dir():
+        shutil.rmtree(path)
+
+
+def create(out: Path, spec, ident: str) -> None:
+    """Create the empty store of the sweep (its arrays' metadata, attributes and identity; no data)."""
+    from symvib.numeric.sweep.labelled import dataset, require, variable_names
+    from symvib.numeric.sweep.result import INTEGER_COLUMNS
+
+    da = require("dask.array", "a sweep stored as Zarr")
+    remove(out)
+    lazy = {}
+    for column in variable_names(spec):
+        shape = (spec.count,) + ((spec.log_events, EVENT_WIDTH) if column == "event_log" else ())
+        dtype = np.int64 if column == "row" or column in INTEGER_COLUMNS else np.float64
+        lazy[column] = da.zeros(shape, dtype=dtype, chunks=shape)
+    ds = dataset(spec, lazy, ident, store=True)
+    ds.attrs["columns"] = json.dumps({c: n for c, n in variable_names(spec).items() if c != "row"})
+    encoding = {name: {"chunks": (spec.chunk,) + var.shape[1:]} for name, var in ds.data_vars.items()}
+    encoding.update({name: {"chunks": (spec.chunk,)} for name in ds.coords})
+    with warnings.catch_warnings():
+        # zarr 3: consolidated metadata is not yet part of the v3 specification (xarray reads it).
+        warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
+        try:
+            ds.to_zarr(store_path(out), mode="w", compute=False, consolidated=True, encoding=encoding)
+        except OSError as exc:
+            raise SweepError(str(store_path(out)), f"cannot create the Zarr store: {exc.strerror or exc}") from None
+
+
+class ZarrChunks:
+    """The chunks of one sweep's Zarr store: checked against the sweep on opening, read and written by number.
+
+    Parameters
+    ----------
+    out : Path
+        The sweep folder.
+    spec : SweepSpec
+    ident : str
+        The sweep's identity (:func:`~symvib.numeric.sweep.store.sweep_id`).
+    mode : {"r", "r+"}
+
+    Raises
+    ------
+    SweepError
+        Naming the store: missing, not a Zarr group, another sweep's, or arrays
+        that are not this sweep's (names, dtypes, shapes, chunks).
+    """
+
+    def __init__(self, out: Path, spec, ident: str, mode: str = "r"):
+        from symvib.numeric.sweep.labelled import variable_names
+        from symvib.numeric.sweep.result import INTEGER_COLUMNS
+
+        zarr = _zarr()
+        self.out, self.spec, self.ident = Path(out), spec, ident
+        path = store_path(out)
+        if path.is_symlink() or not path.is_dir():
+            raise SweepError(str(path), "no Zarr store here (missing, or not a folder); run the same sweep "
+                                        "again to recompute it")
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                self.group = zarr.open_group(str(path), mode=mode)
+            attrs = dict(self.group.attrs)
+            arrays = {name: self.group[name] for name in self.group.array_keys()}
+        except Exception as exc:  # noqa: BLE001 - zarr raises many kinds on a spoiled store
+            raise SweepError(str(path), f"not a readable Zarr store ({type(exc).__name__})") from None
+        if attrs.get("sweep_id") != ident:
+            raise SweepError(str(path), "made by another sweep (its sweep_id differs from the manifest's)")
+        self.names = {c: n for c, n in variable_names(spec).items() if c != "row"}
+        if set(arrays) != set(self.names.values()):
+            raise SweepError(str(path), f"arrays {sorted(arrays)} are not this sweep's")
+        for column, name in self.names.items():
+            arr = arrays[name]
+            tail = (spec.log_events, EVENT_WIDTH) if column == "event_log" else ()
+            dtype = np.dtype(np.int64 if column in INTEGER_COLUMNS else np.float64)
+            if arr.dtype != dtype or tuple(arr.shape) != (spec.count,) + tail \
+                    or tuple(arr.chunks) != (spec.chunk,) + tail:
+                raise SweepError(str(path), f"array {name} is {arr.dtype}{list(arr.shape)} in chunks "
+                                            f"{list(arr.chunks)}, expected {dtype}{[spec.count, *tail]} in chunks "
+                                            f"{[spec.chunk, *tail]}")
+        self.arrays = arrays
+
+    def _marker(self, index: int) -> dict:
+        path = marker_path(self.out, index)
+        try:
+            if path.stat().st_size > MAX_MARKER_BYTES:
+                raise SweepError(str(path), "larger than a chunk marker can be; run the same sweep again")
+            marker = json.loads(path.read_bytes().decode("utf-8"))
+        except SweepError:
+            raise
+        except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+            raise SweepError(str(path), f"not a chunk marker ({type(exc).__name__}); run the same sweep again "
+                                        "to recompute the chunk") from None
+        ok = isinstance(marker, dict) and marker.get("sweep_id") == self.ident \
+            and isinstance(marker.get("sha256"), dict)
+        if not ok or type(marker.get("chunk")) is not int or marker["chunk"] != index:
+            raise SweepError(str(path), "made by another sweep, or not the marker of this chunk; run the same "
+                                        "sweep again to recompute it")
+        return marker
+
+    def read(self, index: int) -> dict:
+        """The columns of chunk ``index`` (as :func:`~symvib.numeric.sweep.store.read_chunk` returns them), checked:
+        its marker is this sweep's and the store holds the bytes it was written with."""
+        from symvib.numeric.sweep.store import check_rows
+
+        marker = self._marker(index)
+        rows = self.spec.rows(index)[0]
+        start, stop = (int(rows[0]), int(rows[-1]) + 1) if len(rows) else (0, 0)
+        columns = {"row": rows}
+        where = f"{store_path(self.out)} (chunk {index})"
+        try:
+            for column, name in self.names.items():
+                columns[column] = np.asarray(self.arrays[name][start:stop])
+        except Exception as exc:  # noqa: BLE001 - a truncated or foreign Zarr chunk fails in the codec
+            raise SweepError(where, f"truncated or unreadable ({type(exc).__name__}); run the same sweep again "
+                                    "to recompute it") from None
+        if digests(columns) != marker["sha256"]:
+            raise SweepError(where, "its data are not what this sweep wrote (truncated, edited or another "
+                                    "sweep's); run the same sweep again to recompute it")
+        check_rows(where, self.spec, index, columns)
+        return columns
+
+    def write(self, index: int, columns: dict) -> None:
+        """Write chunk ``index``: unmark it, write its region of every array, then mark it (atomic rename)."""
+        path = marker_path(self.out, index)
+        path.unlink(missing_ok=True)
+        rows = columns["row"]
+        start, stop = int(rows[0]), int(rows[-1]) + 1
+        try:
+            for column, name in self.names.items():
+                self.arrays[name][start:stop] = columns[column]
+            text = json.dumps({"sweep_id": self.ident, "chunk": index, "rows": [start, stop],
+                               "sha256": digests(columns)})
+            tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.json")
+            tmp.write_text(text, encoding="utf-8")
+            os.replace(tmp, path)
+        except OSError as exc:
+            raise SweepError(str(store_path(self.out)), f"cannot write chunk {index}: {exc.strerror or exc}") \
+                from None
