@@ -136,3 +136,17 @@ def test_result_json_carries_the_units_of_the_table():
     assert set(units["samples"]) == set(data["samples"])
     assert all(units["samples"][k] for k in data["samples"]), units["samples"]
     assert set(units["energy_budget"]) == set(data["energy_budget"])
+
+
+@pytest.mark.parametrize("value", [
+    "1" + " " * 5000 + "deg",        # the parser's length cap applies to the whole text
+    "1 " * 20000 + "deg",
+    "3 deg deg",
+    "(1 deg)",
+    "3 " + "x" * 100000,
+    "3 deg/s/s",
+])
+def test_hostile_units_are_one_line_errors(value):
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(with_value(CIRCLE, "physics.alpha0", value))
+    assert str(info.value).startswith("physics.alpha0: ") and len(str(info.value)) < 400

@@ -191,9 +191,19 @@ class DenseOutput:
         ivs = self._ivs
         lo = np.minimum(ivs[:, IntervalColumn.qa], ivs[:, IntervalColumn.qb])
         hi = np.maximum(ivs[:, IntervalColumn.qa], ivs[:, IntervalColumn.qb])
-        if interval is None:
-            on = (flat[:, None] >= lo) & (flat[:, None] <= hi)
-            which = np.where(on.any(axis=1), on.argmax(axis=1), -1)
+        if interval is None:  # the first interval whose span holds each q
+            which = np.full(flat.shape, -1, dtype=np.int64)
+            order = np.argsort(flat, kind="stable")
+            ordered = flat[order]
+            starts, ends = np.searchsorted(ordered, lo, "left"), np.searchsorted(ordered, hi, "right")
+            left = int(np.isfinite(flat).sum())
+            for j in range(len(ivs)):
+                if left == 0:
+                    break
+                span = order[starts[j]:ends[j]]
+                free = span[which[span] < 0]
+                which[free] = j
+                left -= len(free)
         else:
             if isinstance(interval, bool) or not isinstance(interval, (int, np.integer)) or \
                     not 0 <= interval < len(ivs):
@@ -298,54 +308,61 @@ class DenseOutput:
         self._halves[key] = half
         return half
 
-    def _gather(self, halves, k):
-        """Per-query arrays of the panel ``k`` of each query's half."""
-        def col(f):
-            return np.array([f(h, j) for h, j in zip(halves, k)], dtype=float)
-        e = col(lambda h, j: h.e)
-        d = col(lambda h, j: h.d)
-        s = col(lambda h, j: h.s)
-        delta = col(lambda h, j: h.delta)
-        root = np.array([h.root for h in halves], dtype=bool)
-        weighted = np.array([h.weighted and j == 0 for h, j in zip(halves, k)], dtype=bool)
-        r1, r2 = col(lambda h, j: h.r[j]), col(lambda h, j: h.r[j + 1])
-        G1, tau1, tau2 = col(lambda h, j: h.G[j]), col(lambda h, j: h.tau[j]), col(lambda h, j: h.tau[j + 1])
-        return e, d, s, delta, root, weighted, r1, r2, G1, tau1, tau2
+    def _gather(self, i, side, x, by):
+        """Per-query arrays of the panel where each query lies: ``x`` is the time from the
+        anchor (``by="tau"``) or ``r`` (``by="r"``) on half ``side`` of interval ``i``."""
+        n = len(i)
+        out = {name: np.zeros(n) for name in ("e", "d", "s", "delta", "r1", "r2", "G1", "tau1", "tau2")}
+        root, weighted, empty = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+        key = 2 * i + side
+        order = np.argsort(key, kind="stable")
+        keys, starts = np.unique(key[order], return_index=True)
+        for u, a, b in zip(keys.tolist(), starts.tolist(), [*starts[1:].tolist(), n]):
+            idx = order[a:b]
+            h = self._half(u // 2, u % 2)
+            out["e"][idx], out["d"][idx], out["s"][idx], out["delta"][idx], root[idx] = h.e, h.d, h.s, h.delta, h.root
+            panels = len(h.r) - 1
+            if panels == 0:
+                empty[idx] = True
+                out["r1"][idx] = out["r2"][idx] = h.r[0]
+                out["G1"][idx] = h.G[0]
+                continue
+            edges = h.tau if by == "tau" else h.r
+            k = np.clip(np.searchsorted(edges, x[idx], side="right") - 1, 0, panels - 1)
+            out["r1"][idx], out["r2"][idx], out["G1"][idx] = h.r[k], h.r[k + 1], h.G[k]
+            out["tau1"][idx], out["tau2"][idx] = h.tau[k], h.tau[k + 1]
+            weighted[idx] = h.weighted & (k == 0)
+        return out, root, weighted, empty
 
     def _state_on(self, i, t):
         """``(q, qdot)`` at times ``t`` on intervals ``i`` (arrays of one length)."""
-        sides = np.empty(len(i), dtype=np.int64)
-        target = np.empty(len(i))
-        for j, (ii, tt) in enumerate(zip(i.tolist(), t.tolist())):
-            first = self._half(ii, START)
-            tau = tt - self._t0[ii]
-            if tau <= first.tau[-1]:
-                sides[j], target[j] = START, tau
-            else:
-                sides[j], target[j] = END, max(self._t1[ii] - tt, 0.0)
-        halves = [self._half(ii, sd) for ii, sd in zip(i.tolist(), sides.tolist())]
-        k = np.array([min(max(int(np.searchsorted(h.tau, x, side="right")) - 1, 0), max(len(h.r) - 2, 0))
-                      for h, x in zip(halves, target.tolist())], dtype=np.int64)
-        e, d, s, delta, root, weighted, r1, r2, G1, tau1, tau2 = self._gather(halves, k)
+        intervals, where = np.unique(i, return_inverse=True)
+        first_time = np.array([self._half(ii, START).tau[-1] for ii in intervals.tolist()])[where]
+        tau = t - self._t0[i]
+        side = np.where(tau <= first_time, START, END)
+        target = np.where(side == START, tau, np.maximum(self._t1[i] - t, 0.0))
+        c, root, weighted, empty = self._gather(i, side, target, "tau")
+        e, d, s, delta = c["e"], c["d"], c["s"], c["delta"]
+        empty |= target <= 0.0
         xi = np.zeros(len(i))
-        G = G1.copy()
+        G = c["G1"].copy()
         h_end = np.full(len(i), np.nan)
         ex_end = np.full(len(i), np.nan)
-        empty = np.array([len(h.r) < 2 for h in halves]) | (target <= 0.0)
         for wt in (True, False):
             sel = np.flatnonzero((weighted == wt) & ~empty)
             if not sel.size:
                 continue
             rl = self._weighted_rule if wt else self._plain_rule
             p = tuple(a[sel] for a in (e, d, s, delta, root))
-            r = self._newton(rl, wt, r1[sel], r2[sel], G1[sel], tau1[sel], tau2[sel], target[sel], p)
-            G[sel], _, h_end[sel], ex_end[sel], _ = self._panels(rl, r1[sel], r, G1[sel], *p, wt)
+            r1 = c["r1"][sel]
+            r = self._newton(rl, wt, r1, c["r2"][sel], c["G1"][sel], c["tau1"][sel], c["tau2"][sel], target[sel], p)
+            G[sel], _, h_end[sel], ex_end[sel], _ = self._panels(rl, r1, r, c["G1"][sel], *p, wt)
             xi[sel] = np.where(root[sel], r * r - delta[sel], r)
         if empty.any():  # at the anchor itself
             sel = np.flatnonzero(empty)
             _, h_end[sel], ex_end[sel] = self._node(s[sel], e[sel])
         q = e + d * xi
-        sigma = np.where(sides == START, d, -d)
+        sigma = np.where(side == START, d, -d)
         return q, self._qdot(sigma, G, h_end, ex_end)
 
     def _qdot(self, sigma, G, h, ex):
@@ -383,26 +400,26 @@ class DenseOutput:
         ivs = self._ivs
         qa, qb = ivs[i, IntervalColumn.qa], ivs[i, IntervalColumn.qb]
         side = np.where(np.abs(q - qa) <= 0.5 * np.abs(qb - qa), START, END)
-        halves = [self._half(ii, sd) for ii, sd in zip(i.tolist(), side.tolist())]
-        xi = np.abs(q - np.array([h.e for h in halves]))
-        root = np.array([h.root for h in halves])
-        delta = np.array([h.delta for h in halves])
+        xi = np.abs(q - np.where(side == START, qa, qb))
+        # r of each query needs its half's root and delta: build the halves first
+        halves = {(ii, sd): self._half(ii, sd) for ii, sd in set(zip(i.tolist(), side.tolist()))}
+        root = np.array([halves[key].root for key in zip(i.tolist(), side.tolist())], dtype=bool)
+        delta = np.array([halves[key].delta for key in zip(i.tolist(), side.tolist())])
         r = np.where(root, np.sqrt(xi + delta), xi)
-        k = np.array([min(max(int(np.searchsorted(h.r, x, side="right")) - 1, 0), max(len(h.r) - 2, 0))
-                      for h, x in zip(halves, r.tolist())], dtype=np.int64)
-        e, d, s, delta, root, weighted, r1, r2, G1, tau1, _ = self._gather(halves, k)
-        r = np.clip(r, r1, np.maximum(r1, r2))
-        tau, G = tau1.copy(), G1.copy()
+        c, root, weighted, empty = self._gather(i, side, r, "r")
+        e, d, s, delta, r1 = c["e"], c["d"], c["s"], c["delta"], c["r1"]
+        r = np.clip(r, r1, np.maximum(r1, c["r2"]))
+        empty |= r <= r1
+        tau, G = c["tau1"].copy(), c["G1"].copy()
         h_end = np.full(len(i), np.nan)
         ex_end = np.full(len(i), np.nan)
-        empty = np.array([len(h.r) < 2 for h in halves]) | (r <= r1)
         for wt in (True, False):
             sel = np.flatnonzero((weighted == wt) & ~empty)
             if not sel.size:
                 continue
             rl = self._weighted_rule if wt else self._plain_rule
             G[sel], time, h_end[sel], ex_end[sel], _ = self._panels(
-                rl, r1[sel], r[sel], G1[sel], *(a[sel] for a in (e, d, s, delta, root)), wt)
+                rl, r1[sel], r[sel], c["G1"][sel], *(a[sel] for a in (e, d, s, delta, root)), wt)
             tau[sel] += time
         if empty.any():
             sel = np.flatnonzero(empty)

@@ -31,6 +31,12 @@ Every number may be an expression (``"pi/4"``, ``"tan(0.05)"``), parsed by
 curve parameters.  Validation happens at construction and every error names
 its field: :class:`SceneError`.
 
+Every quantity is in SI units, the coordinate ``q`` in its own (``rad`` or
+``m``): :data:`FIELD_UNITS` states each field's, and ``docs/scenes.md`` shows
+it (:func:`units_table`).  An angle may carry its unit after a blank
+(``alpha0 = "3 deg"``, ``right = "pi/4 rad"``, ``qdot = "90 deg/s"``;
+:data:`VALUE_UNITS`), any other field only its own SI unit (``t_max = "10 s"``).
+
 This module is in the numeric wing: it imports neither SymPy nor NumPy.
 
 Examples
@@ -656,6 +662,8 @@ def _split_unit(text: str, field_: str, unit: str | None, symbols) -> tuple[str,
     A text ends in a unit when it is an expression, blanks and a name; the expression
     then must parse on its own (``"2 * pi"`` is an expression, not ``2 *`` in ``pi``).
     """
+    if len(text) > _expr.MAX_LENGTH:
+        return text, 1.0  # the parser's caps apply to the whole text, unit included
     match = _WITH_UNIT.fullmatch(text)
     if match is None:
         return text, 1.0
