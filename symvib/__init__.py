@@ -8,11 +8,19 @@ Two wings meet only at the code generator:
 * :mod:`symvib.checks`: references, peer integrators, the stability suite, benchmarks.
 
 ``import symvib`` imports neither SymPy nor NumPy; the names below load their
-module on first use.
+module on first use.  The four verbs:
+
+* ``symvib.load_scene(source)``: a scene from a file, a packaged scene's name or a dict;
+* ``symvib.simulate(scene)``: a :class:`~symvib.numeric.events.Result` (events, samples,
+  dense output ``result.state(t)``, DataFrames ``result.events_frame()``);
+* ``symvib.sweep(scene, vary)``: many scenes at once;
+* ``symvib.derive(curve)``: eqs. 1-2 of a curve (SymPy, imported only here).
 
 >>> import symvib
 >>> symvib.derive("circle").eom(+1)
 Eq(mu*phidot**2 + phiddot + g*(mu*cos(phi) + sin(phi))/R, 0)
+>>> symvib.simulate("paper-parabola", backend="python").status.value
+'arrested'
 """
 from __future__ import annotations
 
@@ -21,6 +29,9 @@ import importlib
 __version__ = "0.1.0"
 
 _LAZY = {
+    "load_scene": "symvib.api",
+    "simulate": "symvib.api",
+    "sweep": "symvib.api",
     "derive": "symvib.symbolic.derive",
     "graph": "symvib.symbolic.curve",
     "parametric": "symvib.symbolic.curve",

@@ -70,3 +70,20 @@ def test_simulate_and_sweep_of_a_catalogue_curve_import_neither_sympy_nor_mpmath
         s = sweep(scene, {{"qdot": [6.0, 7.0]}}, backend="python", out={str(tmp_path / "out")!r}, progress=False)
         print(r.status.value, list(s.status_names()), 'sympy' in sys.modules, 'mpmath' in sys.modules)
     """) == "arrested ['arrested', 'arrested'] False False"
+
+
+def test_top_level_simulate_load_scene_and_sweep_leave_sympy_unloaded():
+    # symvib.simulate / load_scene / sweep are the light top-level names (symvib/api.py);
+    # only derive loads SymPy.
+    assert _run("""
+        import sys
+        import symvib
+        symvib.simulate, symvib.load_scene, symvib.sweep
+        before = 'sympy' in sys.modules
+        r = symvib.simulate("paper-parabola", backend="python")
+        q, qdot = r.state(1.0)
+        s = symvib.sweep("paper-circle-7", {"qdot": [6.0, 7.0]}, backend="python", progress=False)
+        print(before, r.status.value, len(s.status_names()), 'sympy' in sys.modules)
+        symvib.derive
+        print('sympy' in sys.modules)
+    """).splitlines() == ["False arrested 2 False", "True"]

@@ -53,7 +53,7 @@ from symvib.symbolic.symbols import g as g_sym
 from symvib.symbolic.symbols import mu as mu_sym
 from symvib.symbolic.symbols import sigma as sigma_sym
 
-__all__ = ["time_reference", "TimeReferenceBudget", "GUARD_DIGITS"]
+__all__ = ["time_reference", "time_reference_states", "TimeReferenceBudget", "GUARD_DIGITS"]
 
 #: Digits kept as guard: steps are accepted at ``10**-(dps - GUARD_DIGITS)``.
 GUARD_DIGITS = 4
@@ -67,6 +67,8 @@ FIRST_STEP = 1e-3
 ROOT_ITERATIONS = 200
 #: Default budget of one run, in seconds of CPU time.
 BUDGET_SECONDS = 600.0
+#: Deepest halving of a probe's step (:func:`time_reference_states`) before it is given up.
+ADVANCE_DEPTH = 30
 #: Relative tolerance of the arrest test (the driver's and the peers').
 CONE_RTOL = 1e-9
 
@@ -144,6 +146,51 @@ def time_reference(scene, *, dps: int = 30, max_events: int | None = None, budge
         ``kind`` is ``"impact"``, ``"reversal"``, ``"arrest"``, ``"rest_on_limiter"`` or
         ``"normal_sign_change"``; stops at arrest, rest, ``max_events`` or ``scene.t_max``.
     """
+    return _run(scene, dps, max_events, budget, max_step, ())[0]
+
+
+def time_reference_states(scene, times, *, dps: int = 30, max_events: int | None = None,
+                          budget: float = BUDGET_SECONDS, max_step: float = MAX_STEP) -> list:
+    """The state ``(q, qdot)`` at each of ``times``, by the same time integration as :func:`time_reference`.
+
+    Each state is a fresh extrapolated step from the last accepted step (or event)
+    before it, so it is as accurate as an event (about ``dps - GUARD_DIGITS``
+    digits); at an event's time it is the state after the event, after an arrest or
+    a rest the rest state.  The reference of the dense output
+    (:mod:`symvib.numeric.dense`).
+
+    Returns
+    -------
+    list of (mpf, mpf) or None
+        In the order of ``times``; None for a time past the end of a run that did
+        not come to rest (``t_max``, ``max_events``).
+
+    Examples
+    --------
+    >>> from symvib.numeric.scene import scene_from_dict
+    >>> s = scene_from_dict({"curve": {"z": "c*x"}, "parameters": {"c": 0.5},
+    ...     "physics": {"mu": 0, "restitution": 1}, "initial": {"q": 0, "qdot": 1}})
+    >>> q, qdot = time_reference_states(s, [0.1], dps=20, max_events=1)[0]   # qdot = 1 - g sin a cos a t
+    >>> round(float(qdot), 12) == round(1 - 9.81 * 0.4 * 0.1, 12)
+    True
+    """
+    return _run(scene, dps, max_events, budget, max_step, times)[1]
+
+
+def _advance(f, y, H, tol, depth=0):
+    """``y`` advanced by ``H`` with extrapolated steps (halved until they converge)."""
+    if H == 0:
+        return list(y)
+    y1, level = _gbs_step(f, y, H, tol)
+    if level is not None:
+        return y1
+    if depth > ADVANCE_DEPTH:
+        raise TimeReferenceBudget("time_reference: a probe step did not converge")
+    return _advance(f, _advance(f, y, H / 2, tol, depth + 1), H / 2, tol, depth + 1)
+
+
+def _run(scene, dps, max_events, budget, max_step, times):
+    """Events and the states at ``times`` (:func:`time_reference`, :func:`time_reference_states`)."""
     max_events = scene.max_events if max_events is None else max_events
     start_cpu = time.process_time()
     with mpmath.workdps(dps):
@@ -156,6 +203,26 @@ def time_reference(scene, *, dps: int = 30, max_events: int | None = None, budge
         t_max = mp(repr(scene.t_max))
         q, v, t = mp(repr(scene.q0)), mp(repr(scene.qdot0)), mp(0)
         events = []
+        targets = [mp(repr(float(x))) for x in times]
+        order = sorted(range(len(targets)), key=lambda j: targets[j])
+        states = [None] * len(targets)
+        done = [0]  # probes recorded, in time order
+
+        def record(f, y, t0, upto, inclusive=False):
+            """The states of the probes at t0 <= time < upto (<= upto if inclusive), from y at t0."""
+            while done[0] < len(order):
+                j = order[done[0]]
+                if targets[j] > upto or (targets[j] == upto and not inclusive):
+                    return
+                if targets[j] >= t0:
+                    states[j] = tuple(_advance(f, y, targets[j] - t0, tol))
+                done[0] += 1
+
+        def at_rest(x):
+            """The states of the remaining probes: at rest at x."""
+            for j in order[done[0]:]:
+                states[j] = (x, mp(0))
+            done[0] = len(order)
 
         def at_limiter(x):
             return 1 if right is not None and x == right else -1 if left is not None and x == left else 0
@@ -174,7 +241,8 @@ def time_reference(scene, *, dps: int = 30, max_events: int | None = None, budge
         if sigma == 0:
             what, sigma = rest(q)
             if what != "slide":
-                return [RefEvent(what, t, q, mp(0), mp(0))]
+                at_rest(q)
+                return [RefEvent(what, t, q, mp(0), mp(0))], states
         elif at_limiter(q) == sigma:
             events.append(RefEvent("impact", t, q, v, -k * v))
             v, sigma = -k * v, -sigma
@@ -182,7 +250,8 @@ def time_reference(scene, *, dps: int = 30, max_events: int | None = None, budge
                 what, sigma = rest(q)
                 if what != "slide":
                     events.append(RefEvent(what, t, q, mp(0), mp(0)))
-                    return events
+                    at_rest(q)
+                    return events, states
         nsign = None
         H = mp(FIRST_STEP)
         H_max = mp(max_step)
@@ -227,11 +296,13 @@ def time_reference(scene, *, dps: int = 30, max_events: int | None = None, budge
                     kind, hr = best
                     y_ev = _gbs_step(f, y, hr, tol)[0]
                     found = (kind, t + hr, y_ev)
+                    record(f, y, t, t + hr)
                     break
+                record(f, y, t, t + H, inclusive=last)
                 t += H
                 y = y1
                 if last:
-                    return events
+                    return events, states
                 if level <= LEVELS // 2:
                     H *= mp(3) / 2
                 elif level >= LEVELS - 1:
@@ -245,6 +316,7 @@ def time_reference(scene, *, dps: int = 30, max_events: int | None = None, budge
                     what, sigma = rest(q)
                     if what != "slide":
                         events.append(RefEvent(what, t, q, mp(0), mp(0)))
+                        at_rest(q)
                         break
                 continue
             if kind == "normal_sign_change":
@@ -254,10 +326,11 @@ def time_reference(scene, *, dps: int = 30, max_events: int | None = None, budge
             what, direction = rest(qb)
             if what != "slide":
                 events.append(RefEvent(what, t, qb, mp(0), mp(0)))
+                at_rest(qb)
                 break
             events.append(RefEvent("reversal", t, qb, mp(0), mp(0)))
             q, v, sigma, nsign = qb, mp(0), direction, None
-        return events
+        return events, states
 
 
 def _locate(phi, fa, fb, H, tol):

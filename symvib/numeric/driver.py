@@ -171,12 +171,21 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         events[-1] = events[-1]._replace(
             detail=f"Zeno accumulation: geometric series of bounces, ratio {zeno.ratio:.9g}")
     budget = EnergyBudget(float(out.E0), float(out.E_final), float(out.W_friction), float(out.W_impacts))
-    sampler = None
+    sampler = interpolant = None
     if samples and status != StatusCode.NON_FINITE:
         sampler = partial(_lazy_samples, eng, cp, row, out.intervals, out.n_intervals, R, scene, mod)
+        interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], nodes)
     return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=sampler,
+                  interpolant=interpolant,
                   energy_budget=budget, t_final=float(out.t), q_final=float(out.q), qdot_final=float(out.qdot),
                   zeno=zinfo, stats={"intervals": int(out.n_intervals) if samples else None, "backend": backend})
+
+
+def _dense(mod, cp, ivs, nodes, result):
+    """The dense output of ``result`` (:class:`symvib.numeric.dense.DenseOutput`) from its interval log."""
+    from symvib.numeric.dense import DenseOutput
+
+    return DenseOutput(result, mod, cp, ivs, (nodes, plain_nodes(nodes)))
 
 
 def _lazy_samples(eng, cp, row, ivs, ni, R, scene, mod):

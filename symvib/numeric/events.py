@@ -182,7 +182,17 @@ class Samples:
 
 @dataclass(frozen=True)
 class Result:
-    """The outcome of :func:`symvib.numeric.driver.simulate` (immutable)."""
+    """The outcome of :func:`symvib.numeric.driver.simulate` (immutable).
+
+    Names a ``scipy.integrate.solve_ivp`` user knows (docs/results.md sets them
+    side by side): :attr:`t` and :attr:`y` (the samples' times and ``[q, qdot]``),
+    :attr:`t_events` and :attr:`y_events`, :attr:`sol` (dense output),
+    :attr:`success`, :attr:`message` and :attr:`status` (a :class:`Status`, not
+    an int).  Tables: :meth:`events_frame`, :meth:`samples_frame`,
+    :meth:`to_pandas` (pandas, the extra ``symvib[pandas]``).  The state at any
+    time or position, exact from the phase trajectory: :meth:`state`, :meth:`at`
+    (:mod:`symvib.numeric.dense`).
+    """
 
     scene: object
     status: Status
@@ -196,6 +206,9 @@ class Result:
     #: Computes the samples on first use of :attr:`samples`: a function returning
     #: ``(Samples or None, error message or None)``; None for a run without samples.
     sampler: object = field(default=None, repr=False, compare=False)
+    #: Builds the dense output on first use: a function of this result returning a
+    #: :class:`symvib.numeric.dense.DenseOutput`; None for a run without its intervals.
+    interpolant: object = field(default=None, repr=False, compare=False)
     _memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -225,8 +238,98 @@ class Result:
     def count(self, kind: EventKind) -> int:
         return sum(e.kind is kind for e in self.events)
 
+    # -- solve_ivp's names --------------------------------------------------------------------------
+
+    def _kept_samples(self) -> Samples:
+        samples = self.samples
+        if samples is None:
+            raise ValueError("samples: this run has none (simulate(scene, samples=True), the default, keeps them"
+                             + (f"; sampling failed: {self.error}" if self.error else "") + ")")
+        return samples
+
+    @property
+    def t(self) -> np.ndarray:
+        """Times of the samples (``samples.t``): each interval's start, Gauss nodes and end,
+        so an event's time appears twice (the end of one interval, the start of the next)."""
+        return self._kept_samples().t
+
+    @property
+    def y(self) -> np.ndarray:
+        """``[q, qdot]`` at the times :attr:`t`, shape ``(2, len(t))`` like ``solve_ivp``'s ``y``;
+        at an event's time the first of the two columns holds the state before it, the second after."""
+        samples = self._kept_samples()
+        return np.vstack((samples.q, samples.qdot))
+
+    @property
+    def t_events(self) -> list:
+        """Times of the events, one array per event kind in :class:`EventCode` order
+        (``result.t_events[EventCode.IMPACT]``), like ``solve_ivp``'s one per event function."""
+        return [np.array([e.t for e in self.events if e.kind.code == code], dtype=float)
+                for code in sorted(EventCode)]
+
+    @property
+    def y_events(self) -> list:
+        """``[q, qdot]`` after each event, one array of shape ``(n, 2)`` per kind (as :attr:`t_events`)."""
+        return [np.array([(e.q, e.qdot_after) for e in self.events if e.kind.code == code],
+                         dtype=float).reshape(-1, 2) for code in sorted(EventCode)]
+
+    # -- dense output -------------------------------------------------------------------------------
+
+    @property
+    def dense(self):
+        """The dense output (:class:`symvib.numeric.dense.DenseOutput`), built on first use.
+
+        Raises
+        ------
+        ValueError
+            For a run without its intervals (``samples=False``) or one that failed.
+        """
+        if "dense" not in self._memo:
+            if self.interpolant is None:
+                raise ValueError("dense output: this run kept no intervals (simulate(scene, samples=True), the "
+                                 "default, keeps them; a run with status non_finite has none)")
+            self._memo["dense"] = self.interpolant(self)
+        return self._memo["dense"]
+
+    @property
+    def sol(self):
+        """The dense output as ``solve_ivp``'s ``sol``: ``result.sol(t)`` is ``[q, qdot]`` at ``t``."""
+        return self.dense
+
+    def state(self, t):
+        """``(q, qdot)`` at time(s) ``t``, exact from the phase trajectory (paper eq. 2;
+        :meth:`symvib.numeric.dense.DenseOutput.state`); right-continuous at impacts."""
+        return self.dense.state(t)
+
+    def at(self, q, interval=None):
+        """``(t, qdot)`` where the particle is at ``q``: on motion interval ``interval``, or at its
+        first passage (:meth:`symvib.numeric.dense.DenseOutput.at`)."""
+        return self.dense.at(q, interval)
+
+    # -- tables -------------------------------------------------------------------------------------
+
+    def events_frame(self):
+        """The events as a pandas DataFrame (columns and dtypes: :mod:`symvib.numeric.tables`)."""
+        from symvib.numeric import tables
+
+        return tables.events_frame(self)
+
+    def samples_frame(self):
+        """The samples as a pandas DataFrame, one column per field of :class:`Samples`."""
+        from symvib.numeric import tables
+
+        return tables.samples_frame(self)
+
+    def to_pandas(self):
+        """``(events_frame(), samples_frame())``."""
+        from symvib.numeric import tables
+
+        return tables.to_pandas(self)
+
     def to_dict(self, *, samples: bool = False) -> dict:
-        """JSON-ready data: status, events, energy budget (and samples if asked)."""
+        """JSON-ready data: status, events, energy budget (and samples if asked), and ``"units"``:
+        the SI unit of every number, nested as the data (:func:`symvib.numeric.tables.result_units`,
+        from :data:`symvib.numeric.scene.FIELD_UNITS`)."""
         out = {
             "scene": getattr(self.scene, "name", ""),
             "status": self.status.value,
@@ -245,6 +348,9 @@ class Result:
             out["zeno"] = {k: getattr(self.zeno, k) for k in self.zeno.__dataclass_fields__}
         if kept is not None:
             out["samples"] = {k: getattr(kept, k).tolist() for k in kept.__dataclass_fields__}
+        from symvib.numeric.tables import result_units
+
+        out["units"] = result_units(self, samples=kept is not None)
         return out
 
     def to_json(self, **kwargs) -> str:

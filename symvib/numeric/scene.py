@@ -31,6 +31,12 @@ Every number may be an expression (``"pi/4"``, ``"tan(0.05)"``), parsed by
 curve parameters.  Validation happens at construction and every error names
 its field: :class:`SceneError`.
 
+Every quantity is in SI units, the coordinate ``q`` in its own (``rad`` or
+``m``): :data:`FIELD_UNITS` states each field's, and ``docs/scenes.md`` shows
+it (:func:`units_table`).  An angle may carry its unit after a blank
+(``alpha0 = "3 deg"``, ``right = "pi/4 rad"``, ``qdot = "90 deg/s"``;
+:data:`VALUE_UNITS`), any other field only its own SI unit (``t_max = "10 s"``).
+
 This module is in the numeric wing: it imports neither SymPy nor NumPy.
 
 Examples
@@ -51,6 +57,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -60,7 +67,8 @@ from symvib.paths import UserPathError, read_user_toml, safe_stem
 from symvib.shapes import CATALOGUE, Shape
 
 __all__ = ["Scene", "SceneError", "SceneNumbers", "Check", "CHECKS", "load_scene", "resolve_scene", "scene_from_dict",
-           "declared_domain", "friction_coefficient", "check_numbers", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS"]
+           "declared_domain", "friction_coefficient", "check_numbers", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS",
+           "FIELD_UNITS", "TEXT_FIELDS", "VALUE_UNITS", "field_unit", "units_table"]
 
 #: Default time bound of a run, in seconds.
 DEFAULT_T_MAX = 1000.0
@@ -91,6 +99,45 @@ _SECTIONS = {
     "run": {"t_max", "max_events"},
 }
 _TOP = {"name", "description"}
+
+#: The SI unit of every scene field that is a quantity, the one table of them: the schema docs
+#: (``docs/scenes.md``, written by :func:`units_table`) and the JSON of a result
+#: (:meth:`symvib.numeric.events.Result.to_dict`) read it.  ``"1"`` is a dimensionless number;
+#: ``"[q]"`` the unit of the curve's coordinate (:attr:`symvib.shapes.Shape.unit`: ``rad`` for the
+#: angle of the catalogue's parametric shapes, ``m`` for the ``x`` of a graph).  The catalogue's
+#: parameters are lengths; a user curve's parameters have the units its expressions give them
+#: (``x`` and ``z`` in m).  Units may be written in values only where :data:`VALUE_UNITS` has some.
+FIELD_UNITS = {
+    "curve.x": "m",
+    "curve.z": "m",
+    "curve.h": "m/[q]",
+    "curve.alpha": "rad",
+    "curve.domain": "[q]",
+    "curve.q_scale": "[q]",
+    "parameters.*": "m",
+    "physics.g": "m/s^2",
+    "physics.m": "kg",
+    "physics.mu": "1",
+    "physics.alpha0": "rad",
+    "physics.restitution": "1",
+    "limiters.left": "[q]",
+    "limiters.right": "[q]",
+    "initial.q": "[q]",
+    "initial.qdot": "[q]/s",
+    "run.t_max": "s",
+    "run.max_events": "1",
+}
+#: Scene fields that are text or names, not quantities (they have no unit).
+TEXT_FIELDS = ("name", "description", "curve.shape", "curve.name", "curve.q", "curve.params", "physics.contact")
+#: Units a value may carry (``alpha0 = "3 deg"``), by the SI unit of its field: unit -> factor to SI.
+#: ``deg`` is ``pi/180`` rad.  Only angles (and angular rates) take units in values.
+VALUE_UNITS = {
+    "rad": {"rad": 1.0, "deg": math.pi / 180.0},
+    "rad/s": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
+}
+#: A value with a unit: an expression, blanks, then the unit (``"pi/6 rad"``, ``"3 deg"``, ``"90 deg/s"``).
+_UNIT_NAME = r"[A-Za-z_][A-Za-z0-9_]*(?:/[A-Za-z_][A-Za-z0-9_]*)?"
+_WITH_UNIT = re.compile(rf"(?s)(?P<value>.*?\S)\s+(?P<unit>{_UNIT_NAME})\s*")
 
 
 class SceneError(ValueError):
@@ -552,7 +599,99 @@ def declared_domain(s: Scene, values=None) -> tuple:
     return lo, hi
 
 
-def _number(section: dict, key: str, prefix: str, symbols=None, default=None):
+def field_unit(name: str, shape: Shape | None = None) -> str | None:
+    """The SI unit of scene field ``name`` (:data:`FIELD_UNITS`), for the curve ``shape``.
+
+    ``"[q]"`` becomes the coordinate's unit (:attr:`symvib.shapes.Shape.unit`); a
+    parameter's unit is ``m`` for a catalogue shape and ``None`` (not known) for
+    a user curve.  Without ``shape`` the table's entry is returned as it is.
+
+    Raises
+    ------
+    KeyError
+        When ``name`` is not a quantity of a scene.
+
+    Examples
+    --------
+    >>> from symvib.shapes import shape
+    >>> field_unit("initial.qdot", shape("circle")), field_unit("limiters.left", shape("catenary"))
+    ('rad/s', 'm')
+    >>> field_unit("parameters.R"), field_unit("physics.g")
+    ('m', 'm/s^2')
+    """
+    key = "parameters.*" if name.startswith("parameters.") else name
+    unit = FIELD_UNITS[key]
+    if shape is None:
+        return unit
+    if key == "parameters.*" and not shape.in_catalogue:
+        return None
+    return unit.replace("[q]", shape.unit)
+
+
+def _value_units(name: str, unit: str) -> str:
+    """The units a value of field ``name`` (SI unit ``unit``) may carry, as text for the table."""
+    if name.startswith("curve."):
+        return "-"  # expressions of the curve, not values
+    if "[q]" in unit:
+        angle, length = unit.replace("[q]", "rad"), unit.replace("[q]", "m")
+        return f"{', '.join(VALUE_UNITS[angle])} (an angle coordinate); {_value_units(name, length)} (a length)"
+    accepted = list(VALUE_UNITS.get(unit, ()))
+    if unit not in accepted and re.fullmatch(_UNIT_NAME, unit):
+        accepted.append(unit)
+    return ", ".join(accepted) or "-"
+
+
+def units_table() -> str:
+    """:data:`FIELD_UNITS` as a Markdown table (``docs/scenes.md`` holds it; a test keeps it current).
+
+    Examples
+    --------
+    >>> print("\\n".join(units_table().splitlines()[:3]))
+    | field | SI unit | units a value may carry |
+    | --- | --- | --- |
+    | `curve.x` | m | - |
+    """
+    lines = ["| field | SI unit | units a value may carry |", "| --- | --- | --- |"]
+    lines += [f"| `{name}` | {unit} | {_value_units(name, unit)} |" for name, unit in FIELD_UNITS.items()]
+    return "\n".join(lines)
+
+
+def _split_unit(text: str, field_: str, unit: str | None, symbols) -> tuple[str, float]:
+    """``(expression, factor to SI)`` of a value that may end in a unit (``"3 deg"``).
+
+    A text ends in a unit when it is an expression, blanks and a name; the expression
+    then must parse on its own (``"2 * pi"`` is an expression, not ``2 *`` in ``pi``).
+    """
+    if len(text) > _expr.MAX_LENGTH:
+        return text, 1.0  # the parser's caps apply to the whole text, unit included
+    match = _WITH_UNIT.fullmatch(text)
+    if match is None:
+        return text, 1.0
+    try:
+        _expr.parse(match["value"], symbols=tuple(symbols or ()), field=field_)
+    except _expr.ExpressionError:
+        return text, 1.0
+    given = match["unit"]
+    accepted = VALUE_UNITS.get(unit or "", {})
+    if given in accepted or given == unit:
+        return match["value"], accepted.get(given, 1.0)
+    if accepted:
+        raise SceneError(field_, f"unknown unit {_show(given)}; this field is in {unit} and takes "
+                                 f"{', '.join(accepted)}")
+    if unit == "1":
+        raise SceneError(field_, f"takes no unit (a dimensionless number), got the unit {_show(given)}")
+    if unit is None:
+        raise SceneError(field_, f"takes no unit, got {_show(given)}; units are accepted on angles only "
+                                 f"({', '.join(VALUE_UNITS['rad'])})")
+    angles = ", ".join(VALUE_UNITS["rad"])
+    if re.fullmatch(_UNIT_NAME, unit):
+        raise SceneError(field_, f"unknown unit {_show(given)}: this field is in {unit} (SI), the one unit it "
+                                 f"takes; other units are accepted on angles only ({angles})")
+    raise SceneError(field_, f"takes no unit, got {_show(given)}: write the number in {unit} (SI); units are "
+                             f"accepted on angles only ({angles})")
+
+
+def _number(section: dict, key: str, prefix: str, symbols=None, default=None, shape: Shape | None = None):
     if key not in section:
         return default
     value = section[key]
@@ -563,10 +702,12 @@ def _number(section: dict, key: str, prefix: str, symbols=None, default=None):
         return _finite(value, field_)
     if not isinstance(value, str):
         raise SceneError(field_, f"must be a number or an expression string, got {type(value).__name__}")
+    text, factor = _split_unit(value, field_, field_unit(field_, shape) if shape is not None else None, symbols)
     try:
-        return _expr.number(value, field=field_, symbols=symbols)
+        number = _expr.number(text, field=field_, symbols=symbols)
     except _expr.ExpressionError as exc:
         raise SceneError(exc.field, exc.reason) from None
+    return number if factor == 1.0 else _finite(number * factor, field_)
 
 
 def _shape(curve: dict) -> Shape:
@@ -691,7 +832,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         if key not in shape.params:
             raise SceneError(f"parameters.{_key(key)}", f"unknown symbol: curve '{shape.name}' has parameters "
                                                   f"{', '.join(shape.params) or 'none'}")
-        values[key] = _number(raw, key, "parameters")
+        values[key] = _number(raw, key, "parameters", shape=shape)
     params = tuple((n, values[n]) if n in values else (n, None) for n in shape.params)
     for n, v in params:
         if v is None:
@@ -699,11 +840,11 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
     phys = data["physics"]
     if "mu" in phys and "alpha0" in phys:
         raise SceneError("physics", "give mu or alpha0 (mu = tan(alpha0)), not both")
-    alpha0 = _number(phys, "alpha0", "physics")
+    alpha0 = _number(phys, "alpha0", "physics", shape=shape)
     if alpha0 is not None:
         mu = friction_coefficient(alpha0)
     else:
-        mu = _number(phys, "mu", "physics", default=0.0)
+        mu = _number(phys, "mu", "physics", default=0.0, shape=shape)
     if "restitution" not in phys:
         raise SceneError("physics.restitution", "missing: the restitution coefficient k in [0, 1]")
     lim = data.get("limiters", {})
@@ -719,16 +860,16 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         name=name or data.get("name", "scene"),
         shape=shape,
         params=params,
-        g=_number(phys, "g", "physics", default=STANDARD_GRAVITY),
-        m=_number(phys, "m", "physics", default=DEFAULT_MASS),
+        g=_number(phys, "g", "physics", default=STANDARD_GRAVITY, shape=shape),
+        m=_number(phys, "m", "physics", default=DEFAULT_MASS, shape=shape),
         mu=mu,
         alpha0=alpha0,
-        k=_number(phys, "restitution", "physics"),
-        left=_number(lim, "left", "limiters", symbols=values),
-        right=_number(lim, "right", "limiters", symbols=values),
-        q0=_number(ini, "q", "initial", symbols=values),
-        qdot0=_number(ini, "qdot", "initial", symbols=values),
-        t_max=_number(run, "t_max", "run", default=DEFAULT_T_MAX),
+        k=_number(phys, "restitution", "physics", shape=shape),
+        left=_number(lim, "left", "limiters", symbols=values, shape=shape),
+        right=_number(lim, "right", "limiters", symbols=values, shape=shape),
+        q0=_number(ini, "q", "initial", symbols=values, shape=shape),
+        qdot0=_number(ini, "qdot", "initial", symbols=values, shape=shape),
+        t_max=_number(run, "t_max", "run", default=DEFAULT_T_MAX, shape=shape),
         max_events=max_events,
         contact=phys.get("contact", "bilateral"),
     )

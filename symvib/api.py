@@ -1,0 +1,85 @@
+"""The package's top-level functions: ``symvib.load_scene``, ``symvib.simulate``, ``symvib.sweep``.
+
+Each takes a scene in any form a user has at hand: a :class:`~symvib.numeric.scene.Scene`,
+the path of a scene file, the name of a packaged scene (``"paper-parabola"``)
+or a dict of a scene file's tables, and hands it to the numeric wing
+(:func:`symvib.numeric.driver.simulate`, :func:`symvib.numeric.sweep.sweep`).
+``symvib.derive`` is the symbolic wing's :func:`symvib.symbolic.derive.derive`.
+
+This module imports nothing heavy: the driver and the sweep are imported when
+called, and neither imports SymPy for a curve whose kernels exist (a catalogue
+shape, or a user curve already generated); a new user curve's kernels are
+generated with SymPy once, and a user curve's singular points are searched with
+SymPy on each run (:func:`symvib.symbolic.singular.regular_shape`).
+
+Examples
+--------
+>>> import symvib
+>>> result = symvib.simulate("paper-circle-3.8", backend="python")
+>>> result.status.value, result.success
+('arrested', True)
+>>> scene = symvib.load_scene({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+...     "physics": {"alpha0": "3 deg", "restitution": 1}, "initial": {"q": "10 deg", "qdot": 2}})
+>>> round(scene.q0, 12), round(scene.mu, 9)
+(0.174532925199, 0.052407779)
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = ["load_scene", "simulate", "sweep"]
+
+
+def load_scene(source, *, name: str | None = None):
+    """A validated :class:`~symvib.numeric.scene.Scene` from ``source``.
+
+    Parameters
+    ----------
+    source : Scene, str, os.PathLike or dict
+        A scene (returned as it is), the path of a scene TOML file, the name of a
+        packaged scene (``"paper-parabola"``; :func:`symvib.numeric.scene.resolve_scene`),
+        or the scene file's tables as a dict (:func:`symvib.numeric.scene.scene_from_dict`).
+    name : str, optional
+        The scene's name, for a dict without one.
+
+    Raises
+    ------
+    SceneError
+        Naming the field (or the file) that is wrong.
+    TypeError
+        When ``source`` is none of these.
+    """
+    from symvib.numeric import scene as _scene
+
+    if isinstance(source, _scene.Scene):
+        return source
+    if isinstance(source, dict):
+        return _scene.scene_from_dict(source, name=name)
+    if isinstance(source, Path):
+        return _scene.load_scene(source)
+    if isinstance(source, str):
+        return _scene.resolve_scene(source)
+    raise TypeError(f"load_scene: a Scene, a path, a packaged scene's name or a dict, got {type(source).__name__}")
+
+
+def simulate(scene, **options):
+    """Simulate a scene given in any form :func:`load_scene` takes; ``options`` are
+    :func:`symvib.numeric.driver.simulate`'s (``nodes``, ``samples``, ``backend``).
+
+    Returns
+    -------
+    Result
+        Status, events, samples, dense output (``result.state(t)``), tables
+        (``result.events_frame()``) and energy budget.
+    """
+    from symvib.numeric.driver import simulate as _simulate
+
+    return _simulate(load_scene(scene), **options)
+
+
+def sweep(scene, vary: dict, **options):
+    """Sweep a scene given in any form :func:`load_scene` takes over the ``vary`` fields;
+    ``options`` are :func:`symvib.numeric.sweep.sweep`'s (``random``, ``out``, ``backend``, ...)."""
+    from symvib.numeric.sweep import sweep as _sweep
+
+    return _sweep(load_scene(scene), vary, **options)

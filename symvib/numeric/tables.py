@@ -1,0 +1,162 @@
+"""A run's results as tables: pandas DataFrames of the events and the samples, and their units.
+
+pandas is an optional dependency (``pip install "symvib[pandas]"``), imported
+only when a table is asked for; everything else here is plain NumPy.
+
+Columns and dtypes (``frame.attrs["units"]`` maps every column to its unit):
+
+* :func:`events_frame`, one row per event (index ``event``, from 0): ``kind``
+  (a pandas ``Categorical`` whose categories are every event kind's name, in
+  the order of :class:`symvib.numeric.layout.EventCode`), ``t``, ``q``,
+  ``qdot_before``, ``qdot_after``, ``energy`` (``float64``) and ``detail``
+  (``object``, text; empty for most events);
+* :func:`samples_frame`, one row per sample (index ``sample``): every field of
+  :class:`symvib.numeric.events.Samples`, in its order (``t``, ``q``, ``qdot``,
+  ``F_N``, ``P_mu``, ``Ek``, ``Ep``, ``E``, ... as ``float64``; ``interval`` and
+  ``branch`` as ``int64``); a field added to ``Samples`` becomes a column.
+
+Units (SI) come from the scene's table :data:`symvib.numeric.scene.FIELD_UNITS`:
+``q`` has the unit of the coordinate (``rad`` or ``m``), ``qdot`` that per second.
+
+Examples
+--------
+>>> from symvib.shapes import shape
+>>> units = quantity_units(shape("circle"))
+>>> units["t"], units["q"], units["qdot"], units["E"], units["F_N"]
+('s', 'rad', 'rad/s', 'J', 'N')
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from symvib.numeric.events import Event
+from symvib.numeric.layout import EVENT_KINDS
+from symvib.numeric.scene import FIELD_UNITS, field_unit
+
+__all__ = ["events_frame", "samples_frame", "to_pandas", "quantity_units", "result_units", "require_pandas",
+           "QUANTITY_UNITS"]
+
+#: Units of the quantities of a result (events, samples, final state, energy budget); ``"[q]"`` is
+#: the coordinate's unit.  Time, position and velocity are the scene's own fields' units.
+QUANTITY_UNITS = {
+    "t": FIELD_UNITS["run.t_max"],
+    "q": FIELD_UNITS["initial.q"],
+    "qdot": FIELD_UNITS["initial.qdot"],
+    "qdot_before": FIELD_UNITS["initial.qdot"],
+    "qdot_after": FIELD_UNITS["initial.qdot"],
+    "kind": None,
+    "detail": None,
+    "energy": "J",
+    "x": "m",
+    "z": "m",
+    "s": "m",
+    "v": "m/s",
+    "F_N": "N",
+    "F_mu": "N",
+    "P_mu": "W",
+    "W_mu": "J",
+    "Ek": "J",
+    "Ep": "J",
+    "E": "J",
+    "interval": "1",
+    "branch": "1",
+}
+#: Units of a result's energy budget (:class:`symvib.numeric.events.EnergyBudget`).
+BUDGET_UNITS = {"initial": "J", "final": "J", "friction_work": "J", "impact_loss": "J", "residual": "J"}
+
+
+def require_pandas():
+    """The ``pandas`` module, or an ImportError that names the extra to install."""
+    try:
+        import pandas
+    except ImportError:
+        raise ImportError('results as DataFrames need pandas: pip install "symvib[pandas]" '
+                          "(or pip install pandas)") from None
+    return pandas
+
+
+def quantity_units(shape) -> dict:
+    """:data:`QUANTITY_UNITS` for a curve: ``"[q]"`` replaced by the coordinate's unit."""
+    return {k: None if u is None else u.replace("[q]", shape.unit) for k, u in QUANTITY_UNITS.items()}
+
+
+def result_units(result, *, samples: bool = False) -> dict:
+    """The ``"units"`` entry of :meth:`symvib.numeric.events.Result.to_dict`: the unit of
+    every number of the JSON, nested as the JSON is, and of every scene field."""
+    shape = result.scene.shape
+    units = quantity_units(shape)
+    out = {"t_final": units["t"], "q_final": units["q"], "qdot_final": units["qdot"],
+           "events": {k: units[k] for k in ("t", "q", "qdot_before", "qdot_after", "energy")},
+           "energy_budget": dict(BUDGET_UNITS)}
+    if samples and result.samples is not None:
+        out["samples"] = {name: units.get(name) for name in _sample_fields(result.samples)}
+    scene_units = {}
+    for name in FIELD_UNITS:
+        if name == "parameters.*":
+            for p in shape.params:
+                scene_units[f"parameters.{p}"] = field_unit(f"parameters.{p}", shape)
+        elif not name.startswith("curve.") or not shape.in_catalogue:
+            scene_units[name] = field_unit(name, shape)
+    out["scene"] = scene_units
+    return out
+
+
+def _sample_fields(samples) -> list:
+    return [f.name for f in dataclasses.fields(samples)]
+
+
+def events_frame(result):
+    """The events of ``result`` as a DataFrame (columns in the module docstring)."""
+    pd = require_pandas()
+    events = result.events
+    columns = {}
+    for name in Event._fields:
+        values = [getattr(e, name) for e in events]
+        if name == "kind":
+            columns[name] = pd.Categorical([v.value for v in values], categories=list(EVENT_KINDS))
+        elif name == "detail":
+            columns[name] = pd.Series(values, dtype=object)
+        else:
+            columns[name] = np.asarray(values, dtype=np.float64)
+    frame = pd.DataFrame(columns)
+    frame.index.name = "event"
+    frame.attrs["units"] = {k: quantity_units(result.scene.shape).get(k) for k in frame.columns}
+    frame.attrs["scene"] = result.scene.name
+    return frame
+
+
+def samples_frame(result):
+    """The samples of ``result`` as a DataFrame, one column per field of ``Samples``.
+
+    Raises
+    ------
+    ValueError
+        When the run kept no samples (``simulate(..., samples=False)``) or sampling failed.
+    """
+    pd = require_pandas()
+    samples = result.samples
+    if samples is None:
+        raise ValueError("samples: this run has none (simulate(scene, samples=True) keeps them"
+                         + (f"; sampling failed: {result.error}" if result.error else "") + ")")
+    columns = {}
+    for name in _sample_fields(samples):
+        values = np.asarray(getattr(samples, name))
+        kind = values.dtype.kind
+        if kind in "iu":
+            values = values.astype(np.int64)
+        elif kind == "f":
+            values = values.astype(np.float64)
+        columns[name] = values
+    frame = pd.DataFrame(columns)
+    frame.index.name = "sample"
+    units = quantity_units(result.scene.shape)
+    frame.attrs["units"] = {k: units.get(k) for k in frame.columns}
+    frame.attrs["scene"] = result.scene.name
+    return frame
+
+
+def to_pandas(result):
+    """``(events_frame(result), samples_frame(result))``."""
+    return events_frame(result), samples_frame(result)
