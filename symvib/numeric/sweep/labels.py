@@ -8,9 +8,8 @@ UDUNITS and pint spell them: ``1`` for a pure number), ``long_name`` and
 ``latex``.  Units of the coordinate ``q`` follow the curve (``rad`` for an
 angle, ``m`` for a graph's ``x``): the tables write them ``{q}``.
 
-:data:`FIELD_UNITS` is keyed by the scene file's dotted names, the key scheme
-of the scene's own field-units table (``symvib.numeric.scene.FIELD_UNITS``,
-planned): once that exists, this table is to read from it.
+The units of the varied fields are the scene's own table
+(:data:`symvib.numeric.scene.FIELD_UNITS`, read by :func:`symvib.numeric.scene.field_unit`).
 
 Examples
 --------
@@ -29,17 +28,11 @@ Examples
 from __future__ import annotations
 
 from symvib.numeric.layout import SUMMARY_COLUMNS
+from symvib.numeric.scene import field_unit
 
-__all__ = ["FIELD_UNITS", "FIELD_LABELS", "COLUMN_LABELS", "axis_name", "field_attrs", "column_attrs",
+__all__ = ["FIELD_LABELS", "COLUMN_LABELS", "axis_name", "field_attrs", "column_attrs",
            "axis_label", "label", "unit_text", "coordinate_latex"]
 
-#: Units (SI) of the sweepable scene fields, by the scene file's dotted name; ``{q}`` is the
-#: curve coordinate's unit (``rad`` or ``m``), ``1`` a pure number.
-FIELD_UNITS = {
-    "initial.q": "{q}", "initial.qdot": "{q}/s", "physics.mu": "1", "physics.alpha0": "rad",
-    "physics.restitution": "1", "physics.g": "m/s^2", "physics.m": "kg", "limiters.left": "{q}",
-    "limiters.right": "{q}", "run.t_max": "s", "run.max_events": "1",
-}
 #: Varied fields: dotted name -> (readable name, long name, LaTeX symbol; ``{q}`` is the coordinate's symbol).
 FIELD_LABELS = {
     "initial.q": ("q0", "initial position", "{q}_0"),
@@ -74,8 +67,6 @@ COLUMN_LABELS = {
                      "W_\\mathrm{{impacts}} / (W_\\mathrm{{friction}} + W_\\mathrm{{impacts}})"),
 }
 assert set(SUMMARY_COLUMNS) <= set(COLUMN_LABELS), "every summary column needs a label"
-#: Units of a catalogue curve's parameters: every one is a length (``p``, ``R``, ``a``, ``b``, ``c``).
-CATALOGUE_PARAMETER_UNITS = "m"
 #: LaTeX of the curve coordinates' names; others are written as they are.
 _GREEK = {"phi": "\\varphi", "theta": "\\theta", "psi": "\\psi", "chi": "\\chi", "alpha": "\\alpha",
           "beta": "\\beta", "s": "s"}
@@ -108,12 +99,12 @@ def field_attrs(scene, field: str) -> dict:
     q = coordinate_latex(scene)
     if field in FIELD_LABELS:
         _, long_name, latex = FIELD_LABELS[field]
-        units = _units(scene, FIELD_UNITS[field])
+        units = field_unit(field, scene.shape) or ""
     else:
         name = field.split(".", 1)[1]
         long_name = f"curve parameter {name}"
         latex = _GREEK.get(name, name)
-        units = CATALOGUE_PARAMETER_UNITS if scene.shape.in_catalogue else ""
+        units = field_unit(field, scene.shape) or ""
     return {"units": units, "long_name": long_name, "latex": f"${latex.format(q=q)}$", "field": field}
 
 
