@@ -8,11 +8,14 @@ one folder:
   and the verdicts of :mod:`symvib.symbolic.audit`, the scene parameters, the event
   table and the energy budget of each run;
 * PNG figures of every scene with ``k = 1`` (the paper's conclusions): the
-  phase portrait, ``F_N``, ``P_mu``, ``Ek``, ``Ep`` and ``E`` against the
-  coordinate, and ``E(t)`` with the friction work and impact losses stacked;
-  with ``k = 0.8`` (the paper does not state its ``k``) the phase portrait and
-  ``E(t)``;
-* ``results.json``: every run's result (status, events, energy budget).
+  scene sketch, the force plan, the phase portrait, ``F_N``, ``P_mu``, ``Ek``,
+  ``Ep`` and ``E`` against the coordinate, and ``E(t)`` with the friction work
+  and impact losses stacked; with ``k = 0.8`` (the paper does not state its
+  ``k``) the phase portrait, ``E`` and ``E(t)``; each titled and captioned with
+  the paper's figure it reproduces (:data:`PAPER_FIGURES`);
+* ``results.json``: every run's result (status, events, energy budget);
+* ``report.html`` reads offline (formulas as MathML, :mod:`symvib.texmathml`),
+  and ``report.pdf`` with ``pdf=True`` (``symvib paper --pdf``).
 
 The simulations use the generated kernels and the driver's plain-Python core,
 so the job needs no compiler and runs in seconds; SymPy is used for the

@@ -139,8 +139,7 @@ def test_the_equilibrium_band_is_the_friction_cone(name, factor):
     r = _run(name, HIGH_K, samples=False)
     (a, b), = equilibrium_arcs(r, -1.0, 1.0)
     edge = factor * math.atan(r.scene.mu)
-    step = 2.0 / 2000
-    assert abs(a + edge) <= 1.5 * step and abs(b - edge) <= 1.5 * step
+    assert a == pytest.approx(-edge, rel=1e-12) and b == pytest.approx(edge, rel=1e-12)
 
 
 # --- figures --------------------------------------------------------------------------------------

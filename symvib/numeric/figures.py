@@ -64,10 +64,14 @@ IMPACT_COLOUR = "tab:red"
 BAND_STYLE = {"facecolor": "tab:green", "alpha": 0.15, "hatch": "...", "edgecolor": "tab:green", "lw": 0.0}
 #: Points of the grid on which the band |tan alpha| <= mu and the sketch's curve are evaluated.
 GRID_POINTS = 2001
+#: Bisections that refine each edge of the band between two grid points.
+EDGE_BISECTIONS = 50
 #: Share of the visited range added on each side of a sketch.
 SKETCH_MARGIN = 0.15
 #: Length of the largest force arrow of a force plan, in units of the scene's extent.
 FORCE_LENGTH = 0.35
+#: Shortest force arrow, in units of the scene's extent (a longer one is drawn dotted).
+MIN_ARROW = 0.08
 #: Characters per line of a caption under a figure, and its font size.
 CAPTION_WIDTH = 150
 CAPTION_POINTS = 7
@@ -80,8 +84,8 @@ CAPTIONS = {
               "the direction of the initial velocity, the final rest, and (thick, green) the arc of relative "
               "equilibrium |tan alpha| <= mu where static friction can hold the particle.",
     "forces": "Force plan at the start: weight m g, normal force F_N along the normal n, friction force F_mu "
-              "along the tangent against the velocity v; arrow lengths in proportion to the forces (m g = one "
-              "unit); alpha is the tangent angle.",
+              "along the tangent against the velocity v; arrow lengths in proportion to the forces (a dotted "
+              "arrow is enlarged to stay visible; the values are in the legend); alpha is the tangent angle.",
     "phase": "Phase portrait: solid = branch v > 0 (upper sign), dashed = branch v < 0 (lower sign); arrows on "
              "the dash-dot limiter lines = impact jumps qdot -> -k qdot; hatched band = relative equilibrium "
              "|tan alpha| <= mu (paper fig. 4), where a reversal ends in arrest.",
@@ -173,16 +177,26 @@ def equilibrium_arcs(result, lo: float, hi: float) -> list:
     [(-0.05, 0.05)]
     """
     mod, cp = _kernels(result)
+    mu = result.scene.mu
+
+    def held(x):  # |tan alpha| <= mu, written without a division
+        alpha = np.broadcast_to(mod.alpha(x, *cp), np.shape(x))
+        return np.abs(np.sin(alpha)) <= mu * np.abs(np.cos(alpha))
+
     q = np.linspace(lo, hi, GRID_POINTS)
-    alpha = np.broadcast_to(mod.alpha(q, *cp), q.shape)
-    inside_band = np.abs(np.sin(alpha)) <= result.scene.mu * np.abs(np.cos(alpha))
-    arcs = []
+    inside_band = held(q)
     edges = np.flatnonzero(np.diff(inside_band.astype(int)))
-    starts = ([0] if inside_band[0] else []) + [i + 1 for i in edges if not inside_band[i]]
-    ends = [i for i in edges if inside_band[i]] + ([len(q) - 1] if inside_band[-1] else [])
-    for a, b in zip(starts, ends):
-        arcs.append((float(q[a]), float(q[b])))
-    return arcs
+    # Each edge refined by bisection between its two grid points (to rounding).
+    a, b = q[edges].copy(), q[edges + 1].copy()
+    left_in = inside_band[edges]
+    for _ in range(EDGE_BISECTIONS):
+        mid = 0.5 * (a + b)
+        same = held(mid) == left_in
+        a, b = np.where(same, mid, a), np.where(same, b, mid)
+    cut = 0.5 * (a + b)
+    starts = ([lo] if inside_band[0] else []) + [float(c) for c, i in zip(cut, left_in) if not i]
+    ends = [float(c) for c, i in zip(cut, left_in) if i] + ([hi] if inside_band[-1] else [])
+    return [(float(x), float(y)) for x, y in zip(starts, ends)]
 
 
 def _limiters(ax, result):
@@ -243,7 +257,7 @@ def phase_portrait(result, ax=None, *, paper=None):
         elif events:
             c, mk, label = event_style(kind)
             ax.plot([e.q for e in events], [e.qdot_before for e in events], mk, color=c, ms=12,
-                    label=label + " (before)", ls="none", zorder=6)
+                    label=label, ls="none", zorder=6)
     ax.plot([result.scene.q0], [result.scene.qdot0], ">", color="k", ms=7, ls="none", label="start", zorder=6)
     ax.axhline(0, color="0.8", lw=0.8)
     _limiters(ax, result)
@@ -384,9 +398,10 @@ def scene_sketch(result, ax=None, *, paper=None):
     if result.events and result.events[-1].kind in (EventKind.ARREST, EventKind.REST_ON_LIMITER):
         xf, zf, _ = _point(mod, cp, result.q_final)
         ax.plot([xf], [zf], "*", color="tab:red", ms=11, ls="none", label="final rest", zorder=6)
-    ax.annotate("", xy=(0.96, 0.6), xytext=(0.96, 0.85), xycoords="axes fraction",
+    # Gravity, beside the axes (under the legend), where it covers nothing.
+    ax.annotate("", xy=(1.05, 0.05), xytext=(1.05, 0.3), xycoords="axes fraction", annotation_clip=False,
                 arrowprops={"arrowstyle": "-|>", "color": "0.3"})
-    ax.text(0.945, 0.72, "$g$", transform=ax.transAxes, fontsize=9, ha="right")
+    ax.text(1.07, 0.17, "gravity $g$", transform=ax.transAxes, fontsize=8, va="center")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("$x$ [m]")
     ax.set_ylabel("$z$ [m]")
@@ -424,11 +439,14 @@ def force_diagram(result, ax=None, *, paper=None, sample: int = 0):
     unit = FORCE_LENGTH * span / largest  # metres per newton: the largest force is FORCE_LENGTH of the scene
     for label, f, colour, ls in forces:
         size = float(np.hypot(*f))
-        tip = (xs + unit * f[0], zs + unit * f[1])
+        scale, note = unit, ""
+        if 0.0 < unit * size < MIN_ARROW * span:  # a small force (friction) stays visible
+            scale, ls, note = MIN_ARROW * span / size, ":", "\n(dotted: arrow enlarged)"
+        tip = (xs + scale * f[0], zs + scale * f[1])
         ax.annotate("", xy=tip, xytext=(xs, zs), zorder=5,
                     arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.8, "ls": ls})
         ax.plot([tip[0]], [tip[1]], ls="none")  # the axes' limits include the arrow
-        ax.plot([], [], color=colour, lw=1.8, ls=ls, label=f"{label} = {size:.4g} N")
+        ax.plot([], [], color=colour, lw=1.8, ls=ls, label=f"{label} = {size:.4g} N{note}")
     v = float(S.v[sample])
     if v != 0.0:
         L = 0.2 * span * np.sign(v)
