@@ -203,7 +203,7 @@ def _cmd_paper(args) -> int:
     check_output_dir(args.out, "--out folder")
     if not 0.0 <= args.restitution < 1.0:
         raise ValueError(f"--restitution: the k < 1 run needs 0 <= k < 1, got {args.restitution}")
-    return paper_main(args.out, low_k=args.restitution, quiet=args.quiet)
+    return paper_main(args.out, low_k=args.restitution, quiet=args.quiet, pdf=args.pdf)
 
 
 class _BenchParser(argparse.ArgumentParser):
@@ -288,6 +288,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="symvib-paper", help="output folder (default: symvib-paper)")
     p.add_argument("--restitution", type=float, default=0.8, help="k of the run beside k = 1 (default 0.8)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--pdf", action="store_true", help="also write report.pdf (text pages, then the figures)")
     p.set_defaults(func=_cmd_paper)
 
     p = sub.add_parser("run", help="simulate a scene file event by event")

@@ -8,11 +8,14 @@ one folder:
   and the verdicts of :mod:`symvib.symbolic.audit`, the scene parameters, the event
   table and the energy budget of each run;
 * PNG figures of every scene with ``k = 1`` (the paper's conclusions): the
-  phase portrait, ``F_N``, ``P_mu``, ``Ek``, ``Ep`` and ``E`` against the
-  coordinate, and ``E(t)`` with the friction work and impact losses stacked;
-  with ``k = 0.8`` (the paper does not state its ``k``) the phase portrait and
-  ``E(t)``;
-* ``results.json``: every run's result (status, events, energy budget).
+  scene sketch, the force plan, the phase portrait, ``F_N``, ``P_mu``, ``Ek``,
+  ``Ep`` and ``E`` against the coordinate, and ``E(t)`` with the friction work
+  and impact losses stacked; with ``k = 0.8`` (the paper does not state its
+  ``k``) the phase portrait, ``E`` and ``E(t)``; each titled and captioned with
+  the paper's figure it reproduces (:data:`PAPER_FIGURES`);
+* ``results.json``: every run's result (status, events, energy budget);
+* ``report.html`` reads offline (formulas as MathML, :mod:`symvib.texmathml`),
+  and ``report.pdf`` with ``pdf=True`` (``symvib paper --pdf``).
 
 The simulations use the generated kernels and the driver's plain-Python core,
 so the job needs no compiler and runs in seconds; SymPy is used for the
@@ -44,6 +47,23 @@ SCENES = [
     ("paper-circle-3.8", "fig. 20"),
     ("paper-circle-7", "figs. 21-26"),
 ]
+#: The paper's figure each of a scene's figures reproduces (by figure name of
+#: :data:`symvib.numeric.figures.FIGURE_NAMES`; absent: not in the paper).
+PAPER_FIGURES = {
+    "paper-parabola": {"sketch": "figs. 2 a, 5 a", "forces": "figs. 1 b, 2 b, 5 b", "phase": "fig. 6",
+                       "F_N": "fig. 7", "P_mu": "fig. 8", "Ek": "fig. 9", "Ep": "fig. 10", "E": "fig. 11"},
+    "paper-cycloid": {"sketch": "figs. 3 a, 12 a", "forces": "figs. 1 b, 3 b, 12 b", "phase": "fig. 13",
+                      "F_N": "fig. 14", "P_mu": "fig. 15", "Ek": "fig. 16", "Ep": "fig. 17", "E": "fig. 18"},
+    "paper-circle-3.8": {"sketch": "figs. 4, 19 a", "forces": "figs. 1 b, 4 a, 19 b", "phase": "fig. 20"},
+    "paper-circle-7": {"sketch": "fig. 19 a", "forces": "figs. 1 b, 19 b", "phase": "fig. 21", "F_N": "fig. 22",
+                       "P_mu": "fig. 23", "Ek": "fig. 24", "Ep": "fig. 25", "E": "fig. 26"},
+}
+#: Figures of the k < 1 runs (the scene sketch and force plan are those of k = 1).
+LOW_K_FIGURES = ("phase", "E", "energy-time")
+#: Pages of the PDF report: A4 portrait [inches], text lines per page and characters per line,
+#: figures per page.
+PDF_PAGE = (8.27, 11.69)
+PDF_LINES, PDF_COLUMNS, PDF_FIGURES_PER_PAGE = 78, 118, 2
 #: Restitution of the paper's conclusions, and the k < 1 run added.
 HIGH_K, LOW_K = 1.0, 0.8
 #: Readings of the first circle scene's "alpha0 = 3": label, physics section.
@@ -179,12 +199,17 @@ def _flat(tex: str) -> str:
     return " ".join(tex.split()).replace("|", r"\vert ")
 
 
-def _figures(result, out: Path, key: str, every: bool) -> tuple:
-    """The run's figures: all seven, or the phase portrait and E(t) only."""
-    from symvib.numeric.figures import save_run_figures
+def _figures(result, out: Path, key: str, every: bool, scene_name: str) -> tuple:
+    """The run's figures as ``(file name, caption)``: all of them, or :data:`LOW_K_FIGURES`."""
+    from symvib.numeric.figures import FIGURE_NAMES, caption, save_run_figures
 
-    which = None if every else ("phase", "energy-time")
-    return tuple(p.name for p in save_run_figures(result, out / "figures", prefix=key, only=which))
+    which = FIGURE_NAMES if every else LOW_K_FIGURES
+    refs = PAPER_FIGURES.get(scene_name, {})
+    if not every:  # the paper does not state its k: a k < 1 run is not the paper's figure
+        refs = {name: f"{ref} (there without a stated k)" for name, ref in refs.items()}
+    paths = save_run_figures(result, out / "figures", prefix=key, only=which, paper=refs)
+    return tuple((p.name, caption(name, refs.get(name))) for name, p in zip([n for n in FIGURE_NAMES if n in which],
+                                                                            paths))
 
 
 def _alpha0_section(out_lines):
@@ -255,8 +280,10 @@ def _start_symbolic():
     return pool, {name: pool.submit(_symbolic, name) for name in SYMBOLIC_JOBS}
 
 
-def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = True, progress=None) -> dict:
-    """Write the report, figures and results into ``out_dir``; returns what was written."""
+def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = True, pdf: bool = False,
+              progress=None) -> dict:
+    """Write the report, figures and results into ``out_dir`` (and ``report.pdf`` with ``pdf``);
+    returns what was written."""
     from symvib.numeric.driver import simulate
     from symvib.symbolic.audit import errata_markdown
 
@@ -275,7 +302,7 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
                 scene = base.replace(k=k, name=key)
                 say(f"simulating {key}")
                 result = simulate(scene, backend=BACKEND)
-                runs.append(Run(key, scene, result, _figures(result, out, key, every=k == HIGH_K)))
+                runs.append(Run(key, scene, result, _figures(result, out, key, k == HIGH_K, name)))
         say("waiting for the derivations and the audit")
         parts = {name: job.result() for name, job in jobs.items()}
     verdicts = sum((parts[name][0] for name in SYMBOLIC_JOBS), ())
@@ -314,14 +341,13 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
                 coord = run.scene.shape.q
                 lines += [f"#### Events of run `{run.key}` ($k = {run.scene.k:g}$)", ""]
                 lines += event_table(run.result, coord) + [""] + _budget_lines(run.result) + [""]
-                for fig in run.figures:
-                    lines.append(f"![{fig}](figures/{fig})")
-                lines.append("")
+                for fig, text in run.figures:
+                    lines += [f"![{fig}](figures/{fig})", "", f"*{text}*", ""]
     lines += [""] + errata_markdown(verdicts).replace("# Errata", "## Errata", 1).splitlines()
     lines += ["", f"Generated in {time.perf_counter() - start:.1f} s."]
     text = "\n".join(lines) + "\n"
     (out / "report.md").write_text(text, encoding="utf-8")
-    written = {"report": out / "report.md", "figures": [out / "figures" / f for r in runs for f in r.figures]}
+    written = {"report": out / "report.md", "figures": [out / "figures" / f for r in runs for f, _ in r.figures]}
     results = {r.key: r.result.to_dict() for r in runs}
     (out / "results.json").write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
     written["results"] = out / "results.json"
@@ -329,22 +355,60 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
         (out / "report.html").write_text(markdown_to_html(text, title="symvib: the paper reproduced"),
                                          encoding="utf-8")
         written["html"] = out / "report.html"
+    if pdf:
+        say("writing report.pdf")
+        written["pdf"], written["pdf_pages"] = write_pdf(text, written["figures"], out / "report.pdf")
     written["runs"] = runs
     return written
 
 
+#: Style of the HTML report (no external resource: the report reads offline).
+HTML_STYLE = ("body{font-family:sans-serif;max-width:70em;margin:auto;padding:0 1em} table{border-collapse:collapse}"
+              " td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%} figure{display:inline-block;"
+              "width:48%;margin:0.5em 0.5%;vertical-align:top} figure img{width:100%}"
+              " figcaption{font-size:85%;color:#333} math[display=block]{margin:0.6em 0;overflow-x:auto}"
+              " code.tex{color:#555}")
+#: Math in a Markdown line: display ``$$...$$`` or inline ``$...$``.
+MATH = re.compile(r"\$\$(.+?)\$\$|(?<![\\$])\$([^$\n]+?)\$")
+
+
+def _math_html(tex: str, display: bool) -> str:
+    """A formula as MathML, or its TeX in ``<code>`` outside :mod:`symvib.texmathml`'s subset."""
+    from symvib.texmathml import to_mathml
+
+    out = to_mathml(tex, display=display)
+    return out if out is not None else f'<code class="tex">{html.escape(tex, quote=False)}</code>'
+
+
+def _inline(s: str) -> str:
+    """Markdown inline constructs of the report (images, links, bold, italics, code) and math as MathML."""
+    parts = []
+    last = 0
+    for m in MATH.finditer(s):
+        parts.append(_inline_text(s[last:m.start()]))
+        display = m.group(1) is not None
+        parts.append(_math_html(m.group(1) if display else m.group(2), display))
+        last = m.end()
+    parts.append(_inline_text(s[last:]))
+    return "".join(parts)
+
+
+def _inline_text(s: str) -> str:
+    s = html.escape(s, quote=False)
+    s = re.sub(r"!\[([^\]]*)\]\(([^)]+)\)", r'<img alt="\1" src="\2">', s)
+    s = re.sub(r"\[([^\]]+)\]\(([^)]+)\)", r'<a href="\2">\1</a>', s)
+    s = re.sub(r"`([^`]+)`", r"<code>\1</code>", s)
+    s = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", s)
+    s = re.sub(r"(?<![*\w])\*([^*\s][^*]*?)\*(?![*\w])", r"<em>\1</em>", s)
+    return s
+
+
 def markdown_to_html(text: str, *, title: str) -> str:
-    """A small Markdown-to-HTML rendering of the report's constructs (MathJax for the formulas)."""
+    """The report's Markdown as one self-contained HTML page: tables, lists, figures with their
+    captions, and formulas as MathML (:mod:`symvib.texmathml`), so it needs no script and no network."""
     body = []
     table = []
-
-    def inline(s):
-        s = html.escape(s, quote=False)
-        s = re.sub(r"!\[([^\]]*)\]\(([^)]+)\)", r'<img alt="\1" src="\2" style="max-width:48%">', s)
-        s = re.sub(r"\[([^\]]+)\]\(([^)]+)\)", r'<a href="\2">\1</a>', s)
-        s = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", s)
-        s = re.sub(r"`([^`]+)`", r"<code>\1</code>", s)
-        return s
+    items = []
 
     def flush():
         if table:
@@ -352,42 +416,116 @@ def markdown_to_html(text: str, *, title: str) -> str:
             cells = [[c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", r.strip()[1:-1])]
                      for r in rows]
             tag = lambda i: "th" if i == 0 else "td"  # noqa: E731
-            out = ["<table>"] + ["<tr>" + "".join(f"<{tag(i)}>{inline(c)}</{tag(i)}>" for c in row) + "</tr>"
+            out = ["<table>"] + ["<tr>" + "".join(f"<{tag(i)}>{_inline(c)}</{tag(i)}>" for c in row) + "</tr>"
                                  for i, row in enumerate(cells)] + ["</table>"]
             body.append("\n".join(out))
             table.clear()
+        if items:
+            body.append("<ul>\n" + "\n".join(f"<li>{_inline(i)}</li>" for i in items) + "\n</ul>")
+            items.clear()
 
-    for line in text.splitlines():
+    lines = text.splitlines()
+    k = 0
+    while k < len(lines):
+        line = lines[k]
+        k += 1
         if line.startswith("|"):
+            if items:
+                flush()
             table.append(line)
+            continue
+        if line.startswith("- "):
+            if table:
+                flush()
+            items.append(line[2:])
             continue
         flush()
         m = re.match(r"^(#{1,4}) (.*)$", line)
+        image = re.match(r"^!\[([^\]]*)\]\(([^)]+)\)$", line)
         if m:
             level = len(m.group(1))
             anchor = re.sub(r"[^a-z0-9 -]", "", m.group(2).lower()).replace(" ", "-")
-            body.append(f'<h{level} id="{anchor}">{inline(m.group(2))}</h{level}>')
-        elif line.startswith("- "):
-            body.append(f"<li>{inline(line[2:])}</li>")
+            body.append(f'<h{level} id="{anchor}">{_inline(m.group(2))}</h{level}>')
+        elif image:
+            # A figure; its caption is the next paragraph when it is in italics.
+            j = k
+            while j < len(lines) and not lines[j].strip():
+                j += 1
+            cap = ""
+            if j < len(lines) and re.match(r"^\*[^*].*\*$", lines[j]):
+                cap = f"<figcaption>{_inline(lines[j][1:-1])}</figcaption>"
+                k = j + 1
+            alt, src = (html.escape(g, quote=True) for g in image.groups())
+            body.append(f'<figure><img alt="{alt}" src="{src}">{cap}</figure>')
         elif line.strip():
-            body.append(f"<p>{inline(line)}</p>")
+            body.append(f"<p>{_inline(line)}</p>")
     flush()
-    return ("<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>" + html.escape(title) + "</title>\n"
-            "<script>MathJax = {tex: {inlineMath: [['$', '$']]}};</script>\n"
-            "<script async src='https://cdn.jsdelivr.net/npm/mathjax@3/es5/tex-chtml.js'></script>\n"
-            "<style>body{font-family:sans-serif;max-width:70em;margin:auto} table{border-collapse:collapse}"
-            " td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%}</style></head><body>\n"
-            + "\n".join(body) + "\n</body></html>\n")
+    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" + html.escape(title)
+            + "</title>\n<style>" + HTML_STYLE + "</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n")
 
 
-def main(out_dir="symvib-paper", *, low_k: float = LOW_K, quiet: bool = False) -> int:
+def pdf_text_pages(text: str) -> list:
+    """The report's Markdown as pages of at most :data:`PDF_LINES` lines of :data:`PDF_COLUMNS`
+    characters (formulas stay TeX; the HTML report renders them)."""
+    import textwrap
+
+    lines = []
+    caption_next = False
+    for line in text.splitlines():
+        image = re.match(r"^!\[([^\]]*)\]\(([^)]+)\)$", line)
+        if image:  # the figure pages follow the text, each figure with its caption
+            line, caption_next = f"[figure {image.group(1)}: on the figure pages]", True
+        elif caption_next and line.strip():
+            caption_next = False
+            if line.startswith("*"):
+                continue
+        lines += textwrap.wrap(line, PDF_COLUMNS, subsequent_indent="    ", break_long_words=True,
+                               replace_whitespace=False) or [""]
+    return ["\n".join(lines[i:i + PDF_LINES]) for i in range(0, len(lines), PDF_LINES)] or [""]
+
+
+def write_pdf(text: str, figures, path: Path) -> tuple:
+    """``report.pdf``: the report's text, then its figures (:data:`PDF_FIGURES_PER_PAGE` a page),
+    with Matplotlib's PDF backend (no other dependency).  Returns ``(path, pages)``."""
+    from matplotlib.backends.backend_pdf import PdfPages
+    from matplotlib.figure import Figure
+    from matplotlib.image import imread
+
+    pages = 0
+    with PdfPages(path) as pdf:
+        info = pdf.infodict()
+        info["Title"], info["Creator"] = "symvib: the paper reproduced", "symvib paper --pdf"
+        for page in pdf_text_pages(text):
+            fig = Figure(figsize=PDF_PAGE)
+            fig.text(0.06, 0.97, page, family="monospace", fontsize=6.3, va="top", ha="left", parse_math=False)
+            pdf.savefig(fig)
+            pages += 1
+        figures = list(figures)
+        for i in range(0, len(figures), PDF_FIGURES_PER_PAGE):
+            fig = Figure(figsize=PDF_PAGE)
+            chunk = figures[i:i + PDF_FIGURES_PER_PAGE]
+            axes = fig.subplots(PDF_FIGURES_PER_PAGE, 1)
+            for ax, fpath in zip(axes, chunk):
+                ax.imshow(imread(fpath))
+                ax.set_title(Path(fpath).name, fontsize=7)
+            for ax in axes:
+                ax.axis("off")
+            fig.tight_layout()
+            pdf.savefig(fig)
+            pages += 1
+    return path, pages
+
+
+def main(out_dir="symvib-paper", *, low_k: float = LOW_K, quiet: bool = False, pdf: bool = False) -> int:
     """The ``symvib paper`` job (see the module docstring)."""
     start = time.perf_counter()
-    written = run_paper(out_dir, low_k=low_k, progress=None if quiet else (lambda m: print(m, flush=True)))
+    written = run_paper(out_dir, low_k=low_k, pdf=pdf, progress=None if quiet else (lambda m: print(m, flush=True)))
     runs = written["runs"]
     for r in runs:
         res = r.result
         print(f"{r.key:24s} {res.status.value:10s} {len(res.events):3d} events, t = {res.t_final:8.4f} s, "
               f"budget residual {res.energy_budget.relative_residual:.1e}")
+    if pdf:
+        print(f"wrote {written['pdf']} ({written['pdf_pages']} pages)")
     print(f"wrote {written['report']} ({len(written['figures'])} figures) in {time.perf_counter() - start:.1f} s")
     return 0

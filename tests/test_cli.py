@@ -4,6 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from symvib.numeric.figures import FIGURE_NAMES
+
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "symvib" / "scenes" / "paper-circle-3.8.toml"
 
@@ -23,7 +25,7 @@ def test_run_prints_table_and_writes_json_and_figures(tmp_path):
     assert [e["kind"] for e in data["events"]] == ["impact", "reversal", "reversal", "arrest"]
     assert set(data["energy_budget"]) == {"initial", "final", "friction_work", "impact_loss", "residual"}
     assert abs(data["energy_budget"]["residual"]) < 1e-12 * data["energy_budget"]["initial"]
-    assert len(list((tmp_path / "fig").glob("*.png"))) == 7
+    assert len(list((tmp_path / "fig").glob("*.png"))) == len(FIGURE_NAMES)  # issue 16: the sketch and force plan too
 
 
 def test_bad_scene_is_one_line_naming_the_field(tmp_path):

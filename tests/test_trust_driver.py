@@ -13,7 +13,6 @@ import pytest
 
 from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
 from symvib.numeric import driver
-from symvib.numeric.engine import bind
 from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe, kind_of, status_of
 from symvib.numeric.layout import ERROR_CODES, STATUSES, SceneRow, StatusCode, Summary
 from symvib.numeric.scene import CONTACTS, MAX_EVENTS, SceneError, scene_from_dict
@@ -230,22 +229,15 @@ def test_circle_rows_that_left_the_budget_open_now_close_it(mu, qdot):
 
 # --- samples linear in the events ----------------------------------------------------------------
 
-def test_samples_are_bitwise_those_of_the_quadratic_code():
+def test_samples_of_many_intervals_are_in_time_order_one_block_per_interval():
+    # The samples are built in one pass and one stable sort (linear in the intervals): each
+    # motion interval is one contiguous block, in time order (benchmarks/bench_samples.py).
     sc = _resolve_scene("paper-parabola").replace(mu=0.0, k=1.0, max_events=300)
-    from symvib.numeric.kernels import load
-
-    mod = load(sc.shape)
-    eng = bind(mod, "python")
-    R = driver.rules(driver.NODES)
-    row, cp = driver.scene_row(sc), tuple(sc.param_values)
-    out = eng.simulate(cp, row, R, True)
-    ni, ivs = out.n_intervals, out.intervals
-    assert ni >= 300
-    new = driver._samples(eng, cp, row, ivs, ni, R, sc, mod)
-    old = driver._samples_quadratic(eng, cp, row, ivs, ni, R, sc, mod)
-    for name in new.__dataclass_fields__:
-        a, b = getattr(new, name), getattr(old, name)
-        assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), name
+    r = driver.simulate(sc, backend="python")
+    S = r.samples
+    assert r.stats["intervals"] >= 300
+    assert (np.diff(S.t) >= 0).all() and (np.diff(S.interval) >= 0).all()
+    assert int(S.interval.max()) + 1 == len(np.unique(S.interval)) == len(r.events)
 
 
 # --- max_events -----------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from symvib import paths
+from symvib.numeric.figures import FIGURE_NAMES
 from symvib.paths import UserPathError, check_output_dir, check_output_file, inside, read_user_file, safe_stem
 
 ROOT = os.geteuid() == 0 if hasattr(os, "geteuid") else False
@@ -559,7 +560,7 @@ def test_run_with_a_traversal_name_writes_only_inside_the_plot_folder(tmp_path, 
     assert code == 0, err
     new = listing(tmp_path) - before
     assert new == {"figs", "r.json"} | {f"figs/{p.name}" for p in (tmp_path / "figs").iterdir()}
-    assert len(list((tmp_path / "figs").iterdir())) == 7
+    assert len(list((tmp_path / "figs").iterdir())) == len(FIGURE_NAMES)  # issue 16: the sketch and force plan too
     assert not (tmp_path.parent.parent / "escaped-phase.png").exists()
 
 

@@ -49,15 +49,20 @@ from symvib.numeric.engine import bind
 from symvib.numeric.engine.state import Rules
 from symvib.numeric.events import EnergyBudget, Event, Result, Samples, Status, ZenoInfo, kind_of, status_of
 from symvib.numeric.kernels import load
-from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, IntervalColumn, SceneRow, StatusCode, Summary
+from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, SceneRow, StatusCode, Summary
 from symvib.numeric.quadrature import rule
 
-__all__ = ["simulate", "NODES", "backend_available", "resolve_backend", "run_backend", "checked_status",
+__all__ = ["simulate", "NODES", "SAMPLES_PER_INTERVAL", "sample_pieces",
+           "backend_available", "resolve_backend", "run_backend", "checked_status",
            "guarded_sweep",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
 
 #: Gauss-Legendre nodes per quadrature panel (the accuracy knob of the times).
 NODES = 16
+#: Samples per motion interval (at least) by default: smooth curves of F_N and P_mu.
+SAMPLES_PER_INTERVAL = 96
+#: Most samples per motion interval a run may ask for (memory: 80 bytes per sample).
+MAX_SAMPLES_PER_INTERVAL = 100_000
 #: Environment variable that forces a backend ("numba" or "python").
 BACKEND_ENV = "SYMVIB_BACKEND"
 #: Largest relative residual of the energy budget (physics.md, "Energies") a trusted run may
@@ -125,7 +130,8 @@ def run_backend(shape, backend: str = "auto") -> str:
     return "numba" if is_compiled(load(shape)) else "python"
 
 
-def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto") -> Result:
+def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto",
+             samples_per_interval: int = SAMPLES_PER_INTERVAL) -> Result:
     """Simulate ``scene`` event by event until arrest, rest, ``t_max`` or ``max_events``.
 
     Parameters
@@ -139,12 +145,21 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     backend : {"auto", "numba", "python"}
         ``"auto"``: the compiled engine where it is on disk already, else the plain one
         (:func:`run_backend`); ``"numba"`` compiles it on first use (about 20 s, once).
+    samples_per_interval : int
+        Samples per motion interval, at least (each logged interval is cut into
+        :func:`sample_pieces` equal pieces in ``q``, each with its Gauss nodes,
+        which cluster in ``sqrt(distance)`` towards a turning point).  Costs
+        nothing until :attr:`Result.samples` is read.
 
     Returns
     -------
     Result
         Status, events, samples and energy budget.
     """
+    spi = samples_per_interval
+    if isinstance(spi, bool) or not isinstance(spi, (int, np.integer)) or not 1 <= spi <= MAX_SAMPLES_PER_INTERVAL:
+        raise ValueError(f"samples_per_interval must be an integer from 1 to {MAX_SAMPLES_PER_INTERVAL}, "
+                         f"not {spi!r}")
     shape = _run_shape(scene)
     backend = run_backend(shape, backend)
     mod, eng = bound_engine(shape, backend)
@@ -173,7 +188,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     budget = EnergyBudget(float(out.E0), float(out.E_final), float(out.W_friction), float(out.W_impacts))
     sampler = interpolant = None
     if samples and status != StatusCode.NON_FINITE:
-        sampler = partial(_lazy_samples, eng, cp, row, out.intervals, out.n_intervals, R, scene, mod)
+        sampler = partial(_lazy_samples, eng, cp, row, out.intervals, out.n_intervals, R, scene, mod,
+                          sample_pieces(spi, nodes))
         interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], nodes)
     return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=sampler,
                   interpolant=interpolant,
@@ -188,11 +204,11 @@ def _dense(mod, cp, ivs, nodes, result):
     return DenseOutput(result, mod, cp, ivs, (nodes, plain_nodes(nodes)))
 
 
-def _lazy_samples(eng, cp, row, ivs, ni, R, scene, mod):
+def _lazy_samples(eng, cp, row, ivs, ni, R, scene, mod, pieces):
     """``(samples, None)``, or ``(None, message)`` where the plain-Python engine overflowed."""
     try:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            return _samples(eng, cp, row, ivs, ni, R, scene, mod), None
+            return _samples(eng, cp, row, ivs, ni, R, scene, mod, pieces), None
     except (ArithmeticError, ValueError) as exc:
         if not _math_error(exc):
             raise
@@ -392,79 +408,46 @@ def rules(nodes: int) -> Rules:
         r.x, r.weights, r.cumulative.T, r.cumulative_weighted.T, p.x, p.weights, p.cumulative.T)))
 
 
-def _samples(eng, cp, row, ivs, ni, R, scene, mod) -> Samples:
-    """Each interval's samples: start point, Gauss nodes (sorted in time), end point.
+def sample_pieces(samples_per_interval: int, nodes: int) -> int:
+    """Pieces each logged interval is cut into so that a motion interval has at least
+    ``samples_per_interval`` samples (a piece gives at least two plain panels' nodes and its end).
 
-    Linear in the number of intervals: the nodes are ordered by (interval, time)
-    with one stable sort, and every interval's block is placed by offsets
-    (``benchmarks/bench_samples.py``).
+    Examples
+    --------
+    >>> sample_pieces(SAMPLES_PER_INTERVAL, NODES), sample_pieces(1, NODES), sample_pieces(1000, NODES)
+    (4, 1, 40)
     """
-    nodes, index = eng.samples(cp, row, R, np.ascontiguousarray(ivs), ni)
-    if not ni:
-        empty = np.zeros(0)
-        return Samples(*(empty.copy() for _ in range(8)), np.zeros(0, dtype=int), np.zeros(0, dtype=int))
-    order = np.lexsort((nodes[:, 0], index))  # stable: ties keep the engine's order
+    per_piece = 2 * plain_nodes(nodes) + 1
+    return max(1, -(-int(samples_per_interval) // per_piece))
+
+
+def _samples(eng, cp, row, ivs, ni, R, scene, mod, pieces: int = 1) -> Samples:
+    """The samples of the logged intervals (:func:`symvib.numeric.engine.timing.samples`), in time
+    order, with the derived columns of :class:`Samples`.
+
+    Linear in the number of intervals: one stable sort by (interval, time).
+    """
+    from symvib.numeric.engine.timing import SampleColumn as C
+
+    nodes, index = eng.samples(cp, row, R, np.ascontiguousarray(ivs), ni, pieces)
+    if not len(index):
+        return Samples.empty()
+    order = np.lexsort((nodes[:, C.t], index))  # stable: ties keep the engine's order
     nodes, index = nodes[order], index[order]
-    counts = np.bincount(index, minlength=ni)[:ni]
-    sizes = counts + 2
-    first = np.concatenate(([0], np.cumsum(sizes)[:-1]))
-    last = first + sizes - 1
-    total = int(sizes.sum())
-    inner = np.ones(total, dtype=bool)
-    inner[first] = False
-    inner[last] = False
-    ends = np.empty((ni, 8))
-    for i in range(ni):
-        qa, qb, Ga, Gb, s, sigma, t0, T = ivs[i, :IntervalColumn.W_friction]
-        wa = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qa, *cp))) * Ga
-        wb = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qb, *cp))) * Gb
-        ends[i] = (t0, t0 + T, qa, qb, wa, wb, mod.N_w_scalar(qa, wa, scene.g, *cp),
-                   mod.N_w_scalar(qb, wb, scene.g, *cp))
-    columns = []
-    for c, (a, b) in enumerate(((0, 1), (2, 3), (4, 5), (6, 7))):
-        col = np.empty(total)
-        col[first] = ends[:, a]
-        col[last] = ends[:, b]
-        col[inner] = nodes[:, c]
-        columns.append(col)
-    t, q, w, N = columns
-    interval = np.repeat(np.arange(ni), sizes)
-    branch = np.repeat(ivs[:ni, IntervalColumn.s].astype(int), sizes)
-    sig = np.repeat(ivs[:ni, IntervalColumn.sigma], sizes)
-    m, g, mu = scene.m, scene.g, scene.mu
-    v = np.sqrt(np.maximum(w, 0.0))
-    Ep = m * g * mod.z(q, *cp)
-    return Samples(t=t, q=q, qdot=sig * v / mod.h(q, *cp), F_N=m * N, P_mu=-mu * m * np.abs(N) * v,
-                   Ek=0.5 * m * w, Ep=Ep, E=0.5 * m * w + Ep, interval=interval, branch=branch)
+    t, q, w, N = nodes[:, C.t], nodes[:, C.q], nodes[:, C.w], nodes[:, C.N]
+    sigma = nodes[:, C.sigma]
+    m, mu = scene.m, scene.mu
+    speed = np.sqrt(np.maximum(w, 0.0))
+    v = sigma * speed
+    Ep = m * scene.g * _column(mod.z(q, *cp), q)
+    F_mu = -sigma * mu * m * np.abs(N)
+    return Samples(t=t, q=q, qdot=v / mod.h(q, *cp), F_N=m * N, P_mu=-mu * m * np.abs(N) * speed,
+                   Ek=0.5 * m * w, Ep=Ep, E=0.5 * m * w + Ep, interval=index.astype(int),
+                   branch=nodes[:, C.branch].astype(int), x=_column(mod.x(q, *cp), q), z=_column(mod.z(q, *cp), q),
+                   s=nodes[:, C.s].copy(), path=nodes[:, C.path].copy(), v=v, F_mu=F_mu,
+                   W_mu=m * nodes[:, C.W], W_impacts=m * nodes[:, C.W_impacts])
 
 
-def _samples_quadratic(eng, cp, row, ivs, ni, R, scene, mod) -> Samples:
-    """The former :func:`_samples` (``nodes[index == i]`` per interval, quadratic): the reference
-    of the bitwise test and of ``benchmarks/bench_samples.py``."""
-    nodes, index = eng.samples(cp, row, R, np.ascontiguousarray(ivs), ni)
-    t_parts, q_parts, w_parts, N_parts, iv_parts, s_parts, sig_parts = [], [], [], [], [], [], []
-    for i in range(ni):
-        qa, qb, Ga, Gb, s, sigma, t0, T = ivs[i, :IntervalColumn.W_friction]
-        sel = nodes[index == i]
-        sel = sel[np.argsort(sel[:, 0], kind="stable")]
-        wa = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qa, *cp))) * Ga
-        wb = math.exp(-2.0 * s * scene.mu * float(mod.alpha_scalar(qb, *cp))) * Gb
-        t_parts.append(np.concatenate(([t0], sel[:, 0], [t0 + T])))
-        q_parts.append(np.concatenate(([qa], sel[:, 1], [qb])))
-        w_parts.append(np.concatenate(([wa], sel[:, 2], [wb])))
-        N_parts.append(np.concatenate(([mod.N_w_scalar(qa, wa, scene.g, *cp)], sel[:, 3],
-                                       [mod.N_w_scalar(qb, wb, scene.g, *cp)])))
-        size = len(sel) + 2
-        iv_parts.append(np.full(size, i, dtype=int))
-        s_parts.append(np.full(size, int(s), dtype=int))
-        sig_parts.append(np.full(size, sigma))
-    if not ni:
-        empty = np.zeros(0)
-        return Samples(*(empty.copy() for _ in range(8)), np.zeros(0, dtype=int), np.zeros(0, dtype=int))
-    t, q, w, N, sig = (np.concatenate(p) for p in (t_parts, q_parts, w_parts, N_parts, sig_parts))
-    m, g, mu = scene.m, scene.g, scene.mu
-    v = np.sqrt(np.maximum(w, 0.0))
-    Ep = m * g * mod.z(q, *cp)
-    return Samples(t=t, q=q, qdot=sig * v / mod.h(q, *cp), F_N=m * N, P_mu=-mu * m * np.abs(N) * v,
-                   Ek=0.5 * m * w, Ep=Ep, E=0.5 * m * w + Ep, interval=np.concatenate(iv_parts),
-                   branch=np.concatenate(s_parts))
+def _column(values, like) -> np.ndarray:
+    """A kernel's values as a float array of ``like``'s shape (a constant kernel returns a scalar)."""
+    return np.array(np.broadcast_to(values, like.shape), dtype=float)

@@ -159,9 +159,25 @@ class ZenoInfo:
 
 @dataclass(frozen=True)
 class Samples:
-    """Per-interval samples for plotting (read-only arrays of one length).
+    """Samples of every motion interval, in time order (read-only arrays of one length).
 
-    ``interval`` numbers the motion intervals; ``branch`` is ``s = sigma sign(N)``.
+    ``interval`` numbers the motion intervals between events (0, 1, ...; an
+    interval ends at each event that changes the motion); ``branch`` is
+    ``s = sigma sign(N)``.  Each interval has its start and end point; at an
+    impact the end of one interval holds the state before it and the start of
+    the next the state after it, at the same ``t``.  SI units with the scene's
+    ``m`` and ``g``:
+
+    ``t`` [s]; ``q``, ``qdot`` (the coordinate's unit, per s); ``x``, ``z`` [m];
+    ``s`` [m] the arc-length coordinate from the initial position (increasing
+    with ``q``), ``path`` [m] the distance travelled (quadratures of ``h dq``);
+    ``v = h qdot`` [m/s]; ``F_N`` [N] the normal force; ``F_mu`` [N] the
+    friction force along the tangent (against ``v``); ``P_mu = F_mu v <= 0`` [W];
+    ``Ek``, ``Ep``, ``E`` [J]; ``W_mu`` [J] the friction work since the start
+    (the cumulative quadrature of ``mu |F_N| ds`` that the energy budget sums);
+    ``W_impacts`` [J] the impact losses since the start.  So
+    ``E + W_mu + W_impacts = E0`` at every sample (before a Zeno series, whose
+    infinitely many bounces are summed at the end, not sampled).
     """
 
     t: np.ndarray
@@ -174,10 +190,24 @@ class Samples:
     E: np.ndarray
     interval: np.ndarray
     branch: np.ndarray
+    x: np.ndarray
+    z: np.ndarray
+    s: np.ndarray
+    path: np.ndarray
+    v: np.ndarray
+    F_mu: np.ndarray
+    W_mu: np.ndarray
+    W_impacts: np.ndarray
 
     def __post_init__(self):
         for name in self.__dataclass_fields__:
             getattr(self, name).setflags(write=False)
+
+    @classmethod
+    def empty(cls) -> Samples:
+        """Samples of a run without motion intervals."""
+        ints = ("interval", "branch")
+        return cls(**{k: np.zeros(0, dtype=int if k in ints else float) for k in cls.__dataclass_fields__})
 
 
 @dataclass(frozen=True)

@@ -1,13 +1,23 @@
-"""Figures of a run: the phase portrait and the paper's energy analysis.
+"""Figures of a run: the scene, the forces, the phase portrait and the paper's energy analysis.
 
-* :func:`phase_portrait` -- ``(q, qdot)`` with the two branches (``v > 0``,
-  ``v < 0``) in two colours, impacts as dashed jumps, reversals and the final
-  rest marked (paper figs. 6, 13, 20, 21);
+* :func:`scene_sketch` -- the curve in ``(x, z)`` with its limiters, the start
+  point and the arc of relative equilibrium (paper figs. 2, 3, 5, 12, 19);
+* :func:`force_diagram` -- the forces on the particle at a sample, drawn on
+  the curve (paper fig. 1 b);
+* :func:`phase_portrait` -- ``(q, qdot)``, the two branches (``v > 0``,
+  ``v < 0``) in two line styles, impacts as arrows on the limiter line,
+  reversals and the final rest marked, the band ``|tan alpha| <= mu`` of
+  relative equilibrium shaded (paper figs. 4, 6, 13, 20, 21);
 * :func:`energy_vs_q` -- ``F_N``, ``P_mu``, ``Ek``, ``Ep`` or ``E`` against
-  ``q``, one curve per interval (figs. 7-11, 14-18, 22-26);
+  ``q``, one curve per motion interval with an arrow in its direction of motion
+  (figs. 7-11, 14-18, 22-26);
 * :func:`energy_vs_t` -- ``E(t)`` with the friction work and impact losses
-  stacked on it, which must add up to ``E0`` (not in the paper);
-* :func:`save_run_figures` -- all of them as PNG files.
+  stacked on it: they add up to ``E0`` at every sample (not in the paper);
+* :func:`run_figures` / :func:`save_run_figures` -- all of them, with captions.
+
+Every figure has axis labels with units in brackets, a title naming the paper's
+figure it reproduces (when given) and a caption (:data:`CAPTIONS`).  Branches
+differ by line style as well as colour, so the figures read in greyscale.
 
 Files are drawn on backend-free :class:`matplotlib.figure.Figure` objects
 (no screen needed, the caller's backend untouched); the single figures use
@@ -15,15 +25,18 @@ Files are drawn on backend-free :class:`matplotlib.figure.Figure` objects
 """
 from __future__ import annotations
 
+import textwrap
+
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.transforms import blended_transform_factory
 
-from symvib.numeric.engine.laws import impact
 from symvib.numeric.events import EventKind
 from symvib.paths import UserPathError, check_output_dir, inside, safe_stem
 
-__all__ = ["phase_portrait", "energy_vs_q", "energy_vs_t", "save_run_figures", "QUANTITIES"]
+__all__ = ["phase_portrait", "energy_vs_q", "energy_vs_t", "scene_sketch", "force_diagram", "run_figures",
+           "save_run_figures", "equilibrium_arcs", "QUANTITIES", "CAPTIONS", "FIGURE_NAMES"]
 
 #: Plotted quantities: label, unit.
 QUANTITIES = {
@@ -33,11 +46,63 @@ QUANTITIES = {
     "Ep": ("potential energy $E_p$", "J"),
     "E": ("total energy $E$", "J"),
 }
-#: Colours of the branches v > 0 and v < 0.
-BRANCH_COLOURS = {1: "tab:blue", -1: "tab:orange"}
-#: Figure size in inches (the report shows figures about 16 cm wide).
-FIGSIZE = (6.4, 4.2)
+#: Line style and colour of the branches v > 0 and v < 0 (style first: greyscale).
+BRANCH_STYLES = {1: {"color": "tab:blue", "ls": "-"}, -1: {"color": "tab:orange", "ls": "--"}}
+BRANCH_LABELS = {1: "branch $v > 0$ (upper sign)", -1: "branch $v < 0$ (lower sign)"}
+#: Figure size in inches: the axes and a legend column on the right (legends never cover data).
+FIGSIZE = (8.0, 4.4)
 DPI = 130
+#: Margins of the axes in figure fractions (the legend column on the right; the caption below
+#: the bottom margin).
+MARGINS = {"left": 0.09, "right": 0.66, "top": 0.87, "bottom": 0.1}
+#: Legend placed outside the axes, on the right.
+LEGEND_OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0, "fontsize": 8}
+#: Colour and line of a limiter, and of an impact's jump.
+LIMITER_STYLE = {"color": "0.35", "lw": 1.0, "ls": "-.", "zorder": 1}
+IMPACT_COLOUR = "tab:red"
+#: Relative-equilibrium band: face colour and hatch.
+BAND_STYLE = {"facecolor": "tab:green", "alpha": 0.15, "hatch": "...", "edgecolor": "tab:green", "lw": 0.0}
+#: Points of the grid on which the band |tan alpha| <= mu and the sketch's curve are evaluated.
+GRID_POINTS = 2001
+#: Bisections that refine each edge of the band between two grid points.
+EDGE_BISECTIONS = 50
+#: Share of the visited range added on each side of a sketch.
+SKETCH_MARGIN = 0.15
+#: Length of the largest force arrow of a force plan, in units of the scene's extent.
+FORCE_LENGTH = 0.35
+#: Shortest force arrow, in units of the scene's extent (a longer one is drawn dotted).
+MIN_ARROW = 0.08
+#: Characters per line of a caption under a figure, and its font size.
+CAPTION_WIDTH = 150
+CAPTION_POINTS = 7
+#: Figures of a run, in order (file name suffixes).
+FIGURE_NAMES = ("sketch", "forces", "phase", *QUANTITIES, "energy-time")
+
+#: Captions: what each figure shows and how to read it (the run's numbers are added).
+CAPTIONS = {
+    "sketch": "The scene: the curve z(x), its elongation limiters (bars across the curve), the start point with "
+              "the direction of the initial velocity, the final rest, and (thick, green) the arc of relative "
+              "equilibrium |tan alpha| <= mu where static friction can hold the particle.",
+    "forces": "Force plan at the start: weight m g, normal force F_N along the normal n, friction force F_mu "
+              "along the tangent against the velocity v; arrow lengths in proportion to the forces (a dotted "
+              "arrow is enlarged to stay visible; the values are in the legend); alpha is the tangent angle.",
+    "phase": "Phase portrait: solid = branch v > 0 (upper sign), dashed = branch v < 0 (lower sign); arrows on "
+             "the dash-dot limiter lines = impact jumps qdot -> -k qdot; hatched band = relative equilibrium "
+             "|tan alpha| <= mu (paper fig. 4), where a reversal ends in arrest.",
+    "F_N": "Normal force along the path, one curve per motion interval (solid v > 0, dashed v < 0; the arrow "
+           "gives the direction of motion); dash-dot lines = limiters.",
+    "P_mu": "Friction power P_mu = -mu |F_N| |v| <= 0 along the path, one curve per motion interval (solid "
+            "v > 0, dashed v < 0; arrows: direction of motion); it vanishes with the square root of the "
+            "distance at a reversal.",
+    "Ek": "Kinetic energy along the path, one curve per motion interval (solid v > 0, dashed v < 0; arrows: "
+          "direction of motion); at k < 1 it drops at each impact.",
+    "Ep": "Potential energy m g z(q): one curve for every branch (it depends on the position only), with the "
+          "reversal and impact positions marked.",
+    "E": "Total mechanical energy along the path: numbers give the order of the motion intervals in time, "
+         "arrows the direction of motion (solid v > 0, dashed v < 0); it decreases along every interval.",
+    "energy-time": "Energy budget in time: mechanical energy E, friction work W_mu and impact losses stacked; "
+                   "their sum is E0 at every sample (the run's own quadrature of the friction work).",
+}
 
 
 def _coord(result):
@@ -46,20 +111,33 @@ def _coord(result):
     return name, shape.unit
 
 
-def _title(result, what):
+def _title(result, what, paper=None):
     # A `$` of the scene's name would start mathtext (and an odd one fails to draw): escaped.
     name = result.scene.name.replace("$", r"\$")
-    return f"{name}: {what} (k = {result.scene.k:g}, $\\mu$ = {result.scene.mu:.4g})"
+    ref = f" - paper {paper}" if paper else ""
+    return f"{name}: {what}{ref}\n(k = {result.scene.k:g}, $\\mu$ = {result.scene.mu:.4g})"
+
+
+def _new_axes(ax):
+    return ax or plt.subplots(figsize=FIGSIZE, dpi=DPI)[1]
+
+
+def _kernels(result):
+    from symvib.numeric.kernels import load
+
+    return load(result.scene.shape), tuple(float(v) for v in result.scene.param_values)
 
 
 def _intervals(result):
+    """``(selection, sign of v)`` of every motion interval of the samples."""
     S = result.samples
     if S is None or not len(S.t):
         return
-    for i in np.unique(S.interval):
-        sel = S.interval == i
-        sign = 1 if np.nanmean(S.qdot[sel]) >= 0 else -1
-        yield sel, sign
+    bounds = np.flatnonzero(np.diff(S.interval)) + 1
+    for sl in np.split(np.arange(len(S.t)), bounds):
+        v = S.v[sl]
+        sign = 1 if np.sum(v) >= 0 else -1
+        yield sl, sign
 
 
 #: Colour, marker and legend label of each event kind in the phase portrait.
@@ -87,103 +165,353 @@ def event_style(kind) -> tuple:
     return (*DEFAULT_EVENT_STYLE, kind.value.replace("_", " "))
 
 
-def phase_portrait(result, ax=None):
-    """The phase portrait of a run in ``(q, qdot)``."""
-    ax = ax or plt.subplots(figsize=FIGSIZE, dpi=DPI)[1]
+def equilibrium_arcs(result, lo: float, hi: float) -> list:
+    """The ``q`` intervals within ``[lo, hi]`` where ``|tan alpha| <= mu`` (relative
+    equilibrium, paper fig. 4: static friction can hold the particle), on a grid of
+    :data:`GRID_POINTS`.
+
+    >>> from symvib.numeric.driver import simulate
+    >>> from symvib.numeric.scene import resolve_scene
+    >>> r = simulate(resolve_scene("paper-circle-7"), samples=False)
+    >>> [(round(a, 3), round(b, 3)) for a, b in equilibrium_arcs(r, -1.0, 1.0)]  # |phi| <= alpha0 = 0.05
+    [(-0.05, 0.05)]
+    """
+    mod, cp = _kernels(result)
+    mu = result.scene.mu
+
+    def held(x):  # |tan alpha| <= mu, written without a division
+        alpha = np.broadcast_to(mod.alpha(x, *cp), np.shape(x))
+        return np.abs(np.sin(alpha)) <= mu * np.abs(np.cos(alpha))
+
+    q = np.linspace(lo, hi, GRID_POINTS)
+    inside_band = held(q)
+    edges = np.flatnonzero(np.diff(inside_band.astype(int)))
+    # Each edge refined by bisection between its two grid points (to rounding).
+    a, b = q[edges].copy(), q[edges + 1].copy()
+    left_in = inside_band[edges]
+    for _ in range(EDGE_BISECTIONS):
+        mid = 0.5 * (a + b)
+        same = held(mid) == left_in
+        a, b = np.where(same, mid, a), np.where(same, b, mid)
+    cut = 0.5 * (a + b)
+    starts = ([lo] if inside_band[0] else []) + [float(c) for c, i in zip(cut, left_in) if not i]
+    ends = [float(c) for c, i in zip(cut, left_in) if i] + ([hi] if inside_band[-1] else [])
+    return [(float(x), float(y)) for x, y in zip(starts, ends)]
+
+
+def _limiters(ax, result):
+    """Dash-dot vertical lines at the limiters, labelled at the top of the axes."""
+    trans = blended_transform_factory(ax.transData, ax.transAxes)
+    for side in ("left", "right"):
+        x = getattr(result.scene, side)
+        if x is not None:
+            ax.axvline(x, **LIMITER_STYLE)
+            ax.text(x, 0.02, f"{side} limiter ", transform=trans, rotation=90, va="bottom",
+                    ha="right" if side == "right" else "left", fontsize=7, color="0.25",
+                    bbox={"boxstyle": "square,pad=0.1", "fc": "w", "ec": "none", "alpha": 0.7})
+
+
+def _band(ax, result):
+    lo, hi = ax.get_xlim()
+    label = r"relative equilibrium $|\tan\alpha| \leq \mu$"
+    for a, b in equilibrium_arcs(result, lo, hi):
+        ax.axvspan(a, b, label=label, zorder=0, **BAND_STYLE)
+        label = None
+    ax.set_xlim(lo, hi)
+
+
+def _direction_arrow(ax, x, y, style):
+    """A small arrow at the middle of a curve, in the direction of its points' order."""
+    if len(x) < 3:
+        return
+    i = len(x) // 2
+    ax.annotate("", xy=(x[i + 1], y[i + 1]), xytext=(x[i - 1], y[i - 1]),
+                arrowprops={"arrowstyle": "-|>", "color": style["color"], "lw": 1.0, "mutation_scale": 10})
+
+
+def phase_portrait(result, ax=None, *, paper=None):
+    """The phase portrait of a run in ``(q, qdot)``; ``paper`` names the paper's figure it reproduces."""
+    ax = _new_axes(ax)
     S = result.samples
     q, unit = _coord(result)
     seen = set()
     for sel, sign in _intervals(result):
-        label = None
-        if sign not in seen:
-            label = ("branch $v > 0$ (upper sign)" if sign > 0 else "branch $v < 0$ (lower sign)")
-            seen.add(sign)
-        ax.plot(S.q[sel], S.qdot[sel], color=BRANCH_COLOURS[sign], lw=1.3, label=label)
+        label = None if sign in seen else BRANCH_LABELS[sign]
+        seen.add(sign)
+        ax.plot(S.q[sel], S.qdot[sel], lw=1.3, label=label, **BRANCH_STYLES[sign])
     marks = {}
+    impact_label = "impact jump $\\dot q \\to -k \\dot q$"
     for e in result.events:
         marks.setdefault(e.kind, []).append(e)
         if e.kind is EventKind.IMPACT:
-            ax.plot([e.q, e.q], [e.qdot_before, e.qdot_after], "k--", lw=0.8)
+            ax.annotate("", xy=(e.q, e.qdot_after), xytext=(e.q, e.qdot_before), zorder=5,
+                        arrowprops={"arrowstyle": "-|>", "color": IMPACT_COLOUR, "lw": 1.6, "mutation_scale": 12})
+    if EventKind.IMPACT in marks:
+        ax.plot([], [], color=IMPACT_COLOUR, lw=1.6, label=impact_label)
     for kind in EventKind:  # every kind of the vocabulary, in its order
         events = marks.get(kind)
-        if events:
+        if events and kind is not EventKind.IMPACT:
             c, mk, label = event_style(kind)
-            ax.plot([e.q for e in events], [e.qdot_before for e in events], mk, color=c, ms=7 if mk != "|" else 12,
-                    label=label, ls="none")
-    for side in ("left", "right"):
-        x = getattr(result.scene, side)
-        if x is not None:
-            ax.axvline(x, color="0.5", lw=2, alpha=0.5)
+            ax.plot([e.q for e in events], [e.qdot_before for e in events], mk, color=c, ms=7,
+                    label=label, ls="none", zorder=6)
+        elif events:
+            c, mk, label = event_style(kind)
+            ax.plot([e.q for e in events], [e.qdot_before for e in events], mk, color=c, ms=12,
+                    label=label, ls="none", zorder=6)
+    ax.plot([result.scene.q0], [result.scene.qdot0], ">", color="k", ms=7, ls="none", label="start", zorder=6)
     ax.axhline(0, color="0.8", lw=0.8)
+    _limiters(ax, result)
+    ax.plot([], [], **{k: v for k, v in LIMITER_STYLE.items() if k != "zorder"}, label="limiter")
+    _band(ax, result)
     ax.set_xlabel(f"${q}$ [{unit}]")
     ax.set_ylabel(f"$\\dot{{{q}}}$ [{unit}/s]")
-    ax.set_title(_title(result, "phase portrait"), fontsize=10)
-    ax.legend(fontsize=8, loc="best")
+    ax.set_title(_title(result, "phase portrait", paper), fontsize=9)
+    ax.legend(**LEGEND_OUTSIDE)
     ax.grid(alpha=0.3)
     return ax
 
 
-def energy_vs_q(result, quantity: str, ax=None):
-    """One of ``F_N, P_mu, Ek, Ep, E`` against ``q``, one curve per interval."""
+def energy_vs_q(result, quantity: str, ax=None, *, paper=None):
+    """One of ``F_N, P_mu, Ek, Ep, E`` against ``q``: one curve per motion interval with an arrow
+    in its direction of motion (``E``: and its number in time order); ``Ep``, a function of
+    the position alone, as one curve."""
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, not {quantity!r}")
-    ax = ax or plt.subplots(figsize=FIGSIZE, dpi=DPI)[1]
+    ax = _new_axes(ax)
     S = result.samples
     q, unit = _coord(result)
     label, qunit = QUANTITIES[quantity]
     values = getattr(S, quantity)
-    seen = set()
-    for sel, sign in _intervals(result):
-        lab = None if sign in seen else (f"$v {'>' if sign > 0 else '<'} 0$")
-        seen.add(sign)
-        ax.plot(S.q[sel], values[sel], color=BRANCH_COLOURS[sign], lw=1.2, label=lab)
+    if quantity == "Ep":
+        order = np.argsort(S.q, kind="stable")
+        ax.plot(S.q[order], values[order], color="k", lw=1.3, label="$E_p = m g z$ (depends on the position only)")
+        for kind in (EventKind.REVERSAL, EventKind.IMPACT, EventKind.ARREST):
+            ev = [e for e in result.events if e.kind is kind]
+            if ev:
+                c, mk, lab = event_style(kind)
+                qs = np.array([e.q for e in ev])
+                ax.plot(qs, np.interp(qs, S.q[order], values[order]), mk, color=c, ms=7 if mk != "|" else 12,
+                        ls="none", label=lab)
+    else:
+        seen = set()
+        for number, (sel, sign) in enumerate(_intervals(result), 1):
+            lab = None if sign in seen else BRANCH_LABELS[sign]
+            seen.add(sign)
+            style = BRANCH_STYLES[sign]
+            ax.plot(S.q[sel], values[sel], lw=1.2, label=lab, **style)
+            _direction_arrow(ax, S.q[sel], values[sel], style)
+            if quantity == "E":
+                i = sel[len(sel) // 2]
+                ax.annotate(str(number), (S.q[i], values[i]), textcoords="offset points", xytext=(0, 5),
+                            fontsize=7, ha="center", bbox={"boxstyle": "round,pad=0.1", "fc": "w", "ec": "none",
+                                                            "alpha": 0.7})
+        if quantity == "E":
+            ax.plot([], [], ls="none", marker="$1$", color="k", label="interval number (time order)")
+    _limiters(ax, result)
     ax.set_xlabel(f"${q}$ [{unit}]")
     ax.set_ylabel(f"{label} [{qunit}]")
-    ax.set_title(_title(result, label), fontsize=10)
-    ax.legend(fontsize=8, title="branch", title_fontsize=8)
+    ax.set_title(_title(result, label, paper), fontsize=9)
+    ax.legend(**LEGEND_OUTSIDE)
     ax.grid(alpha=0.3)
     return ax
 
 
-def energy_vs_t(result, ax=None):
-    """``E(t)`` with the friction work and impact losses stacked on it (they sum to ``E0``)."""
-    ax = ax or plt.subplots(figsize=FIGSIZE, dpi=DPI)[1]
+def energy_vs_t(result, ax=None, *, paper=None):
+    """``E(t)`` with the friction work and impact losses stacked on it: they sum to ``E0``
+    at every sample (the samples' ``W_mu`` and ``W_impacts``, the energy budget's own terms;
+    at an impact the state after it carries its loss)."""
+    ax = _new_axes(ax)
     S = result.samples
-    order = np.argsort(S.t, kind="stable")
-    t, E = S.t[order], S.E[order]
-    P = S.P_mu[order]
-    # Friction work: integral of -P_mu dt (trapezoid on the samples, for display only).
-    Wf = np.concatenate(([0.0], np.cumsum(-0.5 * (P[1:] + P[:-1]) * np.diff(t))))
-    loss = np.zeros_like(t)
-    for e in result.events:
-        if e.kind is EventKind.IMPACT:
-            _, _, jump = impact(e.qdot_before, (e.qdot_before * _h(result, e.q)) ** 2, result.scene.k,
-                                result.scene.m)
-            loss[t >= e.t] += jump
-    ax.stackplot(t, E, Wf, loss, labels=["mechanical energy $E$", "friction work", "impact losses"],
-                 colors=["tab:blue", "tab:orange", "tab:gray"], alpha=0.75)
+    polys = ax.stackplot(S.t, S.E, S.W_mu, S.W_impacts,
+                         labels=["mechanical energy $E$", r"friction work $W_\mu$", "impact losses $W_k$"],
+                         colors=["tab:blue", "tab:orange", "0.6"], alpha=0.75)
+    for poly, hatch in zip(polys, ("", "//", "..")):
+        poly.set_hatch(hatch)
     ax.axhline(result.energy_budget.initial, color="k", lw=0.8, ls="--", label="$E_0$")
     ax.set_xlabel("$t$ [s]")
     ax.set_ylabel("energy [J]")
-    ax.set_title(_title(result, "energy budget"), fontsize=10)
-    ax.legend(fontsize=8, loc="lower left")
+    ax.set_title(_title(result, "energy budget", paper), fontsize=9)
+    ax.legend(**LEGEND_OUTSIDE)
     ax.grid(alpha=0.3)
     return ax
 
 
-def _h(result, q):
-    from symvib.numeric.kernels import load
+def _sketch_range(result):
+    """The ``q`` range a sketch shows: limiters and the visited positions, with a margin,
+    inside the curve's regular domain."""
+    mod, cp = _kernels(result)
+    sc = result.scene
+    qs = [sc.q0] + [e.q for e in result.events] + [v for v in (sc.left, sc.right) if v is not None]
+    S = result.samples
+    if S is not None and len(S.q):
+        qs += [float(S.q.min()), float(S.q.max())]
+    lo, hi = min(qs), max(qs)
+    pad = SKETCH_MARGIN * max(hi - lo, 1e-3)
+    dlo, dhi = (float(v) for v in mod.domain(*cp))
+    inset = 1e-6 * max(hi - lo, 1e-3)
+    return max(lo - pad, dlo + inset), min(hi + pad, dhi - inset)
 
-    return float(load(result.scene.shape).h_scalar(q, *result.scene.param_values))
+
+def _point(mod, cp, q):
+    x = float(np.broadcast_to(mod.x(q, *cp), ()))
+    z = float(np.broadcast_to(mod.z(q, *cp), ()))
+    a = float(np.broadcast_to(mod.alpha(q, *cp), ()))
+    return x, z, a
 
 
-def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None) -> list:
-    """Write the phase portrait, the five energy figures and E(t) as PNG; returns the paths.
+def scene_sketch(result, ax=None, *, paper=None):
+    """The curve in the vertical plane with its limiters, the start point and direction, the
+    final rest and the arc of relative equilibrium (paper figs. 2, 3, 5, 12, 19)."""
+    ax = _new_axes(ax)
+    mod, cp = _kernels(result)
+    sc = result.scene
+    lo, hi = _sketch_range(result)
+    q = np.linspace(lo, hi, GRID_POINTS)
+    x = np.broadcast_to(mod.x(q, *cp), q.shape)
+    z = np.broadcast_to(mod.z(q, *cp), q.shape)
+    ax.plot(x, z, color="k", lw=1.4, label=f"curve: {sc.shape.name}")
+    span = max(np.ptp(x), np.ptp(z), 1e-9)
+    label = r"relative equilibrium $|\tan\alpha| \leq \mu$"
+    for a, b in equilibrium_arcs(result, lo, hi):
+        sel = (q >= a) & (q <= b)
+        ax.plot(x[sel], z[sel], color="tab:green", lw=5, alpha=0.6, solid_capstyle="butt", label=label)
+        label = None
+    qn, qu = _coord(result)
+    for side in ("left", "right"):
+        ql = getattr(sc, side)
+        if ql is None:
+            continue
+        xl, zl, al = _point(mod, cp, ql)
+        nx, nz = -np.sin(al), np.cos(al)
+        d = 0.06 * span
+        ax.plot([xl - d * nx, xl + d * nx], [zl - d * nz, zl + d * nz], color="0.2", lw=3, solid_capstyle="butt")
+        ax.annotate(f"{side} limiter\n${qn}$ = {ql:.4g} {qu}", (xl + d * nx, zl + d * nz), fontsize=7,
+                    xytext=(0, 4), textcoords="offset points", ha="center", va="bottom")
+    x0, z0, a0 = _point(mod, cp, sc.q0)
+    ax.plot([x0], [z0], "o", color="tab:blue", ms=7, label=f"start ${qn}_0$ = {sc.q0:.4g} {qu}", zorder=5)
+    if sc.qdot0 != 0.0:
+        sgn = np.sign(sc.qdot0) * np.sign(float(np.broadcast_to(mod.h(sc.q0, *cp), ())))
+        L = 0.15 * span
+        ax.annotate("", xy=(x0 + sgn * L * np.cos(a0), z0 + sgn * L * np.sin(a0)), xytext=(x0, z0), zorder=5,
+                    arrowprops={"arrowstyle": "-|>", "color": "tab:blue", "lw": 1.5})
+        ax.plot([], [], color="tab:blue", lw=1.5, label=f"initial velocity ($\\dot{{{qn}}}_0$ = {sc.qdot0:g} {qu}/s)")
+    if result.events and result.events[-1].kind in (EventKind.ARREST, EventKind.REST_ON_LIMITER):
+        xf, zf, _ = _point(mod, cp, result.q_final)
+        ax.plot([xf], [zf], "*", color="tab:red", ms=11, ls="none", label="final rest", zorder=6)
+    # Gravity, beside the axes (under the legend), where it covers nothing.
+    ax.annotate("", xy=(1.05, 0.05), xytext=(1.05, 0.3), xycoords="axes fraction", annotation_clip=False,
+                arrowprops={"arrowstyle": "-|>", "color": "0.3"})
+    ax.text(1.07, 0.17, "gravity $g$", transform=ax.transAxes, fontsize=8, va="center")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("$x$ [m]")
+    ax.set_ylabel("$z$ [m]")
+    ax.set_title(_title(result, "the scene", paper), fontsize=9)
+    ax.legend(**LEGEND_OUTSIDE)
+    ax.grid(alpha=0.3)
+    return ax
 
-    ``only`` restricts them to some names: ``"phase"``, ``"F_N"``, ``"P_mu"``,
-    ``"Ek"``, ``"Ep"``, ``"E"``, ``"energy-time"``.  File names start with
-    ``safe_stem(prefix or scene name)`` (:func:`symvib.paths.safe_stem`): a name
-    such as ``../../x`` or ``/abs/path`` writes inside ``out_dir`` and nowhere else.
+
+def force_diagram(result, ax=None, *, paper=None, sample: int = 0):
+    """The force plan (paper fig. 1 b) at a sample (default: the start), drawn on the curve:
+    weight, normal force along ``n = (-sin alpha, cos alpha)``, friction force along the
+    tangent against the velocity; lengths in proportion to the forces."""
+    ax = _new_axes(ax)
+    mod, cp = _kernels(result)
+    S = result.samples
+    sc = result.scene
+    qs = float(S.q[sample])
+    xs, zs, a = _point(mod, cp, qs)
+    lo, hi = _sketch_range(result)
+    q = np.linspace(lo, hi, GRID_POINTS)
+    x = np.broadcast_to(mod.x(q, *cp), q.shape)
+    z = np.broadcast_to(mod.z(q, *cp), q.shape)
+    ax.plot(x, z, color="0.4", lw=1.2, label=f"curve: {sc.shape.name}")
+    span = max(np.ptp(x), np.ptp(z), 1e-9)
+    weight = sc.m * sc.g
+    t_vec = np.array([np.cos(a), np.sin(a)])
+    n_vec = np.array([-np.sin(a), np.cos(a)])
+    forces = [
+        ("weight $m g$", np.array([0.0, -weight]), "k", "-"),
+        ("normal force $F_N$", float(S.F_N[sample]) * n_vec, "tab:blue", "-"),
+        (r"friction force $F_\mu$", float(S.F_mu[sample]) * t_vec, "tab:red", "-"),
+    ]
+    largest = max(float(np.hypot(*f)) for _, f, _, _ in forces)
+    unit = FORCE_LENGTH * span / largest  # metres per newton: the largest force is FORCE_LENGTH of the scene
+    for label, f, colour, ls in forces:
+        size = float(np.hypot(*f))
+        scale, note = unit, ""
+        if 0.0 < unit * size < MIN_ARROW * span:  # a small force (friction) stays visible
+            scale, ls, note = MIN_ARROW * span / size, ":", "\n(dotted: arrow enlarged)"
+        tip = (xs + scale * f[0], zs + scale * f[1])
+        ax.annotate("", xy=tip, xytext=(xs, zs), zorder=5,
+                    arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.8, "ls": ls})
+        ax.plot([tip[0]], [tip[1]], ls="none")  # the axes' limits include the arrow
+        ax.plot([], [], color=colour, lw=1.8, ls=ls, label=f"{label} = {size:.4g} N{note}")
+    v = float(S.v[sample])
+    if v != 0.0:
+        L = 0.2 * span * np.sign(v)
+        ax.annotate("", xy=(xs + L * t_vec[0], zs + L * t_vec[1]), xytext=(xs, zs), zorder=4,
+                    arrowprops={"arrowstyle": "-|>", "color": "tab:green", "lw": 1.2, "ls": "--"})
+        ax.plot([], [], color="tab:green", lw=1.2, ls="--", label=f"velocity $v$ = {v:.4g} m/s (direction)")
+    ax.plot([xs - 0.25 * span, xs + 0.25 * span], [zs, zs], color="0.6", lw=0.8, ls=":")
+    ax.plot([xs, xs + 0.25 * span * t_vec[0]], [zs, zs + 0.25 * span * t_vec[1]], color="0.6", lw=0.8, ls=":")
+    ax.text(xs + 0.27 * span, zs, f"$\\alpha$ = {np.degrees(a):.3g} deg", fontsize=8, va="center")
+    ax.plot([xs], [zs], "o", color="k", ms=6, zorder=6, label=f"particle at t = {float(S.t[sample]):.3g} s")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("$x$ [m]")
+    ax.set_ylabel("$z$ [m]")
+    ax.set_title(_title(result, "force plan", paper), fontsize=9)
+    ax.legend(**LEGEND_OUTSIDE)
+    ax.grid(alpha=0.3)
+    return ax
+
+
+def _drawers():
+    out = {"sketch": scene_sketch, "forces": force_diagram, "phase": phase_portrait}
+    for k in QUANTITIES:
+        out[k] = (lambda kk: lambda r, ax, paper=None: energy_vs_q(r, kk, ax, paper=paper))(k)
+    out["energy-time"] = energy_vs_t
+    return out
+
+
+def caption(name: str, paper=None) -> str:
+    """The caption of a figure kind (:data:`CAPTIONS`), with the paper's figure it reproduces."""
+    text = CAPTIONS[name]
+    return f"{text} Reproduces paper {paper}." if paper else text
+
+
+def run_figures(result, *, only=None, paper=None) -> list:
+    """The run's figures as ``(name, Figure, caption)``, names from :data:`FIGURE_NAMES`.
+
+    ``only`` restricts them to some names; ``paper`` maps a name to the paper's
+    figure it reproduces (``{"phase": "fig. 6"}``), shown in the title and caption.
+    Each figure carries its caption under the axes.
+    """
+    paper = paper or {}
+    out = []
+    for name, draw in _drawers().items():
+        if only is not None and name not in only:
+            continue
+        fig = Figure(figsize=FIGSIZE, dpi=DPI)
+        ax = fig.subplots()
+        draw(result, ax, paper=paper.get(name))
+        text = caption(name, paper.get(name))
+        lines = textwrap.fill(text, CAPTION_WIDTH)
+        fig.text(0.01, 0.01, lines, fontsize=CAPTION_POINTS, va="bottom", ha="left")
+        height = (lines.count("\n") + 1) * CAPTION_POINTS * 1.35 / 72 / FIGSIZE[1] + 0.02
+        # Fixed margins (tight_layout would lay every text out twice: most of the drawing time).
+        fig.subplots_adjust(bottom=height + MARGINS["bottom"], **{k: v for k, v in MARGINS.items() if k != "bottom"})
+        out.append((name, fig, text))
+    return out
+
+
+def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None, paper=None) -> list:
+    """Write the run's figures (:func:`run_figures`) as PNG; returns the paths.
+
+    ``only`` restricts them to some names: ``"sketch"``, ``"forces"``, ``"phase"``,
+    ``"F_N"``, ``"P_mu"``, ``"Ek"``, ``"Ep"``, ``"E"``, ``"energy-time"``.  File names
+    start with ``safe_stem(prefix or scene name)`` (:func:`symvib.paths.safe_stem`): a
+    name such as ``../../x`` or ``/abs/path`` writes inside ``out_dir`` and nowhere else.
 
     Raises
     ------
@@ -195,15 +523,7 @@ def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None) -
     # File names from user text: a plain stem, and never outside ``out_dir`` (docs: README "Trust").
     prefix = safe_stem(prefix or result.scene.name)
     paths = []
-    figures = [("phase", phase_portrait)] + [(k, (lambda kk: lambda r, ax: energy_vs_q(r, kk, ax))(k))
-                                             for k in QUANTITIES] + [("energy-time", energy_vs_t)]
-    for name, draw in figures:
-        if only is not None and name not in only:
-            continue
-        fig = Figure(figsize=FIGSIZE, dpi=DPI)
-        ax = fig.subplots()
-        draw(result, ax)
-        fig.tight_layout()
+    for name, fig, _ in run_figures(result, only=only, paper=paper):
         path = out / f"{prefix}-{name}.png"
         if not inside(path, out):
             raise UserPathError(path, f"figure file name would leave the folder {out}")

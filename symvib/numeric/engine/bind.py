@@ -53,7 +53,7 @@ ENTRY_POINTS = ("simulate_scene", "sample_scene", "sweep_scenes")
 class Engine(NamedTuple):
     """The engine bound to one curve's kernels.
 
-    ``simulate(cp, row, R, keep) -> Outcome``; ``samples(cp, row, R, intervals, n)
+    ``simulate(cp, row, R, keep) -> Outcome``; ``samples(cp, row, R, intervals, n, pieces)
     -> (samples, index)``; ``sweep(rows, cp_rows, R, max_log) -> (summary, logs)``
     (see :mod:`symvib.numeric.engine.loop`).
     """
@@ -233,7 +233,7 @@ def _compiled_engine(ncp: int) -> dict:
     _flush_if_stale([compiled[name] for name in ENTRY_POINTS], cache_dir() / "engines" / f"engine-{engine_digest()}")
     signatures = {
         "simulate_scene": (k_type, cp_type, vec, rules_type, nt.boolean),
-        "sample_scene": (k_type, cp_type, vec, rules_type, mat, nt.int64),
+        "sample_scene": (k_type, cp_type, vec, rules_type, mat, nt.int64, nt.int64),
         "sweep_scenes": (k_type, mat, mat, rules_type, nt.int64),  # rows, parameter rows
     }
     for name, sig in signatures.items():

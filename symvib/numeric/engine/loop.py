@@ -293,9 +293,10 @@ def simulate_scene(K, cp, row, R, keep):
                int(row[SceneRow.max_events]), keep)
 
 
-def sample_scene(K, cp, row, R, ivs, ni):
-    """Entry point: node samples (t, q, w, N) of the logged intervals of a run of ``row``."""
-    return samples(ivs, ni, setup_of(row, K, cp), K, cp, R)
+def sample_scene(K, cp, row, R, ivs, ni, pieces):
+    """Entry point: samples of the logged intervals of a run of ``row``, each cut into ``pieces``
+    (columns :class:`~symvib.numeric.engine.timing.SampleColumn`), and their motion-interval index."""
+    return samples(ivs, ni, setup_of(row, K, cp), K, cp, R, pieces)
 
 
 def sweep_scenes(K, rows, cp_rows, R, max_log):
@@ -356,9 +357,9 @@ def simulate_bound(cp, row, R, keep):
     return simulate_scene(BOUND_KERNELS, cp, row, R, keep)
 
 
-def sample_bound(cp, row, R, ivs, ni):
+def sample_bound(cp, row, R, ivs, ni, pieces):
     """:func:`sample_scene` with the bound curve's kernels."""
-    return sample_scene(BOUND_KERNELS, cp, row, R, ivs, ni)
+    return sample_scene(BOUND_KERNELS, cp, row, R, ivs, ni, pieces)
 
 
 def sweep_bound(rows, cp_rows, R, max_log):

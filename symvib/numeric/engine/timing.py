@@ -12,7 +12,7 @@ inverse square root, with panels graded geometrically from ``sqrt(delta)``.
 Examples
 --------
 >>> PANEL_Q, ROOT_RATIO, WORK_ROWS
-(1.0, 1.0, 10)
+(1.0, 1.0, 12)
 """
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ from symvib.numeric.engine.laws import Fs, dFs, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update
 from symvib.numeric.layout import IntervalColumn
 
-__all__ = ["quad", "root_time", "samples", "PANEL_Q", "ROOT_RATIO", "WORK_ROWS"]
+__all__ = ["quad", "root_time", "samples", "arc_length", "PANEL_Q", "ROOT_RATIO", "WORK_ROWS", "SampleColumn"]
 
 #: Widest quadrature panel, in units of the curve's q_scale.
 PANEL_Q = 1.0
@@ -34,10 +34,31 @@ ROOT_RATIO = 1.0
 #: Smallest positive double, used to keep 1/sqrt(G) finite at a node on a root.
 TINY = np.finfo(float).tiny
 #: Rows of the quadrature's scratch array (node values and the cumulative sums).
-WORK_ROWS = 10
-#: Columns of a sample: t, q, w, N.
-SAMPLE_COLUMNS = 4
-#: Nodes per interval a sample buffer grows by at least, times the rule's nodes.
+WORK_ROWS = 12
+#: Columns :func:`quad` writes per node when it keeps samples: time, q, w, N, path
+#: length and friction work per unit mass, the last two cumulative from the start of
+#: the quadrature's interval (like the time).
+QUAD_COLUMNS = 6
+
+
+class SampleColumn:
+    """Columns of the samples :func:`samples` returns (plain ints, for numba)."""
+
+    t = 0  #: time [s]
+    q = 1  #: coordinate
+    w = 2  #: squared speed v^2
+    N = 3  #: normal reaction per unit mass
+    s = 4  #: arc-length coordinate from the initial position (increasing with q)
+    path = 5  #: distance travelled since the start
+    W = 6  #: friction work per unit mass since the start (the energy budget's quadrature)
+    W_impacts = 7  #: impact losses per unit mass since the start (at an impact: counted after it)
+    branch = 8  #: the branch s = sigma sign(N)
+    sigma = 9  #: the direction of motion
+
+
+#: Columns of a sample (:class:`SampleColumn`).
+SAMPLE_COLUMNS = 10
+#: Nodes per quadrature piece a sample buffer grows by at least, times the rule's nodes.
 SAMPLE_GROWTH = 200
 
 
@@ -59,8 +80,10 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
     maxq = PANEL_Q * scale
     gam, dGdr, qn, dqdr, ft = work[0], work[1], work[2], work[3], work[4]
     hn, exn, kn, cn, acc = work[5], work[6], work[7], work[8], work[9]
+    fp, fw = work[10], work[11]
     T = 0.0
     Wf = 0.0
+    P = 0.0
     half_b = o
     for kh in range(2):
         if kh == 0:
@@ -72,6 +95,8 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
         root = Ge == 0.0 or (gamma > 0.0 and Ge < ROOT_RATIO * gamma * half)
         Gstart = Ge
         tau0 = 0.0
+        path0 = 0.0
+        work0 = 0.0
         if root:
             delta = Ge / gamma if Ge > 0.0 else 0.0
             r_lo = math.sqrt(delta)
@@ -120,6 +145,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
                 total *= hw
                 Tp = 0.0
                 Wp = 0.0
+                Pp = 0.0
                 # acc = S @ dGdr (or SW @ gam next to a root), summed over i in order for every
                 # node j at once: the inner loop runs along a row of the transposed matrix.
                 for j in range(n):
@@ -147,31 +173,49 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
                     Tp += Wt[j] * f
                     Wp += Wt[j] * mu * abs(N) * hh * dqdr[j]
                     if keep:
+                        fp[j] = hh * dqdr[j]
+                        fw[j] = mu * abs(N) * hh * dqdr[j]
+                        Pp += Wt[j] * fp[j]
                         out[o + j, 1] = qn[j]
                         out[o + j, 2] = w
                         out[o + j, 3] = N
                 if keep:
+                    # Time, path and friction work at every node: the same cumulative
+                    # Gauss-Legendre integral as the interval's totals.
                     for j in range(n):
-                        acc[j] = 0.0
+                        out[o + j, 0] = 0.0
+                        out[o + j, 4] = 0.0
+                        out[o + j, 5] = 0.0
                     for i in range(n):
-                        fi = ft[i]
+                        fi, pi, wi = ft[i], fp[i], fw[i]
                         for j in range(n):
-                            acc[j] += St[i, j] * fi
+                            out[o + j, 0] += St[i, j] * fi
+                            out[o + j, 4] += St[i, j] * pi
+                            out[o + j, 5] += St[i, j] * wi
                     for j in range(n):
-                        out[o + j, 0] = tau0 + hw * acc[j]
+                        out[o + j, 0] = tau0 + hw * out[o + j, 0]
+                        out[o + j, 4] = path0 + hw * out[o + j, 4]
+                        out[o + j, 5] = work0 + hw * out[o + j, 5]
                     o += n
                 Tp *= hw
                 Wp *= hw
+                Pp *= hw
                 tau0 += Tp
+                path0 += Pp
+                work0 += Wp
                 T += Tp
                 Wf += Wp
+                P += Pp
                 Gstart += total
             if seg_b >= r_hi:
                 break
             seg_a = seg_b
     if keep:
+        # The half anchored at qb was integrated from qb backwards.
         for j in range(half_b, o):
             out[j, 0] = T - out[j, 0]
+            out[j, 4] = P - out[j, 4]
+            out[j, 5] = Wf - out[j, 5]
     return T, Wf, o
 
 
@@ -193,33 +237,114 @@ def root_time(p, a, b, fa, fb):
     return b
 
 
+def arc_length(qa, qb, S, K, cp, R):
+    """``Integral h dq`` from ``qa`` to ``qb`` (>= 0): Gauss-Legendre panels of at most
+    ``PANEL_Q`` q_scale (``h`` is smooth on the regular domain, so this is exact to rounding)."""
+    X, Wt = R.Xp, R.Wp
+    L = abs(qb - qa)
+    if L == 0.0:
+        return 0.0
+    parts = max(1, int(math.ceil(L / (PANEL_Q * S.scale))))
+    step = (qb - qa) / parts
+    total = 0.0
+    for jp in range(parts):
+        a = qa + jp * step
+        for j in range(X.shape[0]):
+            total += Wt[j] * K.h(a + 0.5 * step * (X[j] + 1.0), *cp)
+    return 0.5 * abs(step) * total
 
-def samples(ivs, ni, S, K, cp, R):
-    """Node samples (columns t, q, w, N) of the logged intervals, interval by interval,
-    and the index of the interval of each sample; the cost grows linearly with ``ni``."""
+
+def _state_at(q, G, s, S, K, cp):
+    """``(w, N)`` at ``q`` from ``G = w exp(2 s mu alpha)`` (physics.md, eq. 2)."""
+    _, _, ex, ka, co = node(s, q, S.mu, K, cp)
+    w = G / (ex * ex)
+    return w, ka * w + S.g * co
+
+
+def samples(ivs, ni, S, K, cp, R, pieces):
+    """Samples of the logged intervals (columns :class:`SampleColumn`) and the index of the
+    motion interval of each; the cost grows linearly with ``ni``.
+
+    Each logged interval is cut into ``pieces`` equal pieces in ``q``; each piece
+    gives the Gauss nodes of :func:`quad` (graded in ``sqrt(distance)`` towards a
+    turning point, where ``w`` has the square-root shape) and its end point, and a
+    motion interval its start point.  Logged intervals that continue one another
+    (the engine's search window ended, no event: same ``s`` and ``sigma``) share
+    one motion interval, so the index counts the intervals between events.  Time,
+    path and friction work are the cumulative quadratures of the run's own
+    integrals; at an impact the start of the next interval carries the speed after
+    it and the loss ``(1 - k^2) w / 2`` (per unit mass; physics.md, "Events" 1).
+    Rows are in time order within each piece's half; the caller sorts by time.
+    """
     n = max(R.Xw.shape[0], R.Xp.shape[0])
     work = np.empty((WORK_ROWS, n))
-    # Upper bound of the nodes per interval: panels are few; grow when needed.
-    cap = max(ni * 8 * n, 16)
+    g, k = S.g, S.k
+    cap = max(ni * pieces * 4 * n, 16)
     out = np.zeros((cap, SAMPLE_COLUMNS))
     index = np.zeros(cap, dtype=np.int64)
     o = 0
+    motion = -1
+    s_prev, sigma_prev, w_prev = 0, 0, 0.0
+    coord, path, Wf, Wimp = 0.0, 0.0, 0.0, 0.0
     for i in range(ni):
-        t0 = ivs[i, IntervalColumn.t0]
-        need = o + SAMPLE_GROWTH * n
-        if need > cap:
-            cap = 2 * need
-            new = np.zeros((cap, SAMPLE_COLUMNS))
-            new[:o] = out[:o]
-            out = new
-            newi = np.zeros(cap, dtype=np.int64)
-            newi[:o] = index[:o]
-            index = newi
-        start = o
-        _, _, o = quad(ivs[i, IntervalColumn.qa], ivs[i, IntervalColumn.qb], ivs[i, IntervalColumn.Ga],
-                       ivs[i, IntervalColumn.Gb], int(ivs[i, IntervalColumn.s]), int(ivs[i, IntervalColumn.sigma]),
-                       S, K, cp, R, work, True, out, o)
-        for j in range(start, o):
-            out[j, 0] += t0
-            index[j] = i
+        qa, qb = ivs[i, IntervalColumn.qa], ivs[i, IntervalColumn.qb]
+        Ga, Gb = ivs[i, IntervalColumn.Ga], ivs[i, IntervalColumn.Gb]
+        s, sigma = int(ivs[i, IntervalColumn.s]), int(ivs[i, IntervalColumn.sigma])
+        t0, T, Wi = ivs[i, IntervalColumn.t0], ivs[i, IntervalColumn.T], ivs[i, IntervalColumn.W_friction]
+        new = i == 0 or s != s_prev or sigma != sigma_prev
+        if new:
+            motion += 1
+            if i > 0 and sigma != sigma_prev:
+                Wimp += 0.5 * (1.0 - k * k) * w_prev  # an impact (0 at a reversal, where w = 0)
+        C = Ga + 2.0 * g * Fs(s, qa, S.mu, K, cp)
+        tp, Wp0 = t0, Wf
+        G1 = Ga
+        for jp in range(pieces):
+            need = o + SAMPLE_GROWTH * n + 2
+            if need > cap:
+                cap = 2 * need
+                new_out = np.zeros((cap, SAMPLE_COLUMNS))
+                new_out[:o] = out[:o]
+                out = new_out
+                new_index = np.zeros(cap, dtype=np.int64)
+                new_index[:o] = index[:o]
+                index = new_index
+            last = jp + 1 == pieces
+            q1 = qa + (qb - qa) * jp / pieces
+            q2 = qb if last else qa + (qb - qa) * (jp + 1) / pieces
+            G2 = Gb if last else max(C - 2.0 * g * Fs(s, q2, S.mu, K, cp), 0.0)
+            if jp == 0 and new:
+                w1, N1 = _state_at(q1, G1, s, S, K, cp)
+                out[o, 0], out[o, 1], out[o, 2], out[o, 3] = tp, q1, w1, N1
+                out[o, 4], out[o, 5], out[o, 6], out[o, 7] = coord, path, Wf, Wimp
+                out[o, 8], out[o, 9] = s, sigma
+                index[o] = motion
+                o += 1
+            start = o
+            Tq, Wq, o = quad(q1, q2, G1, G2, s, sigma, S, K, cp, R, work, True, out, o)
+            for j in range(start, o):
+                dp, dw = out[j, 4], out[j, 5]
+                out[j, 0] += tp
+                out[j, 4] = coord + sigma * dp
+                out[j, 5] = path + dp
+                out[j, 6] = Wf + dw
+                out[j, 7] = Wimp
+                out[j, 8], out[j, 9] = s, sigma
+                index[j] = motion
+            L = arc_length(q1, q2, S, K, cp, R)
+            if last:  # the interval's end: its logged time and friction work
+                tp, Wf = t0 + T, Wp0 + Wi
+            else:
+                tp, Wf = tp + Tq, Wf + Wq
+            path += L
+            coord += sigma * L
+            w2, N2 = _state_at(q2, G2, s, S, K, cp)
+            out[o, 0], out[o, 1], out[o, 2], out[o, 3] = tp, q2, w2, N2
+            out[o, 4], out[o, 5], out[o, 6], out[o, 7] = coord, path, Wf, Wimp
+            out[o, 8], out[o, 9] = s, sigma
+            index[o] = motion
+            o += 1
+            G1 = G2
+            w_prev = w2
+        s_prev, sigma_prev = s, sigma
     return out[:o], index[:o]
