@@ -9,7 +9,7 @@ equation with ``+-``/``-+`` for the two branches (upper sign for ``v > 0``, ``N 
     phiddot +- phidot^2 tg alpha0 + g/(R cos alpha0) sin(phi +- alpha0) = 0    (circle, eq. 7)
 
 How a branch becomes the double form: every derived quantity depends on the branch
-``s`` through ``s mu`` only (physics.md, "Equation of motion"), so with
+``s`` through ``s mu`` only (physics.md, "Equation of motion (paper eq. 1)"), so with
 ``mu = tg alpha0`` the branch ``s`` is the ``s = +1`` expression at the angle
 ``s alpha0``.  :func:`paper_expr` rewrites the ``s = +1`` expression (``a cos u +
 b sin u`` with ``mu`` in ``a``, ``b`` becomes a multiple of ``cos(u + alpha0)`` and
