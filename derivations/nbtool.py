@@ -11,11 +11,18 @@ Commands (paths default to every ``*.ipynb`` next to this file)::
     python derivations/nbtool.py clean [NOTEBOOK ...]   # strip outputs, normalize (in place)
     python derivations/nbtool.py check [NOTEBOOK ...]   # exit 1 if one is not stored clean
     python derivations/nbtool.py run [NOTEBOOK ...] [--output DIR] [--timeout SECONDS]
+    python derivations/nbtool.py render [NOTEBOOK ...] [--out DIR]   # executed copies for docs/notebooks/
 
 ``run`` executes each notebook top to bottom on a fresh Jupyter kernel
 (nbclient + ipykernel, Matplotlib on ``Agg``) in this folder, and exits 1 on
 the first error of any notebook; ``--output DIR`` writes the executed copies
 (with their outputs and figures) there, never over the stored ones.
+
+``render`` runs them the same way with the plain-Python engine (``SYMVIB_BACKEND=python``:
+nothing waits for a compiler) and writes each executed notebook, outputs and figures
+included, to ``docs/notebooks/NAME.ipynb`` (GitHub renders it), plus a Markdown export
+``NAME.md`` with its figures in ``NAME_files/``.  :func:`rendered_problems` says why a
+rendered copy is not current (``tests/test_notebooks_rendered.py``).
 
 ``clean`` and ``check`` need only the standard library (``check`` also
 validates against the nbformat schema when :mod:`nbformat` is installed);
@@ -57,6 +64,10 @@ KERNEL_NAME = "python3"
 CELL_METADATA = ("tags",)
 #: Environment of the kernel: figures render off-screen.
 KERNEL_ENV = {"MPLBACKEND": "Agg"}
+#: Where ``render`` writes the executed copies.
+RENDERED = HERE.parent / "docs" / "notebooks"
+#: The engine a rendering runs on: plain Python, so no notebook waits for a numba compile.
+RENDER_ENV = {"SYMVIB_BACKEND": "python"}
 
 
 def notebooks(paths=None) -> list:
@@ -191,16 +202,135 @@ def run(paths=None, *, output=None, timeout: float = CELL_TIMEOUT) -> int:
     return failed
 
 
+def _volatile_free(nb: dict) -> dict:
+    """An executed notebook without what changes on every run but says nothing (timings, kernel versions)."""
+    for cell in nb.get("cells", []):
+        cell["metadata"] = {k: v for k, v in cell.get("metadata", {}).items() if k in CELL_METADATA}
+    meta = nb.get("metadata", {})
+    nb["metadata"] = {k: meta[k] for k in ("kernelspec",) if k in meta}
+    nb["metadata"]["language_info"] = {"name": meta.get("language_info", {}).get("name", "python")}
+    return nb
+
+
+def _text(value) -> str:
+    return "".join(value) if isinstance(value, list) else str(value)
+
+
+def markdown_export(nb: dict, name: str, files: Path) -> str:
+    """A Markdown page of an executed notebook: its markdown cells, code in fences, text outputs,
+    LaTeX and Markdown outputs as they are, and figures written as PNG into ``files``."""
+    import base64
+
+    lines = []
+    figure = 0
+    for cell in nb["cells"]:
+        source = _text(cell.get("source", ""))
+        if cell["cell_type"] == "markdown":
+            lines += [source, ""]
+            continue
+        if cell["cell_type"] != "code":
+            continue
+        lines += ["```python", source, "```", ""]
+        for out in cell.get("outputs", []):
+            kind = out.get("output_type")
+            if kind == "stream":
+                lines += ["```text", _text(out.get("text", "")).rstrip("\n"), "```", ""]
+            elif kind == "error":
+                lines += ["```text", f"{out.get('ename')}: {out.get('evalue')}", "```", ""]
+            else:
+                data = out.get("data", {})
+                if "image/png" in data:
+                    figure += 1
+                    files.mkdir(parents=True, exist_ok=True)
+                    png = files / f"figure-{figure:02d}.png"
+                    png.write_bytes(base64.b64decode(_text(data["image/png"])))
+                    lines += [f"![figure {figure}]({files.name}/{png.name})", ""]
+                elif "text/markdown" in data:
+                    lines += [_text(data["text/markdown"]), ""]
+                elif "text/latex" in data:
+                    lines += [_text(data["text/latex"]).strip(), ""]
+                elif "text/plain" in data:
+                    lines += ["```text", _text(data["text/plain"]), "```", ""]
+    head = (f"<!-- Rendered from derivations/{name}.ipynb by `python derivations/nbtool.py render`; "
+            "do not edit. -->\n\n")
+    return head + "\n".join(lines).rstrip() + "\n"
+
+
+def render(paths=None, *, out=RENDERED, timeout: float = CELL_TIMEOUT) -> int:
+    """Execute notebooks (plain-Python engine) and write their rendered copies; returns the failures."""
+    import shutil
+
+    import nbformat
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    failed = 0
+    for path in notebooks(paths):
+        start = time.perf_counter()
+        try:
+            nb = execute(path, timeout=timeout, env={**os.environ, **RENDER_ENV})
+        except Exception as exc:  # noqa: BLE001 - report every notebook, then fail
+            failed += 1
+            text = re.sub(r"\x1b\[[0-9;]*m", "", str(exc)).strip()
+            print(f"FAIL {path.name} ({time.perf_counter() - start:.1f} s): {type(exc).__name__}\n{text}")
+            continue
+        data = _volatile_free(json.loads(nbformat.writes(nb)))
+        (out / path.name).write_text(json.dumps(data, sort_keys=True, indent=1, ensure_ascii=False) + "\n",
+                                     encoding="utf-8")
+        files = out / f"{path.stem}_files"
+        if files.exists():
+            shutil.rmtree(files)
+        (out / f"{path.stem}.md").write_text(markdown_export(data, path.stem, files), encoding="utf-8")
+        print(f"ok   {path.name} ({time.perf_counter() - start:.1f} s) -> {out / path.name}")
+    return failed
+
+
+def rendered_problems(path, rendered_dir=RENDERED) -> list:
+    """Why the rendered copy of notebook ``path`` is not current (empty when it is).
+
+    Current means: it exists, its cells are the stored notebook's (same types and
+    sources, in order), every code cell was executed, at least one has an output, no
+    output is an error, and its Markdown export exists.
+    """
+    path = Path(path)
+    copy = Path(rendered_dir) / path.name
+    if not copy.is_file():
+        return [f"no rendered copy {copy.name}"]
+    stored = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    try:
+        shown = json.loads(copy.read_text(encoding="utf-8"))["cells"]
+    except (json.JSONDecodeError, KeyError) as exc:
+        return [f"rendered copy unreadable: {exc}"]
+    found = []
+    if [(c["cell_type"], _text(c["source"])) for c in stored] != [(c["cell_type"], _text(c["source"]))
+                                                                   for c in shown]:
+        found.append("cells differ from the stored notebook (run: python derivations/nbtool.py render)")
+    code = [c for c in shown if c["cell_type"] == "code"]
+    if any(c.get("execution_count") is None for c in code):
+        found.append("a code cell was not executed")
+    if not any(c.get("outputs") for c in code):
+        found.append("no outputs")
+    if any(o.get("output_type") == "error" for c in code for o in c.get("outputs", [])):
+        found.append("an output is an error")
+    if not copy.with_suffix(".md").is_file():
+        found.append(f"no Markdown export {copy.with_suffix('.md').name}")
+    return found
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="nbtool.py", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
     for name, text in (("clean", "strip outputs and normalize, in place"),
                        ("check", "exit 1 if a notebook carries outputs or is not normalized"),
-                       ("run", "execute every notebook on a fresh kernel; exit 1 on any error")):
+                       ("run", "execute every notebook on a fresh kernel; exit 1 on any error"),
+                       ("render", "execute every notebook and write rendered copies (docs/notebooks/)")):
         p = sub.add_parser(name, help=text)
         p.add_argument("paths", nargs="*", help="notebooks (default: every *.ipynb in derivations/)")
         if name == "run":
             p.add_argument("--output", help="folder for the executed copies (with outputs)")
+        if name == "render":
+            p.add_argument("--out", default=str(RENDERED), help="folder of the copies (default: docs/notebooks)")
+        if name in ("run", "render"):
             p.add_argument("--timeout", type=float, default=CELL_TIMEOUT, help="seconds per cell")
     args = parser.parse_args(argv)
     missing = [p for p in args.paths if not Path(p).is_file()]
@@ -218,6 +348,8 @@ def main(argv=None) -> int:
         if found:
             print("run: python derivations/nbtool.py clean", file=sys.stderr)
         return 1 if found else 0
+    if args.command == "render":
+        return 1 if render(args.paths, out=args.out, timeout=args.timeout) else 0
     return 1 if run(args.paths, output=args.output, timeout=args.timeout) else 0
 
 

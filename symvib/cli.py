@@ -2,7 +2,7 @@
 
 ``symvib paper``          reproduce the paper: report, figures, errata (the main job)
 ``symvib derive SHAPE``   print the derivation of a catalogue shape (or of ``--z``/``--x``)
-``symvib run SCENE.toml`` simulate a scene: event table, ``--json PATH``, ``--plot DIR``
+``symvib run SCENE.toml`` simulate a scene: event table, ``--json PATH``, ``--plot DIR``, ``--animate FILE``
 ``symvib generate``       write the kernel modules of the catalogue into generated/ (``--check``)
 ``symvib audit``          the paper's printed equations against the derivation (errata)
 ``symvib bench ...``      work-precision and stability (options: ``symvib bench --help``)
@@ -166,6 +166,12 @@ def _cmd_run(args) -> int:
             raise UserPathError(args.json, "--json would overwrite the scene file")
     if args.plot:
         check_output_dir(args.plot, "--plot folder")
+    if args.animate:
+        from symvib.numeric.animation import check_animation_path
+
+        check_animation_path(args.animate, "--animate file")
+        if Path(args.animate).resolve() == Path(args.scene).resolve():
+            raise UserPathError(args.animate, "--animate would overwrite the scene file")
     changes = {}
     if args.restitution is not None:
         changes["k"] = args.restitution
@@ -188,6 +194,10 @@ def _cmd_run(args) -> int:
 
         for path in save_run_figures(result, args.plot):
             print(f"wrote {path}")
+    if args.animate and result.samples is not None:
+        from symvib.numeric.animation import animate
+
+        print(f"wrote {animate(result, args.animate)}")
     if not result.success:
         detail = f" ({result.stats['error']})" if result.stats.get("error") else ""
         print(f"symvib run: error: run failed with status {result.status.value}: {result.message}{detail}",
@@ -296,6 +306,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="PATH", help="write the result as JSON")
     p.add_argument("--samples", action="store_true", help="include the samples in the JSON")
     p.add_argument("--plot", metavar="DIR", help="write the phase portrait and energy figures (PNG)")
+    p.add_argument("--animate", metavar="FILE", help="write an animation of the run: the particle on the curve "
+                   "beside its phase portrait (.gif; .mp4 with ffmpeg)")
     p.add_argument("--restitution", type=float, help="override physics.restitution")
     p.add_argument("--t-max", type=float, help="override run.t_max")
     p.add_argument("--max-events", type=int, help="override run.max_events")
