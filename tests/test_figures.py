@@ -119,6 +119,28 @@ def test_density_is_set_by_samples_per_interval():
     assert np.bincount(default.interval).min() >= driver.SAMPLES_PER_INTERVAL
 
 
+def test_a_long_run_keeps_one_piece_per_interval_by_default(monkeypatch):
+    """Samples grow linearly with the events, at fewer per interval past SAMPLE_BUDGET (issue 15:
+    100,000 events with samples in seconds); an explicit density is kept."""
+    full = _run("paper-circle-7", HIGH_K).samples
+    monkeypatch.setattr(driver, "SAMPLE_BUDGET", 10)
+    thin = _run("paper-circle-7", HIGH_K).samples
+    asked = _run("paper-circle-7", HIGH_K, samples_per_interval=driver.SAMPLES_PER_INTERVAL).samples
+    per_piece = 2 * driver.plain_nodes(driver.NODES) + 1
+    assert np.bincount(thin.interval).max() < driver.SAMPLES_PER_INTERVAL <= np.bincount(full.interval).min()
+    assert np.bincount(thin.interval).min() >= per_piece // 2
+    assert len(asked.t) == len(full.t)
+    assert np.array_equal(np.unique(thin.interval), np.unique(full.interval))
+
+
+def test_too_many_samples_are_refused_with_the_field_named(monkeypatch):
+    monkeypatch.setattr(driver, "MAX_SAMPLES", 100)
+    result = _run("paper-circle-7", HIGH_K)
+    assert result.samples is None
+    assert "samples_per_interval" in result.error and "max_events" in result.error
+    assert result.success  # the run itself is whole
+
+
 @pytest.mark.parametrize("bad", [0, -3, 2.5, "many", True, 10**9])
 def test_a_bad_samples_per_interval_is_a_clear_error(bad):
     with pytest.raises(ValueError, match="samples_per_interval"):

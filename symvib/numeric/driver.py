@@ -52,7 +52,7 @@ from symvib.numeric.kernels import load
 from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, SceneRow, StatusCode, Summary
 from symvib.numeric.quadrature import rule
 
-__all__ = ["simulate", "NODES", "SAMPLES_PER_INTERVAL", "sample_pieces",
+__all__ = ["simulate", "NODES", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET", "sample_pieces",
            "backend_available", "resolve_backend", "run_backend", "checked_status",
            "guarded_sweep",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
@@ -63,6 +63,11 @@ NODES = 16
 SAMPLES_PER_INTERVAL = 96
 #: Most samples per motion interval a run may ask for (memory: 80 bytes per sample).
 MAX_SAMPLES_PER_INTERVAL = 100_000
+#: Samples a run keeps by default at most at :data:`SAMPLES_PER_INTERVAL` (above, one piece per
+#: interval): 1e6 samples are about 150 MB and a second to compute.
+SAMPLE_BUDGET = 1_000_000
+#: Most samples a run computes (about 1.5 GB); a run that would pass it gets no samples and says why.
+MAX_SAMPLES = 10_000_000
 #: Environment variable that forces a backend ("numba" or "python").
 BACKEND_ENV = "SYMVIB_BACKEND"
 #: Largest relative residual of the energy budget (physics.md, "Energies") a trusted run may
@@ -131,7 +136,7 @@ def run_backend(shape, backend: str = "auto") -> str:
 
 
 def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto",
-             samples_per_interval: int = SAMPLES_PER_INTERVAL) -> Result:
+             samples_per_interval: int | None = None) -> Result:
     """Simulate ``scene`` event by event until arrest, rest, ``t_max`` or ``max_events``.
 
     Parameters
@@ -145,18 +150,21 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     backend : {"auto", "numba", "python"}
         ``"auto"``: the compiled engine where it is on disk already, else the plain one
         (:func:`run_backend`); ``"numba"`` compiles it on first use (about 20 s, once).
-    samples_per_interval : int
+    samples_per_interval : int, optional
         Samples per motion interval, at least (each logged interval is cut into
         :func:`sample_pieces` equal pieces in ``q``, each with its Gauss nodes,
         which cluster in ``sqrt(distance)`` towards a turning point).  Costs
-        nothing until :attr:`Result.samples` is read.
+        nothing until :attr:`Result.samples` is read.  Default:
+        :data:`SAMPLES_PER_INTERVAL`, or one piece per interval (about 25 samples)
+        for a run whose samples would pass :data:`SAMPLE_BUDGET` that way (a run of
+        100,000 events keeps 2.5 million samples, not 10 million).
 
     Returns
     -------
     Result
         Status, events, samples and energy budget.
     """
-    spi = samples_per_interval
+    spi = SAMPLES_PER_INTERVAL if samples_per_interval is None else samples_per_interval
     if isinstance(spi, bool) or not isinstance(spi, (int, np.integer)) or not 1 <= spi <= MAX_SAMPLES_PER_INTERVAL:
         raise ValueError(f"samples_per_interval must be an integer from 1 to {MAX_SAMPLES_PER_INTERVAL}, "
                          f"not {spi!r}")
@@ -188,8 +196,16 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     budget = EnergyBudget(float(out.E0), float(out.E_final), float(out.W_friction), float(out.W_impacts))
     sampler = interpolant = None
     if samples and status != StatusCode.NON_FINITE:
-        sampler = partial(_lazy_samples, eng, cp, row, out.intervals, out.n_intervals, R, scene, mod,
-                          sample_pieces(spi, nodes))
+        pieces = sample_pieces(spi, nodes)
+        if samples_per_interval is None and int(out.n_intervals) * spi > SAMPLE_BUDGET:
+            pieces = 1
+        wanted = int(out.n_intervals) * pieces * (2 * plain_nodes(nodes) + 1)
+        if wanted > MAX_SAMPLES:
+            sampler = partial(_no_samples, f"samples: {int(out.n_intervals):,} intervals at samples_per_interval "
+                                           f"{spi} would give about {wanted:,} samples, more than {MAX_SAMPLES:,}; "
+                                           "ask for fewer (samples_per_interval) or a shorter run (run.max_events)")
+        else:
+            sampler = partial(_lazy_samples, eng, cp, row, out.intervals, out.n_intervals, R, scene, mod, pieces)
         interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], nodes)
     return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=sampler,
                   interpolant=interpolant,
@@ -202,6 +218,11 @@ def _dense(mod, cp, ivs, nodes, result):
     from symvib.numeric.dense import DenseOutput
 
     return DenseOutput(result, mod, cp, ivs, (nodes, plain_nodes(nodes)))
+
+
+def _no_samples(message):
+    """``(None, message)``: a run whose samples would be too many (:data:`MAX_SAMPLES`)."""
+    return None, message
 
 
 def _lazy_samples(eng, cp, row, ivs, ni, R, scene, mod, pieces):
