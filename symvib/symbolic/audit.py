@@ -587,8 +587,9 @@ def _general_entries():
     eq2 = _printed("eq2")
 
     def solves(W, s):
+        # Expanded, exponentials combined and cancelled: zero exactly when it solves it (no simplify needed).
         res = sp.diff(W, x) / 2 + A.subs(sigma, s) * W + B.subs(sigma, s)
-        return sp.simplify(res) == 0
+        return sp.cancel(sp.powsimp(sp.expand(res), combine="exp")) == 0
 
     ok2 = all(solves(eq2.build(G).subs(pm, s), s) for s in (1, -1))
     if ok2:
