@@ -37,7 +37,7 @@ Examples
 >>> import sympy as sp
 >>> phi, mu, pm = sp.symbols("phi mu pm")
 >>> read(r"\\dot{\\phi}^2 = \\cos^2 \\phi \\pm \\mu t g \\phi", (), {"phi": phi, "mu": mu, "pm": pm})
-(pm*mu*tan(phi) + cos(phi)**2,)
+(mu*pm*tan(phi) + cos(phi)**2,)
 """
 from __future__ import annotations
 
