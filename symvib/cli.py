@@ -85,17 +85,18 @@ def _cmd_derive(args) -> int:
 
 def _cmd_audit(args) -> int:
     from symvib.paths import check_output_file
-    from symvib.symbolic.audit import audit, errata_markdown
+    from symvib.symbolic.audit import audit
 
     if args.write:
         check_output_file(args.write, "--write file")
     verdicts = audit()
     if args.write:
-        with open(args.write, "w", encoding="utf-8") as fh:
-            fh.write(errata_markdown(verdicts) + "\n")
-        print(f"wrote {args.write}")
+        from symvib.errata import write_errata
+
+        print(f"wrote {write_errata(args.write, verdicts=verdicts)}")
     for v in verdicts:
-        print(f"{v.shape:9s} {v.label:6s} {'matches' if v.matches else 'DIFFERS'}  {v.how}")
+        print(f"{v.shape:9s} {v.label:6s} {'matches' if v.matches else 'DIFFERS'}  {v.how}"
+              + (f" ({v.origin})" if v.origin else ""))
     return 0
 
 
@@ -336,7 +337,7 @@ def build_parser() -> argparse.ArgumentParser:
         sub.add_parser(name, help=text, add_help=False)
 
     p = sub.add_parser("audit", help="compare the paper's printed equations with the derivation")
-    p.add_argument("--write", metavar="PATH", help="write the errata table (Markdown) to PATH")
+    p.add_argument("--write", metavar="PATH", help="write the errata document (docs/errata.md) to PATH")
     p.set_defaults(func=_cmd_audit)
     return parser
 

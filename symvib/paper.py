@@ -31,12 +31,14 @@ from __future__ import annotations
 
 import html
 import json
-import math
 import re
 import time
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+
+# The readings of the first circle scene's "alpha0 = 3" and the remark they are judged by (re-exported).
+from symvib.errata import ALPHA0_READINGS, REMARK
 
 __all__ = ["SCENES", "LOW_K", "HIGH_K", "run_paper", "ALPHA0_READINGS", "main"]
 
@@ -66,14 +68,6 @@ PDF_PAGE = (8.27, 11.69)
 PDF_LINES, PDF_COLUMNS, PDF_FIGURES_PER_PAGE = 78, 118, 2
 #: Restitution of the paper's conclusions, and the k < 1 run added.
 HIGH_K, LOW_K = 1.0, 0.8
-#: Readings of the first circle scene's "alpha0 = 3": label, physics section.
-ALPHA0_READINGS = [
-    ("mu = 3 (the text's \"friction coefficient 3\")", {"mu": 3.0}),
-    ("alpha0 = 3 degrees (mu = tan 3 deg = 0.0524)", {"alpha0": "3*pi/180"}),
-    ("alpha0 = pi - 3 rad = 8.1 deg (mu = |tan 3| = 0.1425)", {"alpha0": "pi - 3"}),
-]
-#: The paper's remark the readings are judged by.
-REMARK = "one impact and one oscillation until arrestment"
 #: Backend of the simulations (no compile time; the runs are short).
 BACKEND = "python"
 #: Significant digits of the numbers in the report's event tables.
@@ -160,7 +154,7 @@ def _scene_table(scene) -> list:
 
 
 def _equations(shape_name, verdicts) -> list:
-    from symvib.symbolic.audit import derivation
+    from symvib.symbolic.audit import PRINTED, derivation, ocr_cell, seed_cell
 
     d = derivation(shape_name)
     tex = d.latex()
@@ -184,14 +178,21 @@ def _equations(shape_name, verdicts) -> list:
         "",
         "The paper's printed forms beside the derivation ([errata](#errata-of-the-papers-printed-equations)):",
         "",
-        "| eq. | printed | derived (energies in terms of the velocity) | verdict |",
-        "| --- | --- | --- | --- |",
+        "The seed's text is the paper's OCR text of the equation, verbatim (`↵`: its line breaks); the",
+        "transcription is compared with it in `tests/test_audit.py`, the OCR differences it declares listed.",
+        "",
+        "| eq. | printed (transcription) | seed text | declared OCR differences | derived (energies in terms of "
+        "the velocity) | verdict |",
+        "| --- | --- | --- | --- | --- | --- |",
     ]
+    printed = {e.key: e for e in PRINTED}
     for v in verdicts:
         if v.shape != shape_name:
             continue
-        verdict = "matches" if v.matches else "**differs**"
-        lines.append(f"| {v.label} | ${_flat(v.printed_tex)}$ | ${_flat(v.corrected_tex)}$ | {verdict} ({v.how}) |")
+        verdict = f"matches ({v.how})" if v.matches else f"**differs** ({v.origin})"
+        e = printed[v.key]
+        lines.append(f"| {v.label} | ${_flat(v.printed_tex)}$ | {seed_cell(e)} | {ocr_cell(e)} | "
+                     f"${_flat(v.corrected_tex)}$ | {verdict} |")
     return lines
 
 
@@ -212,11 +213,11 @@ def _figures(result, out: Path, key: str, every: bool, scene_name: str) -> tuple
                                                                             paths))
 
 
-def _alpha0_section(out_lines):
-    from symvib.numeric.driver import simulate
-    from symvib.numeric.scene import SceneError
+def _alpha0_section(out_lines) -> tuple:
+    """The report's section on "alpha0 = 3"; returns the readings (for the errata row)."""
+    from symvib.errata import alpha0_readings
 
-    base = _scene("paper-circle-3.8")
+    readings, rejected = alpha0_readings()
     out_lines += [
         "### The reading of \"alpha0 = 3\"",
         "",
@@ -227,24 +228,9 @@ def _alpha0_section(out_lines):
         "| reading | $\\mu$ | events | impacts | reversals |",
         "| --- | ---: | --- | ---: | ---: |",
     ]
-    from symvib.numeric.scene import scene_from_dict
-
-    data = base.to_dict()
-    for label, phys in ALPHA0_READINGS:
-        d = json.loads(json.dumps(data))
-        d["physics"] = {k: v for k, v in d["physics"].items() if k not in ("mu", "alpha0")} | phys
-        s = scene_from_dict(d)
-        r = simulate(s, backend=BACKEND, samples=False)
-        kinds = ", ".join(e.kind.value for e in r.events)
-        out_lines.append(f"| {label} | {s.mu:.4g} | {kinds} | {sum(e.kind.value == 'impact' for e in r.events)} | "
-                         f"{sum(e.kind.value == 'reversal' for e in r.events)} |")
-    try:
-        d = json.loads(json.dumps(data))
-        d["physics"] = {k: v for k, v in d["physics"].items() if k not in ("mu", "alpha0")} | {"mu": math.tan(3.0)}
-        scene_from_dict(d)
-        rejected = "accepted"
-    except SceneError as exc:
-        rejected = str(exc)
+    for r in readings:
+        out_lines.append(f"| {r.label.replace('|', chr(92) + '|')} | {r.mu:.4g} | {', '.join(r.kinds)} | "
+                         f"{r.impacts} | {r.reversals} |")
     out_lines += [
         "",
         f"($\\mu = \\tan 3$ as given: `{rejected}`.) Only the friction angle $\\pi - 3$ (the same line as 3 rad, "
@@ -253,6 +239,7 @@ def _alpha0_section(out_lines):
         "gives three oscillations. This report uses $\\alpha_0 = \\pi - 3$.",
         "",
     ]
+    return readings
 
 
 #: The report's symbolic part, one job each: eqs. (1)-(2) for a general curve
@@ -284,6 +271,8 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
               progress=None) -> dict:
     """Write the report, figures and results into ``out_dir`` (and ``report.pdf`` with ``pdf``);
     returns what was written."""
+    from symvib.conclusions import conclusions, conclusions_markdown
+    from symvib.errata import alpha0_row
     from symvib.numeric.driver import simulate
     from symvib.symbolic.audit import errata_markdown
 
@@ -322,6 +311,7 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
         "- [Parabola](#parabola)",
         "- [Cycloid](#cycloid)",
         "- [Circle](#circle)",
+        "- [Conclusions](#conclusions)",
         "- [Errata](#errata-of-the-papers-printed-equations)",
         "",
     ]
@@ -329,7 +319,7 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
         lines += [f"## {title}", ""]
         lines += parts[shape_name][1] + [""]
         if shape_name == "circle":
-            _alpha0_section(lines)
+            readings = _alpha0_section(lines)
         for name, figs in SCENES:
             base = _scene(name)
             if base.shape.name != shape_name:
@@ -343,7 +333,14 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
                 lines += event_table(run.result, coord) + [""] + _budget_lines(run.result) + [""]
                 for fig, text in run.figures:
                     lines += [f"![{fig}](figures/{fig})", "", f"*{text}*", ""]
-    lines += [""] + errata_markdown(verdicts).replace("# Errata", "## Errata", 1).splitlines()
+    say("checking the paper's conclusions")
+    elastic = {r.key.removesuffix(f"-k{HIGH_K:g}"): r.result for r in runs if r.scene.k == HIGH_K}
+    lines += ["## Conclusions", "",
+              "The paper's concluding claims about the motion, in its own words, against the runs above with "
+              f"$k = {HIGH_K:g}$ (the quantities per motion interval between two events; `symvib/conclusions.py`).",
+              "", conclusions_markdown(conclusions(elastic)), ""]
+    lines += [""] + errata_markdown(verdicts, extra_rows=[alpha0_row(readings)],
+                                    title="## Errata of the paper's printed equations").splitlines()
     lines += ["", f"Generated in {time.perf_counter() - start:.1f} s."]
     text = "\n".join(lines) + "\n"
     (out / "report.md").write_text(text, encoding="utf-8")

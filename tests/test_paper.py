@@ -66,8 +66,16 @@ def test_report_states_the_readings_and_the_errata(written):
     text = written["report"].read_text()
     assert "pi - 3" in text and "one impact and one oscillation until arrestment" in text
     assert "## Errata of the paper's printed equations" in text
-    assert "**differs**" in text and r"\frac{\mu}{2}" in text
+    assert "**differs**" in text and r"\frac{\mu}{2}" in text and "(differs)" not in text
     assert "k = 0.8" in text
+    # The conclusions, and the seed's text beside each transcription.
+    from symvib.conclusions import CLAIM_KEYS
+    from symvib.symbolic.audit import PRINTED, seed_cell
+
+    conclusions = text.split("## Conclusions")[1].split("## Errata")[0]
+    assert all(c.quote in conclusions for c in CLAIM_KEYS)
+    assert all(seed_cell(e) in text for e in PRINTED if e.shape != "general")
+    assert '| "alpha0 = 3" | circle (fig. 20) | **differs** | root |' in text
     # The reading chosen reproduces the remark: one impact, then oscillation, then arrest.
     run = next(r for r in written["runs"] if r.key == "paper-circle-3.8-k1")
     kinds = [e.kind for e in run.result.events]
