@@ -367,6 +367,13 @@ HTML_STYLE = ("body{font-family:sans-serif;max-width:70em;margin:auto;padding:0 
               " code.tex{color:#555}")
 #: Math in a Markdown line: display ``$$...$$`` or inline ``$...$``.
 MATH = re.compile(r"\$\$(.+?)\$\$|(?<![\\$])\$([^$\n]+?)\$")
+#: A code span (kept as it is: the seed's texts hold ``$``) or math, whichever comes first.
+_CODE_OR_MATH = re.compile(r"`([^`\n]+)`|" + MATH.pattern)
+
+
+def formulas(text: str) -> list:
+    """The TeX of every formula of Markdown ``text`` (not those inside code spans)."""
+    return [m.group(2) or m.group(3) for m in _CODE_OR_MATH.finditer(text) if m.group(1) is None]
 
 
 def _math_html(tex: str, display: bool) -> str:
@@ -381,10 +388,13 @@ def _inline(s: str) -> str:
     """Markdown inline constructs of the report (images, links, bold, italics, code) and math as MathML."""
     parts = []
     last = 0
-    for m in MATH.finditer(s):
+    for m in _CODE_OR_MATH.finditer(s):
         parts.append(_inline_text(s[last:m.start()]))
-        display = m.group(1) is not None
-        parts.append(_math_html(m.group(1) if display else m.group(2), display))
+        if m.group(1) is not None:
+            parts.append(f"<code>{html.escape(m.group(1), quote=False)}</code>")
+        else:
+            display = m.group(2) is not None
+            parts.append(_math_html(m.group(2) if display else m.group(3), display))
         last = m.end()
     parts.append(_inline_text(s[last:]))
     return "".join(parts)

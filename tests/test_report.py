@@ -115,7 +115,7 @@ def test_a_formula_outside_the_subset_is_refused_not_garbled(tex):
 
 def test_every_formula_of_the_committed_report_renders_as_mathml():
     text = (ROOT / "docs" / "paper" / "report.md").read_text(encoding="utf-8")
-    formulas = [a or b for a, b in paper.MATH.findall(text)]
+    formulas = paper.formulas(text)
     assert len(formulas) > 100
     assert [f for f in formulas if to_mathml(f) is None] == []
     html_text = (ROOT / "docs" / "paper" / "report.html").read_text(encoding="utf-8")
