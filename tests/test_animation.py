@@ -6,7 +6,6 @@ anything is simulated; the README's example runs.
 """
 from __future__ import annotations
 
-import re
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
+from readme_blocks import run_section
 
 from symvib.numeric import animation, explorer
 from symvib.numeric.driver import simulate
@@ -126,19 +126,9 @@ def test_symvib_run_animate_refuses_bad_paths(tmp_path, target, message):
     assert out.stderr.count("\n") == 1 and "event" not in out.stdout   # refused before the run
 
 
-def _readme_block() -> str:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text.split("\n## Notebooks and animation", 1)
-    assert len(section) == 2, "README.md has no '## Notebooks and animation' section"
-    block = re.search(r"```python\n(.*?)```", section[1].split("\n## ", 1)[0], re.S)
-    assert block, "the section has no python code block"
-    return block.group(1)
-
-
 def test_readme_animation_example_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    namespace = {"__name__": "readme_animation"}
-    exec(compile(_readme_block(), "README.md#notebooks-and-animation", "exec"), namespace)  # noqa: S102
+    namespace = run_section("## Notebooks and animation", "readme_animation")
     with Image.open(tmp_path / "circle.gif") as gif:
         assert gif.n_frames == round(namespace["fps"] * namespace["duration"])
     assert namespace["result"].count(EventKind.IMPACT) >= 1

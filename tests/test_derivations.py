@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from readme_blocks import run_section
 
 ROOT = Path(__file__).resolve().parent.parent
 DERIVATIONS = ROOT / "derivations"
@@ -113,20 +114,9 @@ def test_notebook_runs(path, tmp_path, monkeypatch):
     assert figures >= 1, f"{path.name} drew no figure"
 
 
-def _readme_own_curve() -> str:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text.split("\n## Your own curve", 1)
-    assert len(section) == 2, "README.md has no '## Your own curve' section"
-    body = section[1].split("\n## ", 1)[0]
-    block = re.search(r"```python\n(.*?)```", body, re.S)
-    assert block, "the 'Your own curve' section has no python code block"
-    return block.group(1)
-
-
 def test_readme_own_curve_runs(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
-    namespace = {"__name__": "readme_own_curve"}
-    exec(compile(_readme_own_curve(), "README.md#your-own-curve", "exec"), namespace)  # noqa: S102
+    namespace = run_section("## Your own curve", "readme_own_curve")
     result = namespace["result"]
     assert result.status.value == "arrested"
     assert result.energy_budget.relative_residual < 1e-12

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from readme_blocks import run_section
 
 from symvib.cli import sweep_main as main
 from symvib.numeric.layout import EVENT_COLUMNS, STATUSES, SUMMARY_COLUMNS
@@ -301,19 +302,9 @@ def test_maps_label_axes_with_names_symbols_and_units(tmp_path, monkeypatch):
 
 # --------------------------------------------------------------------- README
 
-def _readme_block() -> str:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text.split("\n### Sweeps as labelled data", 1)
-    assert len(section) == 2, "README.md has no '### Sweeps as labelled data' section"
-    block = re.search(r"```python\n(.*?)```", section[1].split("\n## ", 1)[0], re.S)
-    assert block, "the section has no python code block"
-    return block.group(1)
-
-
 def test_readme_labelled_sweep_example_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    namespace = {"__name__": "readme_labelled_sweep"}
-    exec(compile(_readme_block(), "README.md#sweeps-as-labelled-data", "exec"), namespace)  # noqa: S102
+    namespace = run_section("### Sweeps as labelled data", "readme_labelled_sweep")
     ds, lazy, res = namespace["ds"], namespace["lazy"], namespace["res"]
     assert tuple(ds["impacts"].dims) == ("qdot0", "mu")
     xr.testing.assert_identical(lazy.compute(), ds)

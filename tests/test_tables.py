@@ -1,12 +1,12 @@
 """A Result as tables (symvib/numeric/tables.py), solve_ivp's names, and the examples of the
 README's "Results as tables" and of docs/results.md."""
 import dataclasses
-import re
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from readme_blocks import code_blocks, run_section
 
 import symvib
 from symvib.numeric.driver import simulate
@@ -93,21 +93,8 @@ def test_solve_ivp_names(result):
     assert result.success and isinstance(result.message, str)
 
 
-def _blocks(text: str) -> list:
-    return re.findall(r"```python\n(.*?)```", text, re.S)
-
-
-def _section(heading: str) -> str:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    parts = text.split(f"\n## {heading}\n", 1)
-    assert len(parts) == 2, f"README.md has no '## {heading}' section"
-    return parts[1].split("\n## ", 1)[0]
-
-
 def test_readme_results_as_tables_runs(capsys):
-    namespace = {"__name__": "readme_results"}
-    for block in _blocks(_section("Results as tables")):
-        exec(compile(block, "README.md#results-as-tables", "exec"), namespace)  # noqa: S102
+    namespace = run_section("## Results as tables", "readme_results")
     out = capsys.readouterr().out
     events, result = namespace["events"], namespace["result"]
     counts = events.groupby("kind", observed=True).size()
@@ -121,7 +108,7 @@ def test_readme_results_as_tables_runs(capsys):
 
 def test_docs_results_side_by_side_runs(capsys):
     pytest.importorskip("scipy")
-    blocks = _blocks((ROOT / "docs" / "results.md").read_text(encoding="utf-8"))
+    blocks = code_blocks((ROOT / "docs" / "results.md").read_text(encoding="utf-8"))
     assert blocks
     namespace = {"__name__": "docs_results"}
     for block in blocks:

@@ -1,0 +1,30 @@
+"""The README's Python examples, for the tests that run them (one reader for every section)."""
+import re
+from pathlib import Path
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def code_blocks(text: str) -> list:
+    """The ```python blocks of Markdown ``text``."""
+    return re.findall(r"```python\n(.*?)```", text, re.S)
+
+
+def python_blocks(heading: str) -> list:
+    """The ```python blocks of the README section whose heading line starts with ``heading``
+    (``"## ..."`` or ``"### ..."``), up to the next ``## `` heading; fails the test when there are none."""
+    text = README.read_text(encoding="utf-8")
+    parts = re.split(rf"\n{re.escape(heading)}[^\n]*\n", text, maxsplit=1)
+    assert len(parts) == 2, f"README.md has no '{heading}' section"
+    blocks = code_blocks(parts[1].split("\n## ", 1)[0])
+    assert blocks, f"the README's '{heading}' section has no python code block"
+    return blocks
+
+
+def run_section(heading: str, name: str) -> dict:
+    """Run the section's blocks in order in one namespace (``__name__`` = ``name``); return it."""
+    namespace = {"__name__": name}
+    anchor = "README.md#" + re.sub(r"[^a-z0-9 -]", "", heading.lstrip("# ").lower()).replace(" ", "-")
+    for block in python_blocks(heading):
+        exec(compile(block, anchor, "exec"), namespace)  # noqa: S102
+    return namespace
