@@ -1,8 +1,12 @@
-"""The README's Python examples, for the tests that run them (one reader for every section)."""
+"""What several test modules read: the README's Python examples (one reader for every section) and
+``derivations/nbtool.py`` (the notebooks' tool, imported from its file)."""
+import importlib.util
 import re
+import sys
 from pathlib import Path
 
 README = Path(__file__).resolve().parents[1] / "README.md"
+NBTOOL = README.parent / "derivations" / "nbtool.py"
 
 
 def code_blocks(text: str) -> list:
@@ -28,3 +32,14 @@ def run_section(heading: str, name: str) -> dict:
     for block in python_blocks(heading):
         exec(compile(block, anchor, "exec"), namespace)  # noqa: S102
     return namespace
+
+
+def load_nbtool():
+    """``derivations/nbtool.py`` as the module ``nbtool`` (one instance for every test module)."""
+    if "nbtool" in sys.modules:
+        return sys.modules["nbtool"]
+    spec = importlib.util.spec_from_file_location("nbtool", NBTOOL)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["nbtool"] = module
+    spec.loader.exec_module(module)
+    return module

@@ -7,13 +7,11 @@ README's "Your own curve" example is run here too.
 """
 from __future__ import annotations
 
-import importlib.util
 import re
-import sys
 from pathlib import Path
 
 import pytest
-from readme_blocks import run_section
+from readme_blocks import load_nbtool, run_section
 
 ROOT = Path(__file__).resolve().parent.parent
 DERIVATIONS = ROOT / "derivations"
@@ -36,15 +34,7 @@ NOTEBOOKS = sorted(DERIVATIONS.glob("*.ipynb"))
 NOT_CURVES = ("errata", "mechanics", "explorer")
 
 
-def _nbtool():
-    spec = importlib.util.spec_from_file_location("nbtool", DERIVATIONS / "nbtool.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("nbtool", module)
-    spec.loader.exec_module(module)
-    return module
-
-
-nbtool = _nbtool()
+nbtool = load_nbtool()
 
 
 def _source(path: Path) -> str:

@@ -6,12 +6,11 @@ folder) is slow.
 """
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import pytest
+from readme_blocks import load_nbtool
 
 ROOT = Path(__file__).resolve().parent.parent
 DERIVATIONS = ROOT / "derivations"
@@ -19,15 +18,7 @@ RENDERED = ROOT / "docs" / "notebooks"
 NOTEBOOKS = sorted(DERIVATIONS.glob("*.ipynb"))
 
 
-def _nbtool():
-    spec = importlib.util.spec_from_file_location("nbtool", DERIVATIONS / "nbtool.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("nbtool", module)
-    spec.loader.exec_module(module)
-    return module
-
-
-nbtool = _nbtool()
+nbtool = load_nbtool()
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
