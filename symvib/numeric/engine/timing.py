@@ -254,6 +254,15 @@ def arc_length(qa, qb, S, K, cp, R):
     return 0.5 * abs(step) * total
 
 
+def put_sample(out, index, o, t, q, w, N, coord, path, Wf, Wimp, s, sigma, motion):
+    """Write the sample at a piece's end into row ``o`` (columns :class:`SampleColumn`); returns ``o + 1``."""
+    out[o, 0], out[o, 1], out[o, 2], out[o, 3] = t, q, w, N
+    out[o, 4], out[o, 5], out[o, 6], out[o, 7] = coord, path, Wf, Wimp
+    out[o, 8], out[o, 9] = s, sigma
+    index[o] = motion
+    return o + 1
+
+
 def _state_at(q, G, s, S, K, cp):
     """``(w, N)`` at ``q`` from ``G = w exp(2 s mu alpha)`` (physics.md, eq. 2)."""
     _, _, ex, ka, co = node(s, q, S.mu, K, cp)
@@ -315,11 +324,7 @@ def samples(ivs, ni, S, K, cp, R, pieces):
             G2 = Gb if last else max(C - 2.0 * g * Fs(s, q2, S.mu, K, cp), 0.0)
             if jp == 0 and new:
                 w1, N1 = _state_at(q1, G1, s, S, K, cp)
-                out[o, 0], out[o, 1], out[o, 2], out[o, 3] = tp, q1, w1, N1
-                out[o, 4], out[o, 5], out[o, 6], out[o, 7] = coord, path, Wf, Wimp
-                out[o, 8], out[o, 9] = s, sigma
-                index[o] = motion
-                o += 1
+                o = put_sample(out, index, o, tp, q1, w1, N1, coord, path, Wf, Wimp, s, sigma, motion)
             start = o
             Tq, Wq, o = quad(q1, q2, G1, G2, s, sigma, S, K, cp, R, work, True, out, o)
             for j in range(start, o):
@@ -339,11 +344,7 @@ def samples(ivs, ni, S, K, cp, R, pieces):
             path += L
             coord += sigma * L
             w2, N2 = _state_at(q2, G2, s, S, K, cp)
-            out[o, 0], out[o, 1], out[o, 2], out[o, 3] = tp, q2, w2, N2
-            out[o, 4], out[o, 5], out[o, 6], out[o, 7] = coord, path, Wf, Wimp
-            out[o, 8], out[o, 9] = s, sigma
-            index[o] = motion
-            o += 1
+            o = put_sample(out, index, o, tp, q2, w2, N2, coord, path, Wf, Wimp, s, sigma, motion)
             G1 = G2
             w_prev = w2
         s_prev, sigma_prev = s, sigma
