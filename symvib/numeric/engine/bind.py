@@ -32,12 +32,9 @@ from __future__ import annotations
 
 import hashlib
 import types
-from concurrent.futures import ThreadPoolExecutor
 from functools import cache, partial
 from pathlib import Path
 from typing import NamedTuple
-
-import numpy as np
 
 from symvib.numeric.engine import laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
@@ -98,11 +95,8 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
 
 
 # --- numba ------------------------------------------------------------------------
-#: Fewest scenes a thread of a sweep takes at a time (numba backend).
+#: Scenes a thread of a parallel sweep takes at a time (numba backend).
 SWEEP_GRAIN = 16
-#: Blocks per thread a sweep is cut into: the scenes of a grid differ in cost (a row of fast
-#: scenes makes many events), so threads take small blocks in turn rather than one share each.
-BLOCKS_PER_THREAD = 32
 
 
 def _signatures(ncp: int) -> dict:
@@ -215,6 +209,7 @@ def _compiled_engine(ncp: int) -> dict:
     numba's cache checks the file of each entry point only, not the modules it
     calls; so the cache is flushed once whenever :func:`engine_digest` changes.
     """
+    import numba
     from numba import types as nt
 
     from symvib.numeric.engine.compiled import kernels_type
@@ -227,9 +222,9 @@ def _compiled_engine(ncp: int) -> dict:
     rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat], Rules)
 
     options = {name: {"cache": True} for name in ENTRY_POINTS}
-    options["sweep_scenes"] = {"cache": True, "nogil": True}
+    options["sweep_scenes"] = {"cache": True, "parallel": True}
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: not n.endswith("_bound") and n != "params_of",
-                                   names={"params_of": _params_of(ncp)}, options=options)
+                                   names={"prange": numba.prange, "params_of": _params_of(ncp)}, options=options)
     _flush_if_stale([compiled[name] for name in ENTRY_POINTS], cache_dir() / "engines" / f"engine-{engine_digest()}")
     signatures = {
         "simulate_scene": (k_type, cp_type, vec, rules_type, nt.boolean),
@@ -297,14 +292,19 @@ def _specialized_engine(module, ncp: int) -> dict:
     cached = getattr(module, "_symvib_specialized_engine", None)
     if cached is not None:
         return cached
+    import numba
+
     from symvib.numeric.engine.static import StaticKernels
     from symvib.numeric.kernels import cache_dir
 
     tag = _tag(module)
     options = {name: {"cache": True} for name in BOUND_ENTRIES}
-    options["sweep_scenes"] = {"nogil": True}
-    options["sweep_bound"] = {"cache": True, "nogil": True}
-    names = {"params_of": _params_of(ncp),
+    # A parallel loop (prange): numba compiles it in about 3 s more of CPU than a plain loop run on
+    # Python threads over blocks of scenes (17.5 s against 14.2 s for the parabola), and it sweeps
+    # 6 % faster on two threads (benchmarks/compare_revisions.py with bench_sweep.py, 2026-11-25).
+    options["sweep_scenes"] = {"parallel": True}
+    options["sweep_bound"] = {"cache": True, "parallel": True}
+    names = {"prange": numba.prange, "params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,
                                    qualnames={name: f"{name}__{tag}" for name in BOUND_ENTRIES})
@@ -315,25 +315,19 @@ def _specialized_engine(module, ncp: int) -> dict:
 
 
 def _balanced(sweep_fn):
-    """``sweep_fn`` (compiled, releasing the GIL) run on numba's number of threads.
+    """``sweep_fn`` with its threads taking :data:`SWEEP_GRAIN` scenes at a time.
 
-    The scenes are cut into about :data:`BLOCKS_PER_THREAD` blocks per thread (at least
-    :data:`SWEEP_GRAIN` scenes each) that the threads take in turn.  Plain threads, not a
-    ``prange`` loop: numba compiles a parallel loop in about 3 s more (measured: 17.5 s
-    against 14.2 s of CPU for the parabola's engine) and it ran no faster.
+    By default numba gives each thread one fixed share of a ``prange`` loop; the
+    scenes of a grid differ in cost (a row of fast scenes makes many events), so
+    one thread would finish early and wait.
     """
     import numba
 
-    def balanced(rows, cp_rows, R, max_log):
-        n = rows.shape[0]
-        threads = min(numba.get_num_threads(), max(1, n // SWEEP_GRAIN))
-        if threads <= 1:
-            return sweep_fn(rows, cp_rows, R, max_log)
-        size = max(SWEEP_GRAIN, -(-n // (threads * BLOCKS_PER_THREAD)))
-        blocks = [slice(i, min(i + size, n)) for i in range(0, n, size)]
-        with ThreadPoolExecutor(threads) as pool:
-            parts = list(pool.map(lambda b: sweep_fn(rows[b], cp_rows[b], R, max_log), blocks))
-        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+    def balanced(*args):
+        old = numba.set_parallel_chunksize(SWEEP_GRAIN)
+        try:
+            return sweep_fn(*args)
+        finally:
+            numba.set_parallel_chunksize(old)
 
-    balanced.__wrapped__ = sweep_fn
     return balanced

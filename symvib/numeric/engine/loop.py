@@ -70,6 +70,9 @@ EVENT_WIDTH, INTERVAL_WIDTH, SUMMARY_WIDTH = len(EVENT_COLUMNS), len(INTERVAL_CO
 #: Column indices as plain ints (numpy indexes faster with an int than with an IntEnum).
 E_KIND, E_T, E_Q, E_BEFORE, E_AFTER, E_ENERGY = (int(c) for c in EventColumn)
 I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W = (int(c) for c in IntervalColumn)
+#: ``prange`` on the plain-Python engine; :mod:`symvib.numeric.engine.bind` gives the
+#: compiled engine numba's parallel range.
+prange = range
 
 
 def put_event(events, ne, kind, t, q, before, after, e):
@@ -305,13 +308,12 @@ def sweep_scenes(K, rows, cp_rows, R, max_log):
 
     Returns the per-scene summary (columns :class:`~symvib.numeric.layout.Summary`) and,
     when ``max_log > 0``, the first ``max_log`` events of each scene.  Scenes run in
-    parallel threads on the numba backend (:func:`symvib.numeric.engine.bind._balanced` runs
-    blocks of rows on threads; the compiled function releases the GIL).
+    parallel threads on the numba backend (``prange``).
     """
     n = rows.shape[0]
     out = np.zeros((n, SUMMARY_WIDTH))
     logs = np.zeros((n, max(max_log, 1), EVENT_WIDTH))
-    for i in range(n):
+    for i in prange(n):
         cp = params_of(cp_rows[i], cp_rows.shape[1])
         S = setup_of(rows[i], K, cp)
         o = run(S, K, cp, R, rows[i, SceneRow.q0], rows[i, SceneRow.qdot0], rows[i, SceneRow.t_max],
