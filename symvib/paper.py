@@ -363,7 +363,8 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
 HTML_STYLE = ("body{font-family:sans-serif;max-width:70em;margin:auto;padding:0 1em} table{border-collapse:collapse}"
               " td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%} figure{display:inline-block;"
               "width:48%;margin:0.5em 0.5%;vertical-align:top} figure img{width:100%}"
-              " figcaption{font-size:85%;color:#333} math[display=block]{margin:0.6em 0;overflow-x:auto}"
+              " figcaption{font-size:85%;color:#333}"
+              " math[display=block]{margin:0.6em 0;padding:0.4em 0;overflow-x:auto;overflow-y:hidden}"
               " code.tex{color:#555}")
 #: Math in a Markdown line: display ``$$...$$`` or inline ``$...$``.
 MATH = re.compile(r"\$\$(.+?)\$\$|(?<![\\$])\$([^$\n]+?)\$")

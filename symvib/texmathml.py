@@ -35,6 +35,8 @@ GREEK = {
     "Gamma": "Γ", "Delta": "Δ", "Theta": "Θ", "Lambda": "Λ", "Xi": "Ξ", "Pi": "Π", "Sigma": "Σ", "Phi": "Φ",
     "Psi": "Ψ", "Omega": "Ω",
 }
+#: MathML's function application (invisible), after a function name and its scripts.
+_APPLY = "<mo>&#x2061;</mo>"
 FUNCTIONS = {"sin", "cos", "tan", "cot", "sec", "csc", "exp", "log", "ln", "sinh", "cosh", "tanh", "arcsin",
              "arccos", "arctan", "sign", "max", "min", "tg", "ctg", "operatorname", "det", "lim"}
 OPERATORS = {
@@ -151,14 +153,18 @@ class _Parser:
                 primes += "<mo>′</mo>"
             else:
                 break
-        if primes:
-            sup = primes + (sup or "")
+        if primes:  # z'' and z'^2: the primes (and the exponent) are one superscript
+            sup = f"<mrow>{primes}</mrow>" if sup is None else f"<mrow>{primes}{sup}</mrow>"
+        # A function name carries its scripts (cos^3): the application operator follows them.
+        apply = ""
+        if base.endswith(_APPLY) and (sub is not None or sup is not None):
+            base, apply = base[:-len(_APPLY)], _APPLY
         if sub is not None and sup is not None:
-            return f"<msubsup>{base}{sub}{_row([sup])}</msubsup>"
+            return f"<msubsup>{base}{sub}{_row([sup])}</msubsup>{apply}"
         if sup is not None:
-            return f"<msup>{base}{_row([sup])}</msup>"
+            return f"<msup>{base}{_row([sup])}</msup>{apply}"
         if sub is not None:
-            return f"<msub>{base}{sub}</msub>"
+            return f"<msub>{base}{sub}</msub>{apply}"
         return base
 
     def atom(self) -> str:
@@ -184,9 +190,9 @@ class _Parser:
         if name in SPACES:
             return f'<mspace width="{SPACES[name]}"/>'
         if name == "operatorname":
-            return f"<mi>{_esc(self.raw_group())}</mi><mo>&#x2061;</mo>"
+            return f"<mi>{_esc(self.raw_group())}</mi>{_APPLY}"
         if name in FUNCTIONS:
-            return f"<mi>{name}</mi><mo>&#x2061;</mo>"
+            return f"<mi>{name}</mi>{_APPLY}"
         if name in OPERATORS:
             return f"<mo>{_esc(OPERATORS[name])}</mo>"
         if name == "frac" or name == "dfrac" or name == "tfrac":

@@ -159,3 +159,21 @@ def test_paper_pdf_and_html_offline(tmp_path):
     assert _pdf_pages(data) == written["pdf_pages"] == expected
     s = structure(written["html"].read_text(encoding="utf-8"))
     assert s.errors == [] and s.external == [] and s.scripts == 0
+
+
+#: Children a MathML element must have (MathML Core): the base and its scripts, a fraction's two parts.
+ARITY = {"msup": 2, "msub": 2, "mover": 2, "munder": 2, "mfrac": 2, "msubsup": 3, "munderover": 3}
+
+
+def test_every_formula_of_the_committed_report_is_well_formed_mathml():
+    """A script element with the wrong number of children is drawn wrongly (seen: ``cos^3`` as
+    ``<msup>`` of three children put the 3 on the base line)."""
+    text = (ROOT / "docs" / "paper" / "report.md").read_text(encoding="utf-8")
+    bad = []
+    for tex in paper.formulas(text):
+        root = ET.fromstring(to_mathml(tex).replace("<math>", f'<math xmlns="{MATHML[1:-1]}">'))
+        for element in root.iter():
+            tag = element.tag.split("}")[-1]
+            if tag in ARITY and len(element) != ARITY[tag]:
+                bad.append((tex, tag, len(element)))
+    assert bad == []
