@@ -402,10 +402,15 @@ def scene_sketch(result, ax=None, *, paper=None):
     ax.annotate("", xy=(1.05, 0.05), xytext=(1.05, 0.3), xycoords="axes fraction", annotation_clip=False,
                 arrowprops={"arrowstyle": "-|>", "color": "0.3"})
     ax.text(1.07, 0.17, "gravity $g$", transform=ax.transAxes, fontsize=8, va="center")
+    return _plane_axes(ax, _title(result, "the scene", paper))
+
+
+def _plane_axes(ax, title: str):
+    """Finish a drawing in the plane of the curve: equal scales, x and z in metres, title, legend beside."""
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("$x$ [m]")
     ax.set_ylabel("$z$ [m]")
-    ax.set_title(_title(result, "the scene", paper), fontsize=9)
+    ax.set_title(title, fontsize=9)
     ax.legend(**LEGEND_OUTSIDE)
     ax.grid(alpha=0.3)
     return ax
@@ -457,13 +462,7 @@ def force_diagram(result, ax=None, *, paper=None, sample: int = 0):
     ax.plot([xs, xs + 0.25 * span * t_vec[0]], [zs, zs + 0.25 * span * t_vec[1]], color="0.6", lw=0.8, ls=":")
     ax.text(xs + 0.27 * span, zs, f"$\\alpha$ = {np.degrees(a):.3g} deg", fontsize=8, va="center")
     ax.plot([xs], [zs], "o", color="k", ms=6, zorder=6, label=f"particle at t = {float(S.t[sample]):.3g} s")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("$x$ [m]")
-    ax.set_ylabel("$z$ [m]")
-    ax.set_title(_title(result, "force plan", paper), fontsize=9)
-    ax.legend(**LEGEND_OUTSIDE)
-    ax.grid(alpha=0.3)
-    return ax
+    return _plane_axes(ax, _title(result, "force plan", paper))
 
 
 def _drawers():
