@@ -133,6 +133,7 @@ def test_readme_animation_example_runs(tmp_path, monkeypatch):
         assert gif.n_frames == round(namespace["fps"] * namespace["duration"])
     assert namespace["result"].count(EventKind.IMPACT) >= 1
     assert "tg(alpha0)" in namespace["eq8"].text
+    assert len(namespace["agree"]) == 4 and all(namespace["agree"].values())   # Kane = derive, every branch
 
 
 # --- the explorer -------------------------------------------------------------------------------
