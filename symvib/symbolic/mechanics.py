@@ -5,8 +5,8 @@ This derivation shares nothing with :mod:`symvib.symbolic.derive` but the curve'
 gravity, the normal reaction ``N`` along the normal ``n = (-sin alpha, cos alpha)``
 and Coulomb friction ``-mu |N| sign(v)`` along the tangent.  Kane's method gives the
 motion along the curve (the normal reaction does no work and drops out); Newton's
-law along the normal gives ``N`` (physics.md, "Equations of motion": ``N = kappa v^2
-+ g cos alpha`` per unit mass).  :func:`check_eq1` compares the result with
+law along the normal gives ``N`` (physics.md, "Equation of motion (paper eq. 1)":
+``N = kappa w + g cos(alpha)`` per unit mass, ``w = v^2``).  :func:`check_eq1` compares the result with
 ``derive(curve).eom(sigma, sign_N)`` on all four branches at 30 digits at random points.
 ``derivations/mechanics.ipynb`` shows the same derivation step by step.
 
