@@ -359,6 +359,16 @@ def _point(mod, cp, q):
     return x, z, a
 
 
+def _draw_curve(ax, result, mod, cp, lo, hi, **style):
+    """The curve ``x(q), z(q)`` for ``lo <= q <= hi``; returns ``(q, x, z, span)``, ``span`` the
+    drawing's size (for arrows and labels in proportion)."""
+    q = np.linspace(lo, hi, GRID_POINTS)
+    x = np.broadcast_to(mod.x(q, *cp), q.shape)
+    z = np.broadcast_to(mod.z(q, *cp), q.shape)
+    ax.plot(x, z, label=f"curve: {result.scene.shape.name}", **style)
+    return q, x, z, max(np.ptp(x), np.ptp(z), 1e-9)
+
+
 def scene_sketch(result, ax=None, *, paper=None):
     """The curve in the vertical plane with its limiters, the start point and direction, the
     final rest and the arc of relative equilibrium (paper figs. 2, 3, 5, 12, 19)."""
@@ -366,11 +376,7 @@ def scene_sketch(result, ax=None, *, paper=None):
     mod, cp = _kernels(result)
     sc = result.scene
     lo, hi = _sketch_range(result)
-    q = np.linspace(lo, hi, GRID_POINTS)
-    x = np.broadcast_to(mod.x(q, *cp), q.shape)
-    z = np.broadcast_to(mod.z(q, *cp), q.shape)
-    ax.plot(x, z, color="k", lw=1.4, label=f"curve: {sc.shape.name}")
-    span = max(np.ptp(x), np.ptp(z), 1e-9)
+    q, x, z, span = _draw_curve(ax, result, mod, cp, lo, hi, color="k", lw=1.4)
     label = r"relative equilibrium $|\tan\alpha| \leq \mu$"
     for a, b in equilibrium_arcs(result, lo, hi):
         sel = (q >= a) & (q <= b)
@@ -427,11 +433,7 @@ def force_diagram(result, ax=None, *, paper=None, sample: int = 0):
     qs = float(S.q[sample])
     xs, zs, a = _point(mod, cp, qs)
     lo, hi = _sketch_range(result)
-    q = np.linspace(lo, hi, GRID_POINTS)
-    x = np.broadcast_to(mod.x(q, *cp), q.shape)
-    z = np.broadcast_to(mod.z(q, *cp), q.shape)
-    ax.plot(x, z, color="0.4", lw=1.2, label=f"curve: {sc.shape.name}")
-    span = max(np.ptp(x), np.ptp(z), 1e-9)
+    _, _, _, span = _draw_curve(ax, result, mod, cp, lo, hi, color="0.4", lw=1.2)
     weight = sc.m * sc.g
     t_vec = np.array([np.cos(a), np.sin(a)])
     n_vec = np.array([-np.sin(a), np.cos(a)])
