@@ -460,12 +460,13 @@ def _samples(eng, cp, row, ivs, ni, R, scene, mod, pieces: int = 1) -> Samples:
     m, mu = scene.m, scene.mu
     speed = np.sqrt(np.maximum(w, 0.0))
     v = sigma * speed
-    Ep = m * scene.g * _column(mod.z(q, *cp), q)
-    F_mu = -sigma * mu * m * np.abs(N)
-    return Samples(t=t, q=q, qdot=v / mod.h(q, *cp), F_N=m * N, P_mu=-mu * m * np.abs(N) * speed,
+    z = _column(mod.z(q, *cp), q)
+    Ep = m * scene.g * z
+    friction = mu * m * np.abs(N)  # |F_mu|
+    return Samples(t=t, q=q, qdot=v / mod.h(q, *cp), F_N=m * N, P_mu=-friction * speed,
                    Ek=0.5 * m * w, Ep=Ep, E=0.5 * m * w + Ep, interval=index.astype(int),
-                   branch=nodes[:, C.branch].astype(int), x=_column(mod.x(q, *cp), q), z=_column(mod.z(q, *cp), q),
-                   s=nodes[:, C.s].copy(), path=nodes[:, C.path].copy(), v=v, F_mu=F_mu,
+                   branch=nodes[:, C.branch].astype(int), x=_column(mod.x(q, *cp), q), z=z,
+                   s=nodes[:, C.s].copy(), path=nodes[:, C.path].copy(), v=v, F_mu=-sigma * friction,
                    W_mu=m * nodes[:, C.W], W_impacts=m * nodes[:, C.W_impacts])
 
 

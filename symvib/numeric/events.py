@@ -270,7 +270,8 @@ class Result:
 
     # -- solve_ivp's names --------------------------------------------------------------------------
 
-    def _kept_samples(self) -> Samples:
+    def require_samples(self) -> Samples:
+        """:attr:`samples`, or a ValueError that says why there are none."""
         samples = self.samples
         if samples is None:
             raise ValueError("samples: this run has none (simulate(scene, samples=True), the default, keeps them"
@@ -281,13 +282,13 @@ class Result:
     def t(self) -> np.ndarray:
         """Times of the samples (``samples.t``): each interval's start, Gauss nodes and end,
         so an event's time appears twice (the end of one interval, the start of the next)."""
-        return self._kept_samples().t
+        return self.require_samples().t
 
     @property
     def y(self) -> np.ndarray:
         """``[q, qdot]`` at the times :attr:`t`, shape ``(2, len(t))`` like ``solve_ivp``'s ``y``;
         at an event's time the first of the two columns holds the state before it, the second after."""
-        samples = self._kept_samples()
+        samples = self.require_samples()
         return np.vstack((samples.q, samples.qdot))
 
     @property

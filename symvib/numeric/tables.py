@@ -124,7 +124,8 @@ def events_frame(result):
             columns[name] = np.asarray(values, dtype=np.float64)
     frame = pd.DataFrame(columns)
     frame.index.name = "event"
-    frame.attrs["units"] = {k: quantity_units(result.scene.shape).get(k) for k in frame.columns}
+    units = quantity_units(result.scene.shape)
+    frame.attrs["units"] = {k: units.get(k) for k in frame.columns}
     frame.attrs["scene"] = result.scene.name
     return frame
 
@@ -138,10 +139,7 @@ def samples_frame(result):
         When the run kept no samples (``simulate(..., samples=False)``) or sampling failed.
     """
     pd = require_pandas()
-    samples = result.samples
-    if samples is None:
-        raise ValueError("samples: this run has none (simulate(scene, samples=True) keeps them"
-                         + (f"; sampling failed: {result.error}" if result.error else "") + ")")
+    samples = result.require_samples()
     columns = {}
     for name in _sample_fields(samples):
         values = np.asarray(getattr(samples, name))
