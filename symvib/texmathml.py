@@ -38,7 +38,7 @@ GREEK = {
 #: MathML's function application (invisible), after a function name and its scripts.
 _APPLY = "<mo>&#x2061;</mo>"
 FUNCTIONS = {"sin", "cos", "tan", "cot", "sec", "csc", "exp", "log", "ln", "sinh", "cosh", "tanh", "arcsin",
-             "arccos", "arctan", "sign", "max", "min", "tg", "ctg", "operatorname", "det", "lim"}
+             "arccos", "arctan", "sign", "max", "min", "tg", "ctg", "det", "lim"}
 OPERATORS = {
     "pm": "±", "mp": "∓", "cdot": "⋅", "times": "×", "leq": "≤", "le": "≤", "geq": "≥", "ge": "≥", "neq": "≠",
     "ne": "≠", "approx": "≈", "to": "→", "rightarrow": "→", "Rightarrow": "⇒", "infty": "∞", "partial": "∂",
@@ -51,7 +51,8 @@ SPACES = {",": "0.167em", ":": "0.222em", ";": "0.278em", " ": "0.25em", "quad":
           "!": "0em"}
 ACCENTS = {"dot": "˙", "ddot": "¨", "hat": "^", "bar": "¯", "tilde": "~", "vec": "→", "overline": "¯"}
 TEXT_COMMANDS = {"text", "mathrm", "textrm", "mbox", "mathit", "mathbf", "textit", "textbf"}
-IGNORED = {"displaystyle", "limits", "nolimits", "left.", "right."}
+#: Commands that only steer TeX's layout: drawn as nothing.
+IGNORED = {"displaystyle", "limits", "nolimits"}
 ENVIRONMENTS = {"cases", "matrix", "pmatrix", "bmatrix", "aligned", "array"}
 _TOKEN = re.compile(r"\\([A-Za-z]+|.)|(\d+(?:\.\d+)?)|(\s+)|(.)", re.S)
 
@@ -218,7 +219,7 @@ class _Parser:
                 raise TexError("\\left without \\right")
             closing = self.delimiter()
             return _row([opening, *items, closing])
-        if name in ("displaystyle", "limits", "nolimits"):
+        if name in IGNORED:
             return "<mrow></mrow>"
         if name == "begin":
             return self.environment(self.raw_group())

@@ -35,10 +35,6 @@ ROOT_RATIO = 1.0
 TINY = np.finfo(float).tiny
 #: Rows of the quadrature's scratch array (node values and the cumulative sums).
 WORK_ROWS = 12
-#: Columns :func:`quad` writes per node when it keeps samples: time, q, w, N, path
-#: length and friction work per unit mass, the last two cumulative from the start of
-#: the quadrature's interval (like the time).
-QUAD_COLUMNS = 6
 
 
 class SampleColumn:
@@ -57,7 +53,7 @@ class SampleColumn:
 
 
 #: Columns of a sample (:class:`SampleColumn`).
-SAMPLE_COLUMNS = 10
+SAMPLE_COLUMNS = 1 + max(v for k, v in vars(SampleColumn).items() if not k.startswith("_"))
 #: Nodes per quadrature piece a sample buffer grows by at least, times the rule's nodes.
 SAMPLE_GROWTH = 200
 

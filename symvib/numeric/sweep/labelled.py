@@ -43,6 +43,7 @@ import numpy as np
 from symvib.numeric.layout import EVENT_COLUMNS, STATUSES, SUMMARY_COLUMNS
 from symvib.numeric.sweep.labels import axis_name, column_attrs, field_attrs
 from symvib.numeric.sweep.limits import EVENT_WIDTH
+from symvib.numeric.sweep.result import impact_share
 
 __all__ = ["EXTRA", "require", "variable_names", "dataset", "dataframe", "dataset_attrs", "open_sweep",
            "impact_share"]
@@ -63,13 +64,10 @@ def require(module: str, what: str):
 
 def variable_names(spec) -> dict:
     """Column name (``initial.qdot``, ``impacts``, ...) -> variable name (``qdot0``, ``impacts``, ...)."""
-    names = {"row": "row"}
-    for a in spec.axes:
-        names[a.field] = axis_name(spec.scene, a.field)
-    names.update({c: c for c in SUMMARY_COLUMNS})
-    if spec.log_events:
-        names["event_log"] = "event_log"
-    return names
+    from symvib.numeric.sweep.store import column_names
+
+    axes = {a.field for a in spec.axes}
+    return {c: axis_name(spec.scene, c) if c in axes else c for c in column_names(spec)}
 
 
 def dataset_attrs(spec, ident: str) -> dict:
@@ -95,27 +93,17 @@ def event_log_attrs() -> dict:
             "columns": " ".join(EVENT_COLUMNS), "units": "mixed: 1, s, {q}, {q}/s, {q}/s, J"}
 
 
-def impact_share(friction_work, impact_loss):
-    """``W_impacts / (W_friction + W_impacts)``, NaN where nothing was lost (NumPy or xarray operands)."""
-    total = friction_work + impact_loss
-    if isinstance(total, np.ndarray):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(total > 0, impact_loss / total, np.nan)
-    return (impact_loss / total).where(total > 0)
-
-
-def dataset(spec, columns: dict, ident: str, *, table: bool = False, store: bool = False):
+def dataset(spec, columns: dict, ident: str, *, store: bool = False):
     """The labelled Dataset of a sweep's ``columns`` (NumPy or Dask arrays in row order).
 
-    ``table`` lays a grid sweep out as a random one (dimension ``row``); ``store``
-    is the form written to Zarr: a table without the ``row`` index, the event
-    column names or the derived ``impact_share``.
+    ``store`` is the form written to Zarr: a table (dimension ``row``) without the
+    ``row`` index, the event column names or the derived ``impact_share``.
     """
     xr = require("xarray", "a labelled sweep")
     scene = spec.scene
     names = variable_names(spec)
     coords = {}
-    if spec.mode == "grid" and not (table or store):
+    if spec.mode == "grid" and not store:
         dims, shape = tuple(names[a.field] for a in spec.axes), spec.shape
         for a in spec.axes:
             coords[names[a.field]] = (names[a.field], a.at(np.arange(a.size)), field_attrs(scene, a.field))

@@ -97,14 +97,13 @@ def axis_name(scene, field: str) -> str:
 def field_attrs(scene, field: str) -> dict:
     """``units``, ``long_name``, ``latex`` and ``field`` (the dotted name) of a varied field."""
     q = coordinate_latex(scene)
+    units = field_unit(field, scene.shape) or ""
     if field in FIELD_LABELS:
         _, long_name, latex = FIELD_LABELS[field]
-        units = field_unit(field, scene.shape) or ""
     else:
         name = field.split(".", 1)[1]
         long_name = f"curve parameter {name}"
         latex = _GREEK.get(name, name)
-        units = field_unit(field, scene.shape) or ""
     return {"units": units, "long_name": long_name, "latex": f"${latex.format(q=q)}$", "field": field}
 
 

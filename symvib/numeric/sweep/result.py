@@ -37,6 +37,15 @@ INTEGER_COLUMNS = tuple(SUMMARY_COLUMNS[c] for c in (Summary.status, Summary.eve
                                                       Summary.reversals, Summary.normal_sign_changes))
 
 
+def impact_share(friction_work, impact_loss):
+    """``W_impacts / (W_friction + W_impacts)``, NaN where nothing was lost (NumPy or xarray operands)."""
+    total = friction_work + impact_loss
+    if isinstance(total, np.ndarray):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(total > 0, impact_loss / total, np.nan)
+    return (impact_loss / total).where(total > 0)
+
+
 @dataclass(frozen=True)
 class SweepResult:
     """A sweep's definition and its per-scene columns (row order), read-only.
@@ -100,9 +109,7 @@ class SweepResult:
     @property
     def impact_share(self) -> np.ndarray:
         """Share of the energy lost to impacts, ``W_impacts / (W_friction + W_impacts)`` (NaN if none)."""
-        total = self.columns["friction_work"] + self.columns["impact_loss"]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(total > 0, self.columns["impact_loss"] / total, np.nan)
+        return impact_share(self.columns["friction_work"], self.columns["impact_loss"])
 
     @property
     def sweep_id(self) -> str:
