@@ -26,9 +26,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from importlib import resources
 
 import numpy as np
+
+from symvib.numeric.events import EventKind
+from symvib.numeric.scene import packaged_scene
 
 __all__ = ["Claim", "Interval", "CLAIM_KEYS", "PAPER_SCENES", "ELASTIC_K", "DENSE_POINTS", "paper_runs", "intervals",
            "dense", "conclusions", "conclusions_markdown", "several_impacts_bounds"]
@@ -114,13 +116,6 @@ class Interval:
         return 1 if self.q1 > self.q0 else -1
 
 
-def _scene(name):
-    from symvib.numeric.scene import load_scene
-
-    with resources.as_file(resources.files("symvib") / "scenes" / f"{name}.toml") as path:
-        return load_scene(path)
-
-
 def paper_runs(results=None) -> dict:
     """``{scene name: Result}`` of the paper's scenes with ``k = 1`` (simulated unless given)."""
     from symvib.numeric.driver import simulate
@@ -128,7 +123,7 @@ def paper_runs(results=None) -> dict:
     results = dict(results or {})
     for name in PAPER_SCENES:
         if name not in results:
-            results[name] = simulate(_scene(name).replace(k=ELASTIC_K), backend="python", samples=False)
+            results[name] = simulate(packaged_scene(name).replace(k=ELASTIC_K), backend="python", samples=False)
     return results
 
 
@@ -215,7 +210,7 @@ def conclusions(results=None) -> tuple:
           "F_N ranges over " + "; ".join(f"{_short(n)} [{_fmt(lo)}, {_fmt(hi)}] N" for n, (lo, hi) in ranges.items())
           + " (it keeps its sign: N > 0 throughout)", ranges=ranges)
     # The elastic impact keeps the speed.
-    impacts = [(n, e) for n, r in runs.items() for e in r.events if e.kind.value == "impact"]
+    impacts = [(n, e) for n, r in runs.items() for e in r.events if e.kind is EventKind.IMPACT]
     worst = max(abs(abs(e.qdot_after) - abs(e.qdot_before)) / abs(e.qdot_before) for _, e in impacts)
     claim("elastic-impact", "true" if worst <= ROUNDING else "false",
           f"{len(impacts)} impacts with k = 1: largest relative change of the speed {worst:.1g}",
@@ -288,7 +283,7 @@ def conclusions(results=None) -> tuple:
           rise_events=rise_events, rise_samples=rise_samples)
     out.append(_several_impacts(runs, quote["several-impacts"]))
     a, b = runs["paper-circle-3.8"], runs["paper-circle-7"]
-    count = {n: (sum(e.kind.value == "impact" for e in r.events), sum(e.kind.value == "reversal" for e in r.events))
+    count = {n: (r.count(EventKind.IMPACT), r.count(EventKind.REVERSAL))
              for n, r in (("paper-circle-3.8", a), ("paper-circle-7", b))}
     more = count["paper-circle-7"][0] > count["paper-circle-3.8"][0] and \
         count["paper-circle-7"][1] > count["paper-circle-3.8"][1]
@@ -313,7 +308,7 @@ def _several_impacts(runs, quote) -> Claim:
         scan = {}
         for qd in SCAN_QDOT0:
             r = simulate(scene.replace(qdot0=float(qd)), backend="python", samples=False)
-            scan[float(qd)] = sum(e.kind.value == "impact" for e in r.events)
+            scan[float(qd)] = r.count(EventKind.IMPACT)
         inside = {qd: n for qd, n in scan.items() if lo < qd < hi}
         outside = {qd: n for qd, n in scan.items() if not lo < qd < hi}
         rows[name] = {"bounds": (lo, hi), "scan": scan, "sufficient": all(n >= 2 for n in inside.values()),

@@ -21,8 +21,9 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
+
+from symvib.numeric.scene import packaged_scene
 
 __all__ = ["ALPHA0_READINGS", "REMARK", "Reading", "alpha0_readings", "alpha0_row", "errata_document", "write_errata"]
 
@@ -57,13 +58,6 @@ class Reading:
         return self.kinds.count("reversal")
 
 
-def _base_scene():
-    from symvib.numeric.scene import load_scene
-
-    with resources.as_file(resources.files("symvib") / "scenes" / f"{ALPHA0_SCENE}.toml") as path:
-        return load_scene(path)
-
-
 def _with_physics(data: dict, physics: dict):
     from symvib.numeric.scene import scene_from_dict
 
@@ -77,7 +71,7 @@ def alpha0_readings() -> tuple:
     from symvib.numeric.driver import simulate
     from symvib.numeric.scene import SceneError
 
-    data = _base_scene().to_dict()
+    data = packaged_scene(ALPHA0_SCENE).to_dict()
     readings = []
     for label, physics in ALPHA0_READINGS:
         scene = _with_physics(data, physics)

@@ -34,11 +34,11 @@ import json
 import re
 import time
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 
 # The readings of the first circle scene's "alpha0 = 3" and the remark they are judged by (re-exported).
 from symvib.errata import ALPHA0_READINGS, REMARK
+from symvib.numeric.scene import packaged_scene
 
 __all__ = ["SCENES", "LOW_K", "HIGH_K", "run_paper", "ALPHA0_READINGS", "main"]
 
@@ -82,13 +82,6 @@ class Run:
     scene: object
     result: object
     figures: tuple
-
-
-def _scene(name):
-    from symvib.numeric.scene import load_scene
-
-    with resources.as_file(resources.files("symvib") / "scenes" / f"{name}.toml") as path:
-        return load_scene(path)
 
 
 def _num(x) -> str:
@@ -285,7 +278,7 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
     with pool:
         runs = []
         for name, _figs in SCENES:
-            base = _scene(name)
+            base = packaged_scene(name)
             for k in (HIGH_K, low_k):
                 key = f"{name}-k{k:g}"
                 scene = base.replace(k=k, name=key)
@@ -321,7 +314,7 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
         if shape_name == "circle":
             readings = _alpha0_section(lines)
         for name, figs in SCENES:
-            base = _scene(name)
+            base = packaged_scene(name)
             if base.shape.name != shape_name:
                 continue
             lines += [f"### Scene `{name}` (paper {figs})", ""] + _scene_table(base) + [""]

@@ -68,7 +68,7 @@ from symvib.shapes import CATALOGUE, Shape
 
 __all__ = ["Scene", "SceneError", "SceneNumbers", "Check", "CHECKS", "load_scene", "resolve_scene", "scene_from_dict",
            "declared_domain", "friction_coefficient", "check_numbers", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS",
-           "FIELD_UNITS", "TEXT_FIELDS", "VALUE_UNITS", "field_unit", "units_table"]
+           "FIELD_UNITS", "TEXT_FIELDS", "VALUE_UNITS", "field_unit", "units_table", "packaged_scene"]
 
 #: Default time bound of a run, in seconds.
 DEFAULT_T_MAX = 1000.0
@@ -905,10 +905,21 @@ def resolve_scene(text: str) -> Scene:
     path = Path(text)
     if path.exists() or text.endswith(".toml"):
         return load_scene(path)
+    return packaged_scene(text)
+
+
+def packaged_scene(name: str) -> Scene:
+    """The packaged scene ``name`` (a file of ``symvib/scenes``), whatever the current folder holds.
+
+    Raises
+    ------
+    SceneError
+        When there is no packaged scene of that name.
+    """
     from importlib import resources
 
-    packaged = resources.files("symvib") / "scenes" / f"{text}.toml"
+    packaged = resources.files("symvib") / "scenes" / f"{name}.toml"
     if not packaged.is_file():
-        raise SceneError(text, "no such scene file (nor a packaged scene of that name)")
+        raise SceneError(name, "no such scene file (nor a packaged scene of that name)")
     with resources.as_file(packaged) as p:
         return load_scene(p)

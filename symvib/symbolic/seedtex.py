@@ -223,7 +223,7 @@ class _Parser:
             return self.braced()
         tok = self.take()
         if re.fullmatch(r"[0-9]+", tok or ""):
-            return sp.Integer(tok[0]) if len(tok) == 1 else sp.Integer(tok)
+            return sp.Integer(tok)
         raise SeedTexError(f"unreadable exponent {tok!r}")
 
     def braced(self):
