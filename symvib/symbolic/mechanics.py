@@ -17,21 +17,17 @@ Examples
 """
 from __future__ import annotations
 
-import random
-
-import mpmath
 import sympy as sp
 from sympy.physics import mechanics as me
 
-from symvib.symbolic.curve import sample_points
+from symvib.symbolic.curve import numeric_zero
 from symvib.symbolic.symbols import g, mu
 
 __all__ = ["first_principles", "agrees", "on_branch", "check_eq1", "BRANCHES"]
 
-#: Random points of a comparison, its working precision and relative tolerance.
+#: Random points of a comparison, and the ranges its speed, gravity and friction are drawn from.
 POINTS = 5
-DIGITS = 30
-TOLERANCE = mpmath.mpf("1e-24")
+QDOT_RANGE, G_RANGE, MU_RANGE = (-3.0, 3.0), (1.0, 20.0), (0.01, 0.5)
 #: The branches of eq. (1): (sign of v, sign of N).
 BRANCHES = ((1, 1), (1, -1), (-1, 1), (-1, -1))
 
@@ -78,19 +74,10 @@ def first_principles(curve, friction: int = -1):
 
 
 def agrees(a, b, curve, seed: int = 0) -> bool:
-    """``a == b`` at :data:`POINTS` random points (``q``, ``qdot``, ``g``, ``mu``, parameters),
-    :data:`DIGITS` digits, relative :data:`TOLERANCE`."""
-    args = [curve.q, curve.qdot, g, mu, *curve.params]
-    fa, fb = (sp.lambdify(args, e, "mpmath") for e in (a, b))
-    rng = random.Random(seed)
-    with mpmath.workdps(DIGITS):
-        for qv in sample_points(curve, POINTS, seed=seed + 1):
-            values = [qv, rng.uniform(-3, 3), rng.uniform(1, 20), rng.uniform(0.01, 0.5)]
-            values += [rng.uniform(0.5, 2) for _ in curve.params]
-            x, y = fa(*map(mpmath.mpf, values)), fb(*map(mpmath.mpf, values))
-            if not abs(x - y) <= TOLERANCE * max(1, abs(x), abs(y)):
-                return False
-    return True
+    """``a == b`` at :data:`POINTS` random points (``q``, ``qdot``, ``g``, ``mu``, parameters), at 30
+    digits (:func:`symvib.symbolic.curve.numeric_zero`)."""
+    extra = {curve.qdot: QDOT_RANGE, g: G_RANGE, mu: MU_RANGE}
+    return numeric_zero(a - b, curve, extra=extra, points=POINTS, seed=seed + 1)
 
 
 def on_branch(expr, sign_v, abs_N, N, s: int, n: int):
