@@ -147,7 +147,11 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
                         xi = r
                         dq = 1.0
                     qj = e + d * xi
-                    dF, hh, ex, ka, co = node(s, qj, mu, K, cp)
+                    # laws.node, called here directly (the plain engine's hottest call)
+                    if s > 0:
+                        dF, hh, ex, ka, co = K.node_p(qj, mu, *cp)
+                    else:
+                        dF, hh, ex, ka, co = K.node_m(qj, mu, *cp)
                     gj = gd * dF
                     dG = gj * dq
                     total += Wt[j] * dG
