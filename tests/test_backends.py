@@ -1,6 +1,7 @@
 """The compiled (numba) core gives the events of the plain-Python core."""
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from symvib.numeric.driver import backend_available, simulate
@@ -76,3 +77,50 @@ def test_the_first_numba_run_leaves_its_marker_and_auto_then_takes_it(tmp_path, 
     assert is_compiled(load(scene.shape))
     again = simulate(scene, samples=False)
     assert again.stats["backend"] == "numba" and again.events == first.events
+    # The samples have a compiled entry of their own: until it is on disk, an "auto" run's
+    # samples come from the plain engine, from the compiled run's interval log.
+    mod = load(scene.shape)
+    auto, plain = simulate(scene), simulate(scene, backend="python")
+    assert auto.stats["backend"] == "numba"
+    assert np.allclose(auto.samples.t, plain.samples.t, rtol=0, atol=1e-12)
+    assert not is_compiled(mod, "sample_bound")
+    compiled = simulate(scene, backend="numba")
+    assert np.allclose(compiled.samples.qdot, plain.samples.qdot, rtol=1e-12, atol=1e-12)
+    assert is_compiled(mod, "sample_bound")
+
+
+def test_the_threaded_sweep_runs_every_scene_once_in_blocks_and_raises_a_block_s_error(monkeypatch):
+    # threaded_sweep: threads take guided blocks (a quarter of what is left per thread, at
+    # least SWEEP_GRAIN scenes) until none is left; an error in a thread reaches the caller.
+    import threading
+
+    import numba
+
+    from symvib.numeric.engine.bind import SWEEP_GRAIN, threaded_sweep
+    from symvib.numeric.layout import Summary
+
+    calls, threads_seen = [], set()
+
+    def block(rows, cp_rows, R, max_log, out, logs, start, stop):
+        calls.append((start, stop))
+        threads_seen.add(threading.get_ident())
+        out[start:stop, Summary.events] += rows[start:stop, 0]
+
+    n = 1000
+    rows = np.arange(n, dtype=float).reshape(n, 1)
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    out, logs = threaded_sweep(block)(rows, rows, None, 3)
+    assert np.array_equal(out[:, Summary.events], rows[:, 0])  # each scene once
+    assert logs.shape == (n, 3, logs.shape[2])
+    spans = sorted(calls)
+    assert spans[0][0] == 0 and spans[-1][1] == n
+    assert all(a[1] == b[0] for a, b in zip(spans, spans[1:]))
+    assert all(stop - start >= SWEEP_GRAIN for start, stop in spans[:-1])
+    assert max(stop - start for start, stop in spans) < n  # more than one block
+    assert len(threads_seen) >= 1
+
+    def failing(rows, cp_rows, R, max_log, out, logs, start, stop):
+        raise ZeroDivisionError("in a block")
+
+    with pytest.raises(ZeroDivisionError, match="in a block"):
+        threaded_sweep(failing)(rows, rows, None, 0)

@@ -117,13 +117,14 @@ def bound_engine(shape, backend: str = "auto"):
     return entry[1], entry[2]
 
 
-def run_backend(shape, backend: str = "auto") -> str:
+def run_backend(shape, backend: str = "auto", entry: str = "simulate_bound") -> str:
     """The backend one run of ``shape`` takes: a single scene never waits for a compiler.
 
-    ``"auto"`` is numba only where the curve's compiled engine is already on disk
-    (compiled by an earlier ``backend="numba"`` run; :func:`symvib.numeric.engine.bind.is_compiled`),
+    ``"auto"`` is numba only where the curve's compiled ``entry`` (``"simulate_bound"``
+    for a run, ``"sample_bound"`` for its samples) is already on disk (compiled by an
+    earlier ``backend="numba"`` run; :func:`symvib.numeric.engine.bind.is_compiled`),
     and the plain-Python engine otherwise (milliseconds per paper scene, where a
-    first compilation takes about 20 s).  ``$SYMVIB_BACKEND`` and an explicit
+    first compilation takes about 15 s).  ``$SYMVIB_BACKEND`` and an explicit
     backend are obeyed.  Sweeps compile (:func:`sweep_function`).
     """
     if backend != "auto" or os.environ.get(BACKEND_ENV):
@@ -132,7 +133,7 @@ def run_backend(shape, backend: str = "auto") -> str:
         return "python"
     from symvib.numeric.engine.bind import is_compiled
 
-    return "numba" if is_compiled(load(shape)) else "python"
+    return "numba" if is_compiled(load(shape), entry) else "python"
 
 
 def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto",
@@ -169,7 +170,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         raise ValueError(f"samples_per_interval must be an integer from 1 to {MAX_SAMPLES_PER_INTERVAL}, "
                          f"not {spi!r}")
     shape = _run_shape(scene)
-    backend = run_backend(shape, backend)
+    requested, backend = backend, run_backend(shape, backend)
     mod, eng = bound_engine(shape, backend)
     R = rules(nodes)
     cp = tuple(float(v) for v in scene.param_values)
@@ -205,7 +206,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
                                            f"{spi} would give about {wanted:,} samples, more than {MAX_SAMPLES:,}; "
                                            "ask for fewer (samples_per_interval) or a shorter run (run.max_events)")
         else:
-            sampler = partial(_lazy_samples, eng, cp, row, out.intervals, out.n_intervals, R, scene, mod, pieces)
+            sampler = partial(_lazy_samples, partial(_sample_engine, shape, requested, backend), cp, row,
+                              out.intervals, out.n_intervals, R, scene, mod, pieces)
         interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], nodes)
     return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=sampler,
                   interpolant=interpolant,
@@ -225,8 +227,22 @@ def _no_samples(message):
     return None, message
 
 
-def _lazy_samples(eng, cp, row, ivs, ni, R, scene, mod, pieces):
-    """``(samples, None)``, or ``(None, message)`` where the plain-Python engine overflowed."""
+def _sample_engine(shape, requested: str, backend: str):
+    """The engine that computes the samples of a run on ``backend`` (asked for as ``requested``).
+
+    The run's own, except where ``"auto"`` took the compiled engine and its samples
+    entry is not compiled yet: the plain engine then computes the samples from the
+    run's interval log (the same quadrature; a run never waits for a compiler).
+    """
+    if backend == "numba" and requested == "auto":
+        backend = run_backend(shape, requested, "sample_bound")
+    return bound_engine(shape, backend)[1]
+
+
+def _lazy_samples(engine_of, cp, row, ivs, ni, R, scene, mod, pieces):
+    """``(samples, None)``, or ``(None, message)`` where the plain-Python engine overflowed;
+    ``engine_of()`` gives the engine (:func:`_sample_engine`)."""
+    eng = engine_of()
     try:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             return _samples(eng, cp, row, ivs, ni, R, scene, mod, pieces), None

@@ -39,12 +39,13 @@ from typing import NamedTuple
 from symvib.numeric.engine import laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
-__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "ENGINE_MODULES", "ENTRY_POINTS"]
+__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "ENGINE_MODULES",
+           "ENTRY_POINTS"]
 
 #: The engine's modules, in import order.
 ENGINE_MODULES = (laws, roots, scan, timing, loop)
 #: Entry points compiled with explicit signatures (and cached on disk).
-ENTRY_POINTS = ("simulate_scene", "sample_scene", "sweep_scenes")
+ENTRY_POINTS = ("simulate_scene", "sample_scene", "sweep_block")
 
 
 class Engine(NamedTuple):
@@ -85,18 +86,25 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
     if not shared:
         entries = _specialized_engine(module, ncp)
         return Engine(_marking(entries["simulate_bound"], compiled_marker(module, "simulate_bound")),
-                      entries["sample_bound"], _balanced(entries["sweep_bound"]))
+                      _marking(entries["sample_bound"], compiled_marker(module, "sample_bound")),
+                      threaded_sweep(entries["sweep_bound"]))
     from symvib.numeric.engine.compiled import kernels_box
 
     k = kernels_box(_compiled_kernels(module, ncp), _signatures(ncp))
     entries = _compiled_engine(ncp)
     return Engine(partial(entries["simulate_scene"], k), partial(entries["sample_scene"], k),
-                  _balanced(partial(entries["sweep_scenes"], k)))
+                  threaded_sweep(partial(entries["sweep_block"], k)))
 
 
 # --- numba ------------------------------------------------------------------------
-#: Scenes a thread of a parallel sweep takes at a time (numba backend).
+#: Fewest scenes a thread of a sweep takes at a time (numba backend).
 SWEEP_GRAIN = 16
+#: A thread takes this share of the scenes left per thread at a time (guided scheduling:
+#: large blocks first, small ones at the end, so the threads finish together).
+SWEEP_SHARE = 4
+#: numba options of an engine function only compiled code calls: no Python or C wrapper
+#: to build (about 2.5 s of the parabola engine's compile).
+INNER = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
 
 
 def _signatures(ncp: int) -> dict:
@@ -119,14 +127,14 @@ def _rebound(fn, namespace: dict, qualname: str | None = None):
     return new
 
 
-def _compiled_functions(modules, keep, *, names=None, options=None, qualnames=None) -> dict:
+def _compiled_functions(modules, keep, *, names=None, options=None, default=None, qualnames=None) -> dict:
     """numba dispatchers of the functions defined in ``modules`` whose names pass ``keep``.
 
     Each function gets a copy of its module's globals in which every such name is
     the compiled function (names must be unique across the modules), then ``names``
-    (globals that replace or add to those: ``prange``, a static-length ``params_of``).
-    ``options`` (name -> ``numba.njit`` options) and ``qualnames`` (name -> the name
-    numba's disk cache files it under) apply per function.  Dispatchers are lazy
+    (globals that replace or add to those: a static-length ``params_of``, the kernels).
+    ``options`` (name -> ``numba.njit`` options; ``default`` for the others) and
+    ``qualnames`` (name -> the name numba's disk cache files it under) apply per function.  Dispatchers are lazy
     (compiled on first call, or by the caller with a signature).
     """
     import numba
@@ -141,7 +149,7 @@ def _compiled_functions(modules, keep, *, names=None, options=None, qualnames=No
                 if name in functions:
                     raise RuntimeError(f"engine function {name!r} is defined twice ({mod.__name__})")
                 functions[name] = (fn, namespace)
-    compiled = {name: numba.njit(**options.get(name, {}))(_rebound(fn, namespace, qualnames.get(name)))
+    compiled = {name: numba.njit(**options.get(name, default or {}))(_rebound(fn, namespace, qualnames.get(name)))
                 for name, (fn, namespace) in functions.items()}
     for namespace in spaces:
         namespace.update(compiled)
@@ -189,7 +197,7 @@ def _params_of(ncp: int):
     def params_of(row, n):
         return to_fixed_tuple(row, ncp)
 
-    return numba.njit(params_of)
+    return numba.njit(**INNER)(params_of)
 
 
 def _flush_if_stale(dispatchers, marker: Path) -> None:
@@ -209,7 +217,6 @@ def _compiled_engine(ncp: int) -> dict:
     numba's cache checks the file of each entry point only, not the modules it
     calls; so the cache is flushed once whenever :func:`engine_digest` changes.
     """
-    import numba
     from numba import types as nt
 
     from symvib.numeric.engine.compiled import kernels_type
@@ -222,14 +229,15 @@ def _compiled_engine(ncp: int) -> dict:
     rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat], Rules)
 
     options = {name: {"cache": True} for name in ENTRY_POINTS}
-    options["sweep_scenes"] = {"cache": True, "parallel": True}
+    options["sweep_block"] = {"cache": True, "nogil": True}
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: not n.endswith("_bound") and n != "params_of",
-                                   names={"prange": numba.prange, "params_of": _params_of(ncp)}, options=options)
+                                   names={"params_of": _params_of(ncp)}, options=options, default=INNER)
     _flush_if_stale([compiled[name] for name in ENTRY_POINTS], cache_dir() / "engines" / f"engine-{engine_digest()}")
     signatures = {
         "simulate_scene": (k_type, cp_type, vec, rules_type, nt.boolean),
         "sample_scene": (k_type, cp_type, vec, rules_type, mat, nt.int64, nt.int64),
-        "sweep_scenes": (k_type, mat, mat, rules_type, nt.int64),  # rows, parameter rows
+        # rows, parameter rows, rules, max_log, summary, event logs, first and last + 1 scene
+        "sweep_block": (k_type, mat, mat, rules_type, nt.int64, mat, f64[:, :, ::1], nt.int64, nt.int64),
     }
     for name, sig in signatures.items():
         compiled[name].compile(sig)
@@ -292,21 +300,19 @@ def _specialized_engine(module, ncp: int) -> dict:
     cached = getattr(module, "_symvib_specialized_engine", None)
     if cached is not None:
         return cached
-    import numba
 
     from symvib.numeric.engine.static import StaticKernels
     from symvib.numeric.kernels import cache_dir
 
     tag = _tag(module)
     options = {name: {"cache": True} for name in BOUND_ENTRIES}
-    # A parallel loop (prange): numba compiles it in about 3 s more of CPU than a plain loop run on
-    # Python threads over blocks of scenes (17.5 s against 14.2 s for the parabola), and it sweeps
-    # 6 % faster on two threads (benchmarks/compare_revisions.py with bench_sweep.py, 2026-11-25).
-    options["sweep_scenes"] = {"parallel": True}
-    options["sweep_bound"] = {"cache": True, "parallel": True}
-    names = {"prange": numba.prange, "params_of": _params_of(ncp),
+    # Threads of Python over blocks of scenes (threaded_sweep), not numba's parallel loop (prange):
+    # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
+    options["sweep_bound"] = {"cache": True, "nogil": True}
+    names = {"params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,
+                                   default=INNER,
                                    qualnames={name: f"{name}__{tag}" for name in BOUND_ENTRIES})
     _flush_if_stale([compiled[name] for name in BOUND_ENTRIES],
                     cache_dir() / "engines" / f"engine-{engine_digest()}-{tag}")
@@ -314,20 +320,51 @@ def _specialized_engine(module, ncp: int) -> dict:
     return compiled
 
 
-def _balanced(sweep_fn):
-    """``sweep_fn`` with its threads taking :data:`SWEEP_GRAIN` scenes at a time.
+def threaded_sweep(block):
+    """A sweep ``(rows, cp_rows, R, max_log) -> (summary, logs)`` that runs the compiled
+    ``block(rows, cp_rows, R, max_log, out, logs, start, stop)`` (which releases the GIL)
+    on ``numba.get_num_threads()`` threads.
 
-    By default numba gives each thread one fixed share of a ``prange`` loop; the
-    scenes of a grid differ in cost (a row of fast scenes makes many events), so
-    one thread would finish early and wait.
+    Each thread takes the next block of scenes: :data:`SWEEP_SHARE`-th of the scenes
+    left per thread, at least :data:`SWEEP_GRAIN` (the scenes of a grid differ in cost:
+    a row of fast scenes makes many events, so fixed shares would leave a thread idle).
     """
+    import threading
+
     import numba
 
-    def balanced(*args):
-        old = numba.set_parallel_chunksize(SWEEP_GRAIN)
-        try:
-            return sweep_fn(*args)
-        finally:
-            numba.set_parallel_chunksize(old)
+    def sweep(rows, cp_rows, R, max_log):
+        n = rows.shape[0]
+        out, logs = loop.sweep_arrays(n, max_log)
+        threads = max(1, min(numba.get_num_threads(), -(-n // SWEEP_GRAIN)))
+        lock = threading.Lock()
+        next_start = [0]
+        failures = []
 
-    return balanced
+        def work():
+            while not failures:
+                with lock:
+                    start = next_start[0]
+                    size = max(SWEEP_GRAIN, (n - start) // (SWEEP_SHARE * threads))
+                    next_start[0] = stop = min(n, start + size)
+                if start >= n:
+                    return
+                try:
+                    block(rows, cp_rows, R, max_log, out, logs, start, stop)
+                except BaseException as exc:  # re-raised in the calling thread
+                    failures.append(exc)
+
+        if threads == 1:
+            work()
+        else:
+            pool = [threading.Thread(target=work, daemon=True) for _ in range(threads)]
+            for thread in pool:
+                thread.start()
+            for thread in pool:
+                thread.join()
+        if failures:
+            raise failures[0]
+        return out, logs
+
+    sweep.__wrapped__ = block
+    return sweep

@@ -12,7 +12,7 @@ the end of the search window (the motion goes on).
 
 Entry points (what the driver calls, compiled by numba or run as plain Python
 by :mod:`symvib.numeric.engine.bind`): :func:`simulate_scene`,
-:func:`sample_scene` and :func:`sweep_scenes`.  Each takes the kernels ``K``
+:func:`sample_scene`, :func:`sweep_scenes` and its part :func:`sweep_block`.  Each takes the kernels ``K``
 (a :class:`~symvib.numeric.engine.state.Kernels`, or its numba structure
 :class:`~symvib.numeric.engine.compiled.KernelsType`: the same field names),
 the curve's parameter values and the scene as a row of floats
@@ -57,7 +57,8 @@ from symvib.numeric.layout import (
     Summary,
 )
 
-__all__ = ["run", "params_of", "setup_of", "simulate_scene", "sample_scene", "sweep_scenes"]
+__all__ = ["run", "params_of", "setup_of", "simulate_scene", "sample_scene", "sweep_scenes", "sweep_block",
+           "sweep_arrays"]
 
 #: Rows the event log starts with (it doubles when full).
 EVENT_LOG_START = 64
@@ -70,9 +71,6 @@ EVENT_WIDTH, INTERVAL_WIDTH, SUMMARY_WIDTH = len(EVENT_COLUMNS), len(INTERVAL_CO
 #: Column indices as plain ints (numpy indexes faster with an int than with an IntEnum).
 E_KIND, E_T, E_Q, E_BEFORE, E_AFTER, E_ENERGY = (int(c) for c in EventColumn)
 I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W = (int(c) for c in IntervalColumn)
-#: ``prange`` on the plain-Python engine; :mod:`symvib.numeric.engine.bind` gives the
-#: compiled engine numba's parallel range.
-prange = range
 
 
 def put_event(events, ne, kind, t, q, before, after, e):
@@ -306,13 +304,24 @@ def sweep_scenes(K, rows, cp_rows, R, max_log):
     values and of parameter values).
 
     Returns the per-scene summary (columns :class:`~symvib.numeric.layout.Summary`) and,
-    when ``max_log > 0``, the first ``max_log`` events of each scene.  Scenes run in
-    parallel threads on the numba backend (``prange``).
+    when ``max_log > 0``, the first ``max_log`` events of each scene.  The compiled
+    engine runs :func:`sweep_block` on threads instead
+    (:func:`symvib.numeric.engine.bind.threaded_sweep`).
     """
-    n = rows.shape[0]
-    out = np.zeros((n, SUMMARY_WIDTH))
-    logs = np.zeros((n, max(max_log, 1), EVENT_WIDTH))
-    for i in prange(n):
+    out, logs = sweep_arrays(rows.shape[0], max_log)
+    sweep_block(K, rows, cp_rows, R, max_log, out, logs, 0, rows.shape[0])
+    return out, logs
+
+
+def sweep_arrays(n, max_log):
+    """The summary and event-log arrays of a sweep of ``n`` scenes (zeros)."""
+    return np.zeros((n, SUMMARY_WIDTH)), np.zeros((n, max(max_log, 1), EVENT_WIDTH))
+
+
+def sweep_block(K, rows, cp_rows, R, max_log, out, logs, start, stop):
+    """Entry point: scenes ``start`` to ``stop - 1`` of a sweep, their summaries into ``out``
+    and their first ``max_log`` events into ``logs`` (see :func:`sweep_scenes`)."""
+    for i in range(start, stop):
         cp = params_of(cp_rows[i], cp_rows.shape[1])
         S = setup_of(rows[i], K, cp)
         o = run(S, K, cp, R, rows[i, SceneRow.q0], rows[i, SceneRow.qdot0], rows[i, SceneRow.t_max],
@@ -344,7 +353,6 @@ def sweep_scenes(K, rows, cp_rows, R, max_log):
         out[i, Summary.E0] = o.E0
         out[i, Summary.E_final] = o.E_final
         out[i, Summary.zeno_ratio] = o.zeno.ratio
-    return out, logs
 
 
 #: The kernels of the curve a compiled engine is specialized to: a global of the entries
@@ -363,6 +371,6 @@ def sample_bound(cp, row, R, ivs, ni, pieces):
     return sample_scene(BOUND_KERNELS, cp, row, R, ivs, ni, pieces)
 
 
-def sweep_bound(rows, cp_rows, R, max_log):
-    """:func:`sweep_scenes` with the bound curve's kernels."""
-    return sweep_scenes(BOUND_KERNELS, rows, cp_rows, R, max_log)
+def sweep_bound(rows, cp_rows, R, max_log, out, logs, start, stop):
+    """:func:`sweep_block` with the bound curve's kernels."""
+    sweep_block(BOUND_KERNELS, rows, cp_rows, R, max_log, out, logs, start, stop)
