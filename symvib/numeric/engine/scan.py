@@ -176,8 +176,11 @@ def changes_sign(f_old, f_new):
 
 def map_extend(region, roots, count, target, mu, K, cp, step):
     """Scan the lattice outward until target is covered (or the domain ends)."""
-    roots = extend_side(region, roots, count, target, mu, K, cp, step, 1.0)
-    return extend_side(region, roots, count, target, mu, K, cp, step, -1.0)
+    if target > region[X_HI]:
+        return extend_side(region, roots, count, target, mu, K, cp, step, 1.0)
+    if target < region[X_LO]:
+        return extend_side(region, roots, count, target, mu, K, cp, step, -1.0)
+    return roots
 
 def extend_side(region, roots, count, target, mu, K, cp, step, up):
     """Scan the lattice up (``up = 1``) or down (``up = -1``) until target is covered (or the domain ends)."""
@@ -196,7 +199,7 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
             x = edge
         zp, xp = K.dz(x, *cp), K.dx(x, *cp)
         fp, fm = zp + mu * xp, zp - mu * xp
-        if not ((fp > 0.0) == (fp_old > 0.0) and (fm > 0.0) == (fm_old > 0.0) and fp != 0.0 and fm != 0.0):
+        if not (fp * fp_old > 0.0 and fm * fm_old > 0.0):
             # Both signs kept (the common case) records nothing: else a closer look.
             if changes_sign(fp_old, fp):
                 roots = crossing(roots, count, 0, x_old, x, fp_old, fp, mu, K, cp)
