@@ -36,6 +36,11 @@ def test_scratch_rows_have_the_loop_versions_shape_and_are_independent():
     assert rows[1][1] == 0.0 and rows[2][1] == 0.0
 
 
+def test_grown_copies_what_the_loop_version_copies():
+    a = np.arange(12.0).reshape(4, 3)
+    assert np.array_equal(plain.grown(a, 3, 6), timing.grown(a, 3, 6))
+
+
 def test_plain_rules_hold_the_same_numbers():
     R = driver.rules(driver.NODES)
     P = plain.plain_rules(R)

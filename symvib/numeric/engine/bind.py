@@ -70,11 +70,12 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
     """The engine bound to the kernels of a generated ``module`` on ``backend``.
 
     On numba, the default is an engine specialized to the curve (its kernels
-    inlined; compiled on first use, about 10 s per entry point, then cached on
-    disk under the curve's module and input hash).  ``shared=True`` takes the
-    engine compiled once per number of curve parameters, with the kernels as
-    first-class functions (a new curve costs its kernels only, about a second;
-    runs are about 12 % slower).
+    inlined; compiled on first use and cached on disk under the curve's module
+    and input hash: for the parabola 0.9 s of CPU for the kernels, then 6.7 s
+    for a sweep or a single run, 2 s for a second entry point in the same
+    process).  ``shared=True`` takes the engine compiled once per number of
+    curve parameters (12 s), with the kernels as first-class functions (a new
+    curve then costs its kernels only, 0.5-1.1 s; runs are about 12 % slower).
     """
     if backend == "python":
         from symvib.numeric.engine.plain import plain_entries
@@ -309,6 +310,7 @@ def _specialized_engine(module, ncp: int) -> dict:
     # Threads of Python over blocks of scenes (threaded_sweep), not numba's parallel loop (prange):
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
     options["sweep_bound"] = {"cache": True, "nogil": True}
+    options.update({name: {"inline": "always", **INNER} for name in ("simulate_scene", "sample_scene", "sweep_block")})
     names = {"params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,

@@ -44,7 +44,7 @@ from symvib.numeric.engine.laws import (
 )
 from symvib.numeric.engine.scan import CRIT_STEP, End, locate, map_new, scratch
 from symvib.numeric.engine.state import Outcome, Setup, Zeno
-from symvib.numeric.engine.timing import WORK_ROWS, quad, root_time, samples
+from symvib.numeric.engine.timing import WORK_ROWS, grown, quad, root_time, samples
 from symvib.numeric.layout import (
     EVENT_COLUMNS,
     INTERVAL_COLUMNS,
@@ -76,9 +76,7 @@ I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W = (int(c) for c in Interval
 def put_event(events, ne, kind, t, q, before, after, e):
     """Append an event (columns :class:`~symvib.numeric.layout.EventColumn`); the log doubles when full."""
     if ne == events.shape[0]:
-        new = np.zeros((2 * events.shape[0], EVENT_WIDTH))
-        new[:ne] = events[:ne]
-        events = new
+        events = grown(events, ne, 2 * events.shape[0])
     events[ne, E_KIND] = kind.value
     events[ne, E_T] = t
     events[ne, E_Q] = q
@@ -91,9 +89,7 @@ def put_event(events, ne, kind, t, q, before, after, e):
 def put_interval(ivs, ni, qa, qb, Ga, Gb, s, sigma, t0, T, Wi):
     """Append a motion interval (columns :class:`~symvib.numeric.layout.IntervalColumn`)."""
     if ni == ivs.shape[0]:
-        new = np.zeros((2 * ivs.shape[0], INTERVAL_WIDTH))
-        new[:ni] = ivs[:ni]
-        ivs = new
+        ivs = grown(ivs, ni, 2 * ivs.shape[0])
     ivs[ni, I_QA] = qa
     ivs[ni, I_QB] = qb
     ivs[ni, I_GA] = Ga

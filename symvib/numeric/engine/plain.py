@@ -11,6 +11,7 @@ which these primitives replace their loop versions:
   times faster than indexing an array);
 * :func:`cumulate`: the cumulative Gauss-Legendre integral at every node, a
   matrix-vector product in NumPy instead of ``n^2`` indexed multiplications;
+* :func:`grown`: a full log copied into a larger one by NumPy, not element by element;
 
 and :func:`plain_rules` gives the rules' nodes and weights as lists.  Each
 computes what its loop version computes (``tests/test_plain.py``); the
@@ -33,11 +34,11 @@ import numpy as np
 from symvib.numeric.engine import laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import Rules
 
-__all__ = ["scratch", "cumulate", "plain_rules", "plain_functions", "plain_entries", "PRIMITIVES"]
+__all__ = ["scratch", "cumulate", "grown", "plain_rules", "plain_functions", "plain_entries", "PRIMITIVES"]
 
 
 def scratch(rows, n):
-    """``rows`` scratch rows of ``n`` floats, as lists (:func:`symvib.numeric.engine.timing.scratch`)."""
+    """``rows`` scratch rows of ``n`` floats, as lists (:func:`symvib.numeric.engine.scan.scratch`)."""
     return [[0.0] * n for _ in range(rows)]
 
 
@@ -47,8 +48,15 @@ def cumulate(St, v, n, acc):
     return np.dot(v[:n], St).tolist()
 
 
+def grown(a, n, rows):
+    """``a`` with its first ``n`` rows copied into ``rows`` zeroed rows (:func:`symvib.numeric.engine.timing.grown`)."""
+    new = np.zeros((rows, a.shape[1]))
+    new[:n] = a[:n]
+    return new
+
+
 #: The primitives the plain-Python engine takes instead of the engine's loop versions.
-PRIMITIVES = {"scratch": scratch, "cumulate": cumulate}
+PRIMITIVES = {"scratch": scratch, "cumulate": cumulate, "grown": grown}
 
 
 def plain_rules(R: Rules) -> Rules:

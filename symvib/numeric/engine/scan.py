@@ -155,7 +155,9 @@ def add_root(roots, count, b, r):
     """Append the critical point ``r`` of branch row ``b`` (grows the array when full)."""
     if count[b] == roots.shape[1]:
         new = np.empty((2, 2 * roots.shape[1]))
-        new[:, :roots.shape[1]] = roots
+        for i in range(2):
+            for j in range(roots.shape[1]):
+                new[i, j] = roots[i, j]  # element by element: see timing.grown
         roots = new
     roots[b, count[b]] = r
     count[b] += 1

@@ -26,8 +26,8 @@ from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_u
 from symvib.numeric.engine.scan import scratch
 from symvib.numeric.layout import IntervalColumn
 
-__all__ = ["quad", "cumulate", "root_time", "samples", "arc_length", "PANEL_Q", "ROOT_RATIO", "WORK_ROWS",
-           "SampleColumn"]
+__all__ = ["quad", "cumulate", "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO",
+           "WORK_ROWS", "SampleColumn"]
 
 #: Widest quadrature panel, in units of the curve's q_scale.
 PANEL_Q = 1.0
@@ -260,6 +260,17 @@ def arc_length(qa, qb, S, K, cp, R):
     return 0.5 * abs(step) * total
 
 
+def grown(a, n, rows):
+    """``a`` (2-d) with its first ``n`` rows copied into ``rows`` zeroed rows: a log that
+    grows when full.  Element by element: numba compiles a slice copy with its
+    broadcasting checks and their error messages, about a second of compile time."""
+    new = np.zeros((rows, a.shape[1]))
+    for i in range(n):
+        for j in range(a.shape[1]):
+            new[i, j] = a[i, j]
+    return new
+
+
 def put_sample(out, index, o, t, q, w, N, coord, path, Wf, Wimp, s, sigma, motion):
     """Write the sample at a piece's end into row ``o`` (columns :class:`SampleColumn`); returns ``o + 1``."""
     out[o, 0], out[o, 1], out[o, 2], out[o, 3] = t, q, w, N
@@ -318,11 +329,10 @@ def samples(ivs, ni, S, K, cp, R, pieces):
             need = o + SAMPLE_GROWTH * n + 2
             if need > cap:
                 cap = 2 * need
-                new_out = np.zeros((cap, SAMPLE_COLUMNS))
-                new_out[:o] = out[:o]
-                out = new_out
+                out = grown(out, o, cap)
                 new_index = np.zeros(cap, dtype=np.int64)
-                new_index[:o] = index[:o]
+                for j in range(o):
+                    new_index[j] = index[j]
                 index = new_index
             last = jp + 1 == pieces
             q1 = qa + (qb - qa) * jp / pieces
