@@ -3,9 +3,8 @@
 The engine (:mod:`~symvib.numeric.engine.laws`, ``roots``, ``scan``, ``timing``,
 ``loop``) is written once, for numba, where indexing a NumPy array costs
 nothing; run as plain Python, each ``a[i, j]`` costs about 100 ns.  Without numba
-the engine's functions run as they are, rebound (as
-:func:`symvib.numeric.engine.bind._rebound` rebinds them for numba) to globals in
-which these primitives replace their loop versions:
+the engine's functions run as they are, rebound (as :mod:`symvib.numeric.engine.bind`
+rebinds them for numba) to globals in which these primitives replace their loop versions:
 
 * :func:`scratch`: scratch rows as Python lists (indexing a list is several
   times faster than indexing an array);
@@ -67,15 +66,15 @@ def plain_rules(R: Rules) -> Rules:
 def plain_functions(modules) -> dict:
     """The functions defined in ``modules``, each with a copy of its module's globals in which the
     engine's functions are these copies and :data:`PRIMITIVES` replace their loop versions."""
-    from symvib.numeric.engine.bind import _rebound
-
     functions, spaces = {}, []
     for mod in modules:
         namespace = dict(vars(mod))
         spaces.append(namespace)
         for name, fn in vars(mod).items():
             if isinstance(fn, types.FunctionType) and fn.__module__ == mod.__name__:
-                functions[name] = _rebound(fn, namespace)
+                new = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
+                new.__qualname__, new.__module__, new.__doc__ = fn.__qualname__, fn.__module__, fn.__doc__
+                functions[name] = new
     for namespace in spaces:
         namespace.update(functions)
         namespace.update(PRIMITIVES)

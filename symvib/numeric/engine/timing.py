@@ -181,7 +181,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
                     N = kn[j] * w + g * cn[j]
                     wj = Wt[j]
                     Tp += wj * f
-                    Wp += wj * abs(N) * hdj
+                    Wp += wj * mu * abs(N) * hdj
                     if keep:
                         ft[j] = f
                         fp[j] = hdj
@@ -204,7 +204,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
                         out[o + j, 5] = work0 + hw * acc[j]
                     o += n
                 Tp *= hw
-                Wp *= mu * hw  # the friction work: mu |N| h dq/dr, integrated
+                Wp *= hw
                 Pp *= hw
                 tau0 += Tp
                 path0 += Pp
