@@ -78,9 +78,9 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
     curve then costs its kernels only, 0.5-1.1 s; runs are about 12 % slower).
     """
     if backend == "python":
-        k = Kernels(*kernel_functions(module))
-        return Engine(partial(loop.simulate_scene, k), partial(loop.sample_scene, k),
-                      partial(loop.sweep_scenes, k))
+        from symvib.numeric.engine.plain import plain_entries
+
+        return Engine(*plain_entries(Kernels(*kernel_functions(module))))
     if backend != "numba":
         raise ValueError(f"unknown backend {backend!r}; use 'numba' or 'python'")
     ncp = len(module.PARAMS)

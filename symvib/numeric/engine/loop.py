@@ -42,7 +42,7 @@ from symvib.numeric.engine.laws import (
     side_at,
     zeno_series,
 )
-from symvib.numeric.engine.scan import CRIT_STEP, End, locate, map_new
+from symvib.numeric.engine.scan import CRIT_STEP, End, locate, map_new, scratch
 from symvib.numeric.engine.state import Outcome, Setup, Zeno
 from symvib.numeric.engine.timing import WORK_ROWS, grown, quad, root_time, samples
 from symvib.numeric.layout import (
@@ -113,8 +113,7 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
     g, m, mu, k, scale = S.g, S.m, S.mu, S.k, S.scale
     region, roots, count = map_new(q0, S.lo, S.hi, mu, K, cp, CRIT_STEP * scale)
     X = R.Xw
-    n = max(X.shape[0], R.Xp.shape[0])
-    work = np.empty((WORK_ROWS, n))
+    work = scratch(WORK_ROWS, max(len(X), len(R.Xp)))
     dummy = np.empty((1, 4))
     events = np.zeros((min(max_events + EVENT_LOG_SPARE, EVENT_LOG_START), EVENT_WIDTH))
     ne = 0

@@ -24,7 +24,7 @@ import numpy as np
 from symvib.numeric.engine.laws import Fs
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update, root_G
 
-__all__ = ["End", "Region", "map_new", "locate", "CRIT_STEP", "WINDOW", "CHUNK", "DIP_ITER"]
+__all__ = ["End", "Region", "scratch", "map_new", "locate", "CRIT_STEP", "WINDOW", "CHUNK", "DIP_ITER"]
 
 #: Search window where no limiter bounds the motion, in units of q_scale.
 WINDOW = 2.0
@@ -117,9 +117,15 @@ def is_safe(x, K, cp):
     """Whether ``N > 0`` surely at ``x`` for ``w >= 0``: ``kappa >= 0`` and ``x' > 0``."""
     return K.kappa(x, *cp) >= 0.0 and K.dx(x, *cp) > 0.0
 
+def scratch(rows, n):
+    """``rows`` scratch rows of ``n`` floats (the plain-Python engine takes lists:
+    :func:`symvib.numeric.engine.plain.scratch`)."""
+    return np.empty((rows, n))
+
+
 def map_new(q0, lo, hi, mu, K, cp, step):
     """The scanned region (:class:`Region`) and critical points at the start ``q0``."""
-    region = np.empty(REGION_SIZE)
+    region = scratch(1, REGION_SIZE)[0]
     lo_in = lo + EDGE_RTOL * max(1.0, abs(lo)) if math.isfinite(lo) else -math.inf
     hi_in = hi - EDGE_RTOL * max(1.0, abs(hi)) if math.isfinite(hi) else math.inf
     k0 = math.floor(q0 / step)
@@ -158,44 +164,57 @@ def add_root(roots, count, b, r):
     return roots
 
 def crossing(roots, count, row, x_old, x_new, f_old, f_new, mu, K, cp):
-    """Record a root of F_s' between two scanned points (or at the new one, if exactly 0)."""
+    """Record the root of F_s' between two scanned points where :func:`changes_sign`
+    (at the new one, if exactly 0)."""
     if f_new == 0.0:
         return add_root(roots, count, row, x_new)
-    if f_old != 0.0 and (f_old > 0.0) != (f_new > 0.0):
-        s = 1 if row == 0 else -1
-        return add_root(roots, count, row, root_crit((s, mu, K, cp), x_old, x_new, f_old, f_new))
-    return roots
+    s = 1 if row == 0 else -1
+    return add_root(roots, count, row, root_crit((s, mu, K, cp), x_old, x_new, f_old, f_new))
+
+def changes_sign(f_old, f_new):
+    """Whether F_s' has a root between two scanned points with values f_old, f_new (or at the
+    new one): a root at the old one is recorded already."""
+    return f_new == 0.0 or (f_old != 0.0 and (f_old > 0.0) != (f_new > 0.0))
 
 def map_extend(region, roots, count, target, mu, K, cp, step):
     """Scan the lattice outward until target is covered (or the domain ends)."""
-    while target > region[X_HI] and region[X_HI] < region[HI_IN]:
-        k = region[K_HI] + 1.0
-        x = min(k * step, region[HI_IN])
+    if target > region[X_HI]:
+        return extend_side(region, roots, count, target, mu, K, cp, step, 1.0)
+    if target < region[X_LO]:
+        return extend_side(region, roots, count, target, mu, K, cp, step, -1.0)
+    return roots
+
+def extend_side(region, roots, count, target, mu, K, cp, step, up):
+    """Scan the lattice up (``up = 1``) or down (``up = -1``) until target is covered (or the domain ends)."""
+    if up > 0.0:
+        ix, ifp, ifm, isafe, iopen, ik, iedge = X_HI, FP_HI, FM_HI, SAFE_HI, SAFE_HI_OPEN, K_HI, HI_IN
+    else:
+        ix, ifp, ifm, isafe, iopen, ik, iedge = X_LO, FP_LO, FM_LO, SAFE_LO, SAFE_LO_OPEN, K_LO, LO_IN
+    x_old, edge = region[ix], region[iedge]
+    if not ((target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0):
+        return roots
+    fp_old, fm_old, k, safe_open = region[ifp], region[ifm], region[ik], region[iopen] != 0.0
+    while (target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0:
+        k += up
+        x = k * step
+        if (x - edge) * up > 0.0:
+            x = edge
         zp, xp = K.dz(x, *cp), K.dx(x, *cp)
         fp, fm = zp + mu * xp, zp - mu * xp
-        a = region[X_HI]
-        roots = crossing(roots, count, 0, a, x, region[FP_HI], fp, mu, K, cp)
-        roots = crossing(roots, count, 1, a, x, region[FM_HI], fm, mu, K, cp)
-        if region[SAFE_HI_OPEN] != 0.0:
+        if not (fp * fp_old > 0.0 and fm * fm_old > 0.0):
+            # Both signs kept (the common case) records nothing: else a closer look.
+            if changes_sign(fp_old, fp):
+                roots = crossing(roots, count, 0, x_old, x, fp_old, fp, mu, K, cp)
+            if changes_sign(fm_old, fm):
+                roots = crossing(roots, count, 1, x_old, x, fm_old, fm, mu, K, cp)
+        if safe_open:
             if xp > 0.0 and K.kappa(x, *cp) >= 0.0:
-                region[SAFE_HI] = x
+                region[isafe] = x
             else:
-                region[SAFE_HI_OPEN] = 0.0
-        region[X_HI], region[FP_HI], region[FM_HI], region[K_HI] = x, fp, fm, k
-    while target < region[X_LO] and region[X_LO] > region[LO_IN]:
-        k = region[K_LO] - 1.0
-        x = max(k * step, region[LO_IN])
-        zp, xp = K.dz(x, *cp), K.dx(x, *cp)
-        fp, fm = zp + mu * xp, zp - mu * xp
-        b = region[X_LO]
-        roots = crossing(roots, count, 0, b, x, region[FP_LO], fp, mu, K, cp)
-        roots = crossing(roots, count, 1, b, x, region[FM_LO], fm, mu, K, cp)
-        if region[SAFE_LO_OPEN] != 0.0:
-            if xp > 0.0 and K.kappa(x, *cp) >= 0.0:
-                region[SAFE_LO] = x
-            else:
-                region[SAFE_LO_OPEN] = 0.0
-        region[X_LO], region[FP_LO], region[FM_LO], region[K_LO] = x, fp, fm, k
+                safe_open = False
+        x_old, fp_old, fm_old = x, fp, fm
+    region[ix], region[ifp], region[ifm], region[ik] = x_old, fp_old, fm_old, k
+    region[iopen] = 1.0 if safe_open else 0.0
     return roots
 
 def next_crit(roots, count, s, a, b, sigma):
@@ -305,7 +324,7 @@ def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X):
     pn = (s, C, nsgn, g, g2, mu, K, cp)
     before, fbefore = q, max(normal_on(q, pn), N_FLOOR)
     prev, fprev = q, N_FLOOR
-    n = X.shape[0]
+    n = len(X)
     for j in range(n + 1):
         x = q + (qe - q) * 0.5 * (X[j] + 1.0) if j < n else qe
         fx = normal_on(x, pn)

@@ -12,19 +12,22 @@ inverse square root, with panels graded geometrically from ``sqrt(delta)``.
 Examples
 --------
 >>> PANEL_Q, ROOT_RATIO, WORK_ROWS
-(1.0, 1.0, 12)
+(1.0, 1.0, 10)
 """
 from __future__ import annotations
 
 import math
+from math import sqrt
 
 import numpy as np
 
 from symvib.numeric.engine.laws import Fs, dFs, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update
+from symvib.numeric.engine.scan import scratch
 from symvib.numeric.layout import IntervalColumn
 
-__all__ = ["quad", "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO", "WORK_ROWS", "SampleColumn"]
+__all__ = ["quad", "cumulate", "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO",
+           "WORK_ROWS", "SampleColumn"]
 
 #: Widest quadrature panel, in units of the curve's q_scale.
 PANEL_Q = 1.0
@@ -34,7 +37,7 @@ ROOT_RATIO = 1.0
 #: Smallest positive double, used to keep 1/sqrt(G) finite at a node on a root.
 TINY = np.finfo(float).tiny
 #: Rows of the quadrature's scratch array (node values and the cumulative sums).
-WORK_ROWS = 12
+WORK_ROWS = 10
 
 
 class SampleColumn:
@@ -58,6 +61,18 @@ SAMPLE_COLUMNS = 1 + max(v for k, v in vars(SampleColumn).items() if not k.start
 SAMPLE_GROWTH = 200
 
 
+def cumulate(St, v, n, acc):
+    """``acc[j] = sum_i St[i, j] v[i]`` for ``j < n``, summed over ``i`` in order: a cumulative
+    Gauss-Legendre integral at every node (``St`` the transposed matrix); returns ``acc``."""
+    for j in range(n):
+        acc[j] = 0.0
+    for i in range(n):
+        vi = v[i]
+        for j in range(n):
+            acc[j] += St[i, j] * vi
+    return acc
+
+
 def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
     """Time and friction work (per unit mass) of one interval; node samples into out[o:].
 
@@ -74,9 +89,10 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
         return 0.0, 0.0, o
     half = 0.5 * L
     maxq = PANEL_Q * scale
-    gam, dGdr, qn, dqdr, ft = work[0], work[1], work[2], work[3], work[4]
-    hn, exn, kn, cn, acc = work[5], work[6], work[7], work[8], work[9]
-    fp, fw = work[10], work[11]
+    # Per node: the integrand of G's cumulative integral, q, h dq/dr, exp(s mu alpha), kappa,
+    # cos alpha, G's cumulative integral; with samples, the integrands of time, path and work.
+    cum, qn, hd, exn, kn, cn, acc = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
+    ft, fp, fw = work[7], work[8], work[9]
     T = 0.0
     Wf = 0.0
     P = 0.0
@@ -87,7 +103,8 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
         else:
             e, d, Ge = qb, -float(sigma), Gb
             half_b = o
-        gamma = -d * g2 * dFs(s, e, mu, K, cp)
+        gd = -d * g2  # G' = gd F_s' along the half (d = +-1: gd F_s' is -2 g F_s' d exactly)
+        gamma = gd * dFs(s, e, mu, K, cp)
         root = Ge == 0.0 or (gamma > 0.0 and Ge < ROOT_RATIO * gamma * half)
         Gstart = Ge
         tau0 = 0.0
@@ -116,10 +133,11 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
                 hw = 0.5 * (r2 - r1)
                 weighted = root and r1 == 0.0
                 if weighted:
-                    X, Wt, St = Xw, Ww, Sw
+                    X, Wt, St, St2 = Xw, Ww, Sw, SWw
                 else:
-                    X, Wt, St = Xp, Wtp, Sp
-                n = X.shape[0]
+                    X, Wt, St, St2 = Xp, Wtp, Sp, Sp
+                n = len(X)
+                total = 0.0
                 for j in range(n):
                     r = r1 + hw * (X[j] + 1.0)
                     if root:
@@ -129,69 +147,61 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
                         xi = r
                         dq = 1.0
                     qj = e + d * xi
-                    qn[j] = qj
-                    dqdr[j] = dq
-                    dF, hh, ex, ka, co = node(s, qj, mu, K, cp)
-                    hn[j], exn[j], kn[j], cn[j] = hh, ex, ka, co
-                    gam[j] = -g2 * dF * d
-                    dGdr[j] = gam[j] * dq
-                total = 0.0
-                for j in range(n):
-                    total += Wt[j] * dGdr[j]
+                    # laws.node, called here directly (the plain engine's hottest call)
+                    if s > 0:
+                        dF, hh, ex, ka, co = K.node_p(qj, mu, *cp)
+                    else:
+                        dF, hh, ex, ka, co = K.node_m(qj, mu, *cp)
+                    gj = gd * dF
+                    dG = gj * dq
+                    total += Wt[j] * dG
+                    # The integrand of G's cumulative integral: gamma with the weight r next to a root.
+                    cum[j] = gj if weighted else dG
+                    hd[j] = hh * dq
+                    exn[j] = ex
+                    kn[j] = ka
+                    cn[j] = co
+                    if keep:
+                        qn[j] = qj
                 total *= hw
                 Tp = 0.0
                 Wp = 0.0
                 Pp = 0.0
-                # acc = S @ dGdr (or SW @ gam next to a root), summed over i in order for every
-                # node j at once: the inner loop runs along a row of the transposed matrix.
+                # G at the nodes: the anchor plus the cumulative integral of dG/dr.
+                acc = cumulate(St2, cum, n, acc)
+                scale_acc = 2.0 * hw * hw if weighted else hw
                 for j in range(n):
-                    acc[j] = 0.0
-                if weighted:
-                    scale_acc = 2.0 * hw * hw
-                    for i in range(n):
-                        gi = gam[i]
-                        for j in range(n):
-                            acc[j] += SWw[i, j] * gi
-                else:
-                    scale_acc = hw
-                    for i in range(n):
-                        di = dGdr[i]
-                        for j in range(n):
-                            acc[j] += St[i, j] * di
-                for j in range(n):
-                    G = max(Gstart + acc[j] * scale_acc, TINY)
-                    hh = hn[j]
+                    G = Gstart + acc[j] * scale_acc
+                    if G < TINY:
+                        G = TINY
                     ex = exn[j]
-                    f = hh * dqdr[j] * ex / math.sqrt(G)
-                    ft[j] = f
+                    hdj = hd[j]
+                    f = hdj * ex / sqrt(G)
                     w = G / (ex * ex)
                     N = kn[j] * w + g * cn[j]
-                    Tp += Wt[j] * f
-                    Wp += Wt[j] * mu * abs(N) * hh * dqdr[j]
+                    wj = Wt[j]
+                    Tp += wj * f
+                    Wp += wj * mu * abs(N) * hdj
                     if keep:
-                        fp[j] = hh * dqdr[j]
-                        fw[j] = mu * abs(N) * hh * dqdr[j]
-                        Pp += Wt[j] * fp[j]
+                        ft[j] = f
+                        fp[j] = hdj
+                        fw[j] = mu * abs(N) * hdj
+                        Pp += wj * fp[j]
                         out[o + j, 1] = qn[j]
                         out[o + j, 2] = w
                         out[o + j, 3] = N
                 if keep:
                     # Time, path and friction work at every node: the same cumulative
                     # Gauss-Legendre integral as the interval's totals.
+                    acc = cumulate(St, ft, n, acc)
                     for j in range(n):
-                        out[o + j, 0] = 0.0
-                        out[o + j, 4] = 0.0
-                        out[o + j, 5] = 0.0
-                    for i in range(n):
-                        fi, pi, wi = ft[i], fp[i], fw[i]
-                        for j in range(n):
-                            out[o + j, 0] += St[i, j] * fi
-                            out[o + j, 4] += St[i, j] * pi
-                            out[o + j, 5] += St[i, j] * wi
+                        out[o + j, 0] = tau0 + hw * acc[j]
+                    acc = cumulate(St, fp, n, acc)
                     for j in range(n):
-                        out[o + j, 0] = tau0 + hw * out[o + j, 0]
-                        out[o + j, 4] = path0 + hw * out[o + j, 4]
-                        out[o + j, 5] = work0 + hw * out[o + j, 5]
+                        out[o + j, 4] = path0 + hw * acc[j]
+                    acc = cumulate(St, fw, n, acc)
+                    for j in range(n):
+                        out[o + j, 5] = work0 + hw * acc[j]
                     o += n
                 Tp *= hw
                 Wp *= hw
@@ -245,7 +255,7 @@ def arc_length(qa, qb, S, K, cp, R):
     total = 0.0
     for jp in range(parts):
         a = qa + jp * step
-        for j in range(X.shape[0]):
+        for j in range(len(X)):
             total += Wt[j] * K.h(a + 0.5 * step * (X[j] + 1.0), *cp)
     return 0.5 * abs(step) * total
 
@@ -292,8 +302,8 @@ def samples(ivs, ni, S, K, cp, R, pieces):
     it and the loss ``(1 - k^2) w / 2`` (per unit mass; physics.md, "Events" 1).
     Rows are in time order within each piece's half; the caller sorts by time.
     """
-    n = max(R.Xw.shape[0], R.Xp.shape[0])
-    work = np.empty((WORK_ROWS, n))
+    n = max(len(R.Xw), len(R.Xp))
+    work = scratch(WORK_ROWS, n)
     g, k = S.g, S.k
     cap = max(ni * pieces * 4 * n, 16)
     out = np.zeros((cap, SAMPLE_COLUMNS))

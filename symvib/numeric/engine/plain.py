@@ -1,0 +1,105 @@
+"""The plain-Python engine: the engine's own functions, with a few primitives made fast in Python.
+
+The engine (:mod:`~symvib.numeric.engine.laws`, ``roots``, ``scan``, ``timing``,
+``loop``) is written once, for numba, where indexing a NumPy array costs
+nothing; run as plain Python, each ``a[i, j]`` costs about 100 ns.  Without numba
+the engine's functions run as they are, rebound (as :mod:`symvib.numeric.engine.bind`
+rebinds them for numba) to globals in which these primitives replace their loop versions:
+
+* :func:`scratch`: scratch rows as Python lists (indexing a list is several
+  times faster than indexing an array);
+* :func:`cumulate`: the cumulative Gauss-Legendre integral at every node, a
+  matrix-vector product in NumPy instead of ``n^2`` indexed multiplications;
+* :func:`grown`: a full log copied into a larger one by NumPy, not element by element;
+
+and :func:`plain_rules` gives the rules' nodes and weights as lists.  Each
+computes what its loop version computes (``tests/test_plain.py``); the
+cumulative sums only in another order, which changes the last bits.
+
+Examples
+--------
+>>> cumulate(np.eye(2), [1.0, 2.0, 3.0], 2, None)
+[1.0, 2.0]
+>>> scratch(2, 3)
+[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+"""
+from __future__ import annotations
+
+import types
+from functools import cache
+
+import numpy as np
+
+from symvib.numeric.engine import laws, loop, roots, scan, timing
+from symvib.numeric.engine.state import Rules
+
+__all__ = ["scratch", "cumulate", "grown", "plain_rules", "plain_functions", "plain_entries", "PRIMITIVES"]
+
+
+def scratch(rows, n):
+    """``rows`` scratch rows of ``n`` floats, as lists (:func:`symvib.numeric.engine.scan.scratch`)."""
+    return [[0.0] * n for _ in range(rows)]
+
+
+def cumulate(St, v, n, acc):
+    """``sum_i St[i, j] v[i]`` for ``j < n`` as a list, by NumPy (:func:`symvib.numeric.engine.timing.cumulate`;
+    ``acc`` is not used: the caller takes the returned list)."""
+    return np.dot(v[:n], St).tolist()
+
+
+def grown(a, n, rows):
+    """``a`` with its first ``n`` rows copied into ``rows`` zeroed rows (:func:`symvib.numeric.engine.timing.grown`)."""
+    new = np.zeros((rows, a.shape[1]))
+    new[:n] = a[:n]
+    return new
+
+
+#: The primitives the plain-Python engine takes instead of the engine's loop versions.
+PRIMITIVES = {"scratch": scratch, "cumulate": cumulate, "grown": grown}
+
+
+def plain_rules(R: Rules) -> Rules:
+    """The rules with their nodes and weights as lists (the matrices stay arrays, for :func:`cumulate`)."""
+    return Rules(R.Xw.tolist(), R.Ww.tolist(), R.Sw, R.SWw, R.Xp.tolist(), R.Wp.tolist(), R.Sp)
+
+
+def plain_functions(modules) -> dict:
+    """The functions defined in ``modules``, each with a copy of its module's globals in which the
+    engine's functions are these copies and :data:`PRIMITIVES` replace their loop versions."""
+    functions, spaces = {}, []
+    for mod in modules:
+        namespace = dict(vars(mod))
+        spaces.append(namespace)
+        for name, fn in vars(mod).items():
+            if isinstance(fn, types.FunctionType) and fn.__module__ == mod.__name__:
+                new = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
+                new.__qualname__, new.__module__, new.__doc__ = fn.__qualname__, fn.__module__, fn.__doc__
+                functions[name] = new
+    for namespace in spaces:
+        namespace.update(functions)
+        namespace.update(PRIMITIVES)
+    return functions
+
+
+@cache
+def _engine() -> dict:
+    """The engine's functions with the plain primitives (built once)."""
+    return plain_functions((laws, roots, scan, timing, loop))
+
+
+def plain_entries(K) -> tuple:
+    """The entry points ``(simulate, samples, sweep)`` of :class:`symvib.numeric.engine.bind.Engine`
+    bound to the kernels ``K``, taking the rules ``R`` as the compiled engine does."""
+    fns = _engine()
+    simulate_scene, sample_scene, sweep_scenes = fns["simulate_scene"], fns["sample_scene"], fns["sweep_scenes"]
+
+    def simulate(cp, row, R, keep):
+        return simulate_scene(K, cp, row, plain_rules(R), keep)
+
+    def samples(cp, row, R, ivs, ni, pieces):
+        return sample_scene(K, cp, row, plain_rules(R), ivs, ni, pieces)
+
+    def sweep(rows, cp_rows, R, max_log):
+        return sweep_scenes(K, rows, cp_rows, plain_rules(R), max_log)
+
+    return simulate, samples, sweep
