@@ -39,8 +39,8 @@ from typing import NamedTuple
 from symvib.numeric.engine import laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
-__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "ENGINE_MODULES",
-           "ENTRY_POINTS"]
+__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep",
+           "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS"]
 
 #: The engine's modules, in import order.
 ENGINE_MODULES = (laws, roots, scan, timing, loop)
@@ -120,27 +120,15 @@ def _signatures(ncp: int) -> dict:
     return out
 
 
-def _rebound(fn, namespace: dict, qualname: str | None = None):
-    """``fn``'s code with ``namespace`` as its globals (its calls bound to compiled siblings);
-    ``qualname`` names it (numba's disk cache is keyed by the name)."""
-    new = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
-    new.__qualname__, new.__module__, new.__doc__ = qualname or fn.__qualname__, fn.__module__, fn.__doc__
-    return new
+def rebound_functions(modules, keep, make=None, names=None) -> dict:
+    """The functions defined in ``modules`` whose names pass ``keep``, each rebuilt from its own
+    code object by ``make(name, fn)`` (default: as it is), with a copy of its module's globals.
 
-
-def _compiled_functions(modules, keep, *, names=None, options=None, default=None, qualnames=None) -> dict:
-    """numba dispatchers of the functions defined in ``modules`` whose names pass ``keep``.
-
-    Each function gets a copy of its module's globals in which every such name is
-    the compiled function (names must be unique across the modules), then ``names``
-    (globals that replace or add to those: a static-length ``params_of``, the kernels).
-    ``options`` (name -> ``numba.njit`` options; ``default`` for the others) and
-    ``qualnames`` (name -> the name numba's disk cache files it under) apply per function.  Dispatchers are lazy
-    (compiled on first call, or by the caller with a signature).
+    In each copy, every such name is the rebuilt function (names must be unique across
+    the modules), then ``names`` replace or add globals (numba's static-length
+    ``params_of`` and the kernels; the plain engine's primitives).  No source text is
+    pasted or executed: both backends run the engine's own code.
     """
-    import numba
-
-    options, qualnames = options or {}, qualnames or {}
     functions, spaces = {}, []
     for mod in modules:
         namespace = dict(vars(mod))
@@ -149,13 +137,33 @@ def _compiled_functions(modules, keep, *, names=None, options=None, default=None
             if isinstance(fn, types.FunctionType) and fn.__module__ == mod.__name__ and keep(name):
                 if name in functions:
                     raise RuntimeError(f"engine function {name!r} is defined twice ({mod.__name__})")
-                functions[name] = (fn, namespace)
-    compiled = {name: numba.njit(**options.get(name, default or {}))(_rebound(fn, namespace, qualnames.get(name)))
-                for name, (fn, namespace) in functions.items()}
+                new = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
+                new.__qualname__, new.__module__, new.__doc__ = fn.__qualname__, fn.__module__, fn.__doc__
+                functions[name] = make(name, new) if make else new
     for namespace in spaces:
-        namespace.update(compiled)
+        namespace.update(functions)
         namespace.update(names or {})
-    return compiled
+    return functions
+
+
+def _compiled_functions(modules, keep, *, names=None, options=None, default=None, qualnames=None) -> dict:
+    """numba dispatchers of the functions defined in ``modules`` whose names pass ``keep``
+    (:func:`rebound_functions`, their calls bound to their compiled siblings).
+
+    ``options`` (name -> ``numba.njit`` options; ``default`` for the others) and
+    ``qualnames`` (name -> the name numba's disk cache files it under) apply per
+    function.  Dispatchers are lazy (compiled on first call, or by the caller with a
+    signature).
+    """
+    import numba
+
+    options, qualnames = options or {}, qualnames or {}
+
+    def make(name, fn):
+        fn.__qualname__ = qualnames.get(name, fn.__qualname__)
+        return numba.njit(**options.get(name, default or {}))(fn)
+
+    return rebound_functions(modules, keep, make, names)
 
 
 def _compiled_kernels(module, ncp: int) -> tuple:

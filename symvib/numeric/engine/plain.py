@@ -25,15 +25,13 @@ Examples
 """
 from __future__ import annotations
 
-import types
 from functools import cache
 
 import numpy as np
 
-from symvib.numeric.engine import laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import Rules
 
-__all__ = ["scratch", "cumulate", "grown", "plain_rules", "plain_functions", "plain_entries", "PRIMITIVES"]
+__all__ = ["scratch", "cumulate", "grown", "plain_rules", "plain_entries", "PRIMITIVES"]
 
 
 def scratch(rows, n):
@@ -63,28 +61,13 @@ def plain_rules(R: Rules) -> Rules:
     return Rules(R.Xw.tolist(), R.Ww.tolist(), R.Sw, R.SWw, R.Xp.tolist(), R.Wp.tolist(), R.Sp)
 
 
-def plain_functions(modules) -> dict:
-    """The functions defined in ``modules``, each with a copy of its module's globals in which the
-    engine's functions are these copies and :data:`PRIMITIVES` replace their loop versions."""
-    functions, spaces = {}, []
-    for mod in modules:
-        namespace = dict(vars(mod))
-        spaces.append(namespace)
-        for name, fn in vars(mod).items():
-            if isinstance(fn, types.FunctionType) and fn.__module__ == mod.__name__:
-                new = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
-                new.__qualname__, new.__module__, new.__doc__ = fn.__qualname__, fn.__module__, fn.__doc__
-                functions[name] = new
-    for namespace in spaces:
-        namespace.update(functions)
-        namespace.update(PRIMITIVES)
-    return functions
-
-
 @cache
 def _engine() -> dict:
-    """The engine's functions with the plain primitives (built once)."""
-    return plain_functions((laws, roots, scan, timing, loop))
+    """The engine's functions with the plain primitives (built once;
+    :func:`symvib.numeric.engine.bind.rebound_functions`)."""
+    from symvib.numeric.engine.bind import ENGINE_MODULES, rebound_functions
+
+    return rebound_functions(ENGINE_MODULES, lambda name: True, names=PRIMITIVES)
 
 
 def plain_entries(K) -> tuple:
