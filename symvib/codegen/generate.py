@@ -172,14 +172,30 @@ def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
             if str(sym) in used:
                 used |= {str(x) for x in value.free_symbols}
         used -= placeholders
-        if set(args) - used:
+        if set(args) - used and isinstance(printer, _NumPy):
             # Broadcast over every argument even where the expression ignores some
             # (h = R on a circle), so that kernels map arrays to arrays of one shape.
-            body = (f"_broadcast({body}, {', '.join(args)})" if isinstance(printer, _NumPy)
-                    else f"float({body})")
+            body = f"_broadcast({body}, {', '.join(args)})"
+        elif not isinstance(printer, _NumPy) and _may_be_int(part):
+            body = f"float({body})"  # a scalar kernel returns a float; float(x) of a float only costs a call
         bodies.append(body)
     lines.append(f"    return {', '.join(bodies)}" if len(bodies) > 1 else f"    return {bodies[0]}")
     return "\n".join(lines)
+
+
+#: Functions whose printed scalar code may give an int for float arguments (``max(q, 0)``).
+_INT_VALUED = (sp.Piecewise, sp.Max, sp.Min, sp.floor, sp.ceiling, sp.sign, sp.Heaviside)
+
+
+def _may_be_int(expr) -> bool:
+    """Whether the scalar code of ``expr`` may give an int for float arguments: a constant
+    (``0``, ``2``), or an expression with one of :data:`_INT_VALUED`.
+
+    >>> q = sp.Symbol("q")
+    >>> _may_be_int(sp.Integer(2)), _may_be_int(sp.Max(q, 0)), _may_be_int(2 * sp.cos(q))
+    (True, True, False)
+    """
+    return not expr.free_symbols or expr.has(*_INT_VALUED)
 
 
 def _called_args(expr) -> set:
