@@ -30,11 +30,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
-def perf_map(module, path):
-    """Write the addresses of every function compiled for ``module``'s dispatchers."""
+def perf_map(dispatchers, path):
+    """Write the addresses of every function compiled for ``dispatchers`` (name -> numba dispatcher)."""
     entries = set()
-    for name in dir(module):
-        dispatcher = getattr(module, name)
+    for dispatcher in dispatchers.values():
         for cres in getattr(dispatcher, "overloads", {}).values():
             library = cres.library
             for fn in library._final_module.functions:  # numba internals: fine for a diagnostic
@@ -84,9 +83,8 @@ def main(argv=None):
     base = load_scene(ROOT / "symvib" / "scenes" / "paper-parabola.toml").replace(k=0.8, mu=0.05)
     vary = {"qdot": "3:12:200", "mu": "0.01:0.2:100"}
     result = sweep(base, vary, backend="numba", progress=False)  # compiles the engine
-    engine = next(m for n, m in sys.modules.items()
-                  if n.startswith("symvib_engine_engine_" + Path(load(base.shape).__file__).stem + "_numba"))
-    count = perf_map(engine, f"/tmp/perf-{os.getpid()}.map")
+    # The curve's engine as compiled for it (symvib.numeric.engine.bind._specialized_engine).
+    count = perf_map(load(base.shape)._symvib_specialized_engine, f"/tmp/perf-{os.getpid()}.map")
     events = int(result["events"].sum())
     print(f"# {count} compiled functions mapped; {result.count} scenes, {events} events per sweep, "
           f"{args.threads} thread(s), {driver.NODES} nodes")
