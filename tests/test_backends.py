@@ -108,8 +108,12 @@ def test_the_threaded_sweep_runs_every_scene_once_in_blocks_and_raises_a_block_s
 
     n = 1000
     rows = np.arange(n, dtype=float).reshape(n, 1)
+    threads = numba.get_num_threads()
     numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
-    out, logs = threaded_sweep(block)(rows, rows, None, 3)
+    try:
+        out, logs = threaded_sweep(block)(rows, rows, None, 3)
+    finally:
+        numba.set_num_threads(threads)
     assert np.array_equal(out[:, Summary.events], rows[:, 0])  # each scene once
     assert logs.shape == (n, 3, logs.shape[2])
     spans = sorted(calls)

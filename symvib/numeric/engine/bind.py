@@ -39,7 +39,7 @@ from typing import NamedTuple
 from symvib.numeric.engine import laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
-__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep",
+__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
            "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS"]
 
 #: The engine's modules, in import order.
@@ -309,7 +309,6 @@ def _specialized_engine(module, ncp: int) -> dict:
     cached = getattr(module, "_symvib_specialized_engine", None)
     if cached is not None:
         return cached
-
     from symvib.numeric.engine.static import StaticKernels
     from symvib.numeric.kernels import cache_dir
 
@@ -330,16 +329,25 @@ def _specialized_engine(module, ncp: int) -> dict:
     return compiled
 
 
+def guided_blocks(n: int, threads: int):
+    """``(start, stop)`` of the blocks a sweep of ``n`` scenes on ``threads`` threads takes, in order:
+    :data:`SWEEP_SHARE`-th of the scenes left per thread, at least :data:`SWEEP_GRAIN`."""
+    start = 0
+    while start < n:
+        stop = min(n, start + max(SWEEP_GRAIN, (n - start) // (SWEEP_SHARE * threads)))
+        yield start, stop
+        start = stop
+
+
 def threaded_sweep(block):
     """A sweep ``(rows, cp_rows, R, max_log) -> (summary, logs)`` that runs the compiled
     ``block(rows, cp_rows, R, max_log, out, logs, start, stop)`` (which releases the GIL)
     on ``numba.get_num_threads()`` threads.
 
-    Each thread takes the next block of scenes: :data:`SWEEP_SHARE`-th of the scenes
-    left per thread, at least :data:`SWEEP_GRAIN` (the scenes of a grid differ in cost:
-    a row of fast scenes makes many events, so fixed shares would leave a thread idle).
+    Each thread takes the next of the :func:`guided_blocks` (the scenes of a grid differ in
+    cost: a row of fast scenes makes many events, so fixed shares would leave a thread idle).
     """
-    import threading
+    from concurrent.futures import ThreadPoolExecutor
 
     import numba
 
@@ -347,33 +355,17 @@ def threaded_sweep(block):
         n = rows.shape[0]
         out, logs = loop.sweep_arrays(n, max_log)
         threads = max(1, min(numba.get_num_threads(), -(-n // SWEEP_GRAIN)))
-        lock = threading.Lock()
-        next_start = [0]
-        failures = []
 
-        def work():
-            while not failures:
-                with lock:
-                    start = next_start[0]
-                    size = max(SWEEP_GRAIN, (n - start) // (SWEEP_SHARE * threads))
-                    next_start[0] = stop = min(n, start + size)
-                if start >= n:
-                    return
-                try:
-                    block(rows, cp_rows, R, max_log, out, logs, start, stop)
-                except BaseException as exc:  # re-raised in the calling thread
-                    failures.append(exc)
+        def run(span):
+            block(rows, cp_rows, R, max_log, out, logs, *span)
 
         if threads == 1:
-            work()
+            for span in guided_blocks(n, 1):
+                run(span)
         else:
-            pool = [threading.Thread(target=work, daemon=True) for _ in range(threads)]
-            for thread in pool:
-                thread.start()
-            for thread in pool:
-                thread.join()
-        if failures:
-            raise failures[0]
+            with ThreadPoolExecutor(threads) as pool:
+                for _ in pool.map(run, guided_blocks(n, threads)):  # re-raises a block's error
+                    pass
         return out, logs
 
     sweep.__wrapped__ = block

@@ -191,8 +191,6 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
     else:
         ix, ifp, ifm, isafe, iopen, ik, iedge = X_LO, FP_LO, FM_LO, SAFE_LO, SAFE_LO_OPEN, K_LO, LO_IN
     x_old, edge = region[ix], region[iedge]
-    if not ((target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0):
-        return roots
     fp_old, fm_old, k, safe_open = region[ifp], region[ifm], region[ik], region[iopen] != 0.0
     while (target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0:
         k += up
