@@ -26,10 +26,10 @@ def result():
 
 def test_events_frame_columns_dtypes_and_values(result):
     frame = result.events_frame()
-    assert list(frame.columns) == ["kind", "t", "q", "qdot_before", "qdot_after", "energy", "detail"]
+    assert list(frame.columns) == ["kind", "t", "t_err", "q", "qdot_before", "qdot_after", "energy", "detail"]
     assert isinstance(frame["kind"].dtype, pd.CategoricalDtype)
     assert list(frame["kind"].cat.categories) == list(EVENT_KINDS)
-    for name in ("t", "q", "qdot_before", "qdot_after", "energy"):
+    for name in ("t", "t_err", "q", "qdot_before", "qdot_after", "energy"):
         assert frame[name].dtype == np.float64, name
         assert frame[name].tolist() == [getattr(e, name) for e in result.events]
     assert frame["detail"].dtype == object
@@ -37,6 +37,7 @@ def test_events_frame_columns_dtypes_and_values(result):
     assert frame.index.name == "event" and len(frame) == len(result.events)
     assert (frame["kind"] == "impact").sum() == result.count(EventKind.IMPACT)
     assert frame.attrs["units"]["t"] == "s" and frame.attrs["units"]["q"] == "rad"
+    assert frame.attrs["units"]["t_err"] == "s"
 
 
 def test_samples_frame_follows_every_samples_field(result):

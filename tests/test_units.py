@@ -59,7 +59,7 @@ def test_field_units_resolve_the_coordinate():
         assert field_unit("initial.qdot", sh) == f"{q_unit}/s"
         for p in sh.params:
             assert field_unit(f"parameters.{p}", sh) == "m"  # the catalogue's parameters are lengths
-    user = scene_from_dict({"curve": {"z": "c*x"}, "parameters": {"c": 0.5}, "physics": {"restitution": 1},
+    user = scene_from_dict({"curve": {"z": "c*x"}, "parameters": {"c": 0.5}, "physics": {"mu": 0, "restitution": 1},
                             "initial": {"q": 0, "qdot": 1}}).shape
     assert field_unit("parameters.c", user) is None  # a slope: only the user knows
 

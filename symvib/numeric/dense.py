@@ -9,16 +9,18 @@ with ``C`` fixed by the interval's start state (the run's interval log keeps
 ``G`` at both ends of every interval).  The time to reach ``q`` is the
 quadrature ``t(q) = t0 + Integral h dq / sqrt(w) = t0 + Integral h exp(s mu alpha) dq / sqrt(G)``
 (physics.md, "Time"), and ``q(t)`` is its inverse.  Both are computed as the
-engine computes an interval's duration (:func:`symvib.numeric.engine.timing.quad`):
-the interval is split at its midpoint and each half is anchored at its outer end,
-where ``G`` is known exactly; ``G`` at the Gauss nodes is rebuilt from the anchor
-by integrating ``G' = -2 g F_s'``, so it keeps its relative accuracy next to a
-turning point; near a (real or virtual) root the variable ``r = sqrt(xi)``,
-``xi`` the distance from that root, removes the inverse square root, on panels
-graded geometrically from the root.  :class:`DenseOutput` keeps, per half, the
-panel edges with ``G`` and the time at each; a query integrates one partial
-panel, and ``q(t)`` is found by a safeguarded Newton iteration in ``r`` (where
-the time is a smooth function, nearly linear).  No time stepping is involved, so
+engine computes an interval's duration (:func:`symvib.numeric.engine.timing.quad`),
+on the very panels it took (the plain engine's ``quad`` run once more per interval,
+recording them): the interval is split at its midpoint and each half is anchored
+at its outer end, where ``G`` is known exactly; ``G`` at the Gauss nodes is rebuilt
+from the anchor by integrating ``G' = -2 g F_s'``, so it keeps its relative
+accuracy next to a turning point; near a (real or virtual) root the variable
+``r = sqrt(xi)``, ``xi`` the distance from that root, removes the inverse square
+root, on panels graded geometrically from the root and refined where the error
+estimate asked for it.  :class:`DenseOutput` keeps, per half, the panel edges
+with ``G`` and the time at each; a query integrates one partial panel, and
+``q(t)`` is found by a safeguarded Newton iteration in ``r`` (where the time is a
+smooth function, nearly linear).  No time stepping is involved, so
 the state at any time is as accurate as the events (about 1e-14).
 
 The state is right-continuous: at an impact it is the state after it.  Past the
@@ -47,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symvib.numeric.engine.timing import PANEL_Q, ROOT_RATIO, TINY
+from symvib.numeric.engine.timing import PANEL_COLUMNS, PANELS, TINY, WORK_ROWS, PanelColumn
 from symvib.numeric.layout import IntervalColumn
 from symvib.numeric.quadrature import rule
 
@@ -99,12 +101,11 @@ class DenseOutput:
         The curve's parameter values.
     intervals : ndarray
         The run's interval log (columns :class:`symvib.numeric.layout.IntervalColumn`).
-    nodes : (int, int)
-        Gauss-Legendre nodes of a panel that starts on a root and of any other
-        (:func:`symvib.numeric.driver.plain_nodes`), as the run used.
+    rules : Rules
+        The rules and tolerances the run used (:func:`symvib.numeric.driver.rules`).
     """
 
-    def __init__(self, result, kernels, params, intervals, nodes):
+    def __init__(self, result, kernels, params, intervals, rules):
         self.result = result
         self._K = kernels
         self._cp = tuple(float(v) for v in params)
@@ -115,8 +116,9 @@ class DenseOutput:
         self._ivs = ivs
         self._t0 = ivs[:, IntervalColumn.t0]
         self._t1 = self._t0 + ivs[:, IntervalColumn.T]
-        self._weighted_rule, self._plain_rule = rule(nodes[0]), rule(nodes[1])
-        self._max_panel = PANEL_Q * float(np.asarray(kernels.q_scale(*self._cp)))
+        self._weighted_rule, self._plain_rule = rule(len(rules.Xw)), rule(len(rules.Xp))
+        self._R = rules
+        self._engine = None
         self._halves: dict = {}
         #: Time span where the state is defined (as ``OdeSolution``'s ``t_min``, ``t_max``);
         #: ``t_max`` is infinite for a run that came to rest.
@@ -260,53 +262,53 @@ class DenseOutput:
         return G_end, time, h[:, n], ex[:, n], dq[:, n]
 
     def _half(self, i: int, side: int) -> _Half:
-        """The panel skeleton of half ``side`` of interval ``i`` (built once, as the engine's ``quad``)."""
+        """The panels of half ``side`` of interval ``i``: those the engine's ``quad`` took (built once)."""
         key = (i, side)
         half = self._halves.get(key)
-        if half is not None:
-            return half
-        qa, qb, Ga, Gb, s, sigma = (float(v) for v in self._ivs[i, :IntervalColumn.t0])
-        s = int(s)
-        length = 0.5 * abs(qb - qa)
-        e, d, Ge = (qa, sigma, Ga) if side == START else (qb, -sigma, Gb)
-        dF = self._node(s, np.array([e]))[0][0]
-        gamma = -d * 2.0 * self._g * dF
-        root = Ge == 0.0 or (gamma > 0.0 and Ge < ROOT_RATIO * gamma * length)
-        delta = Ge / gamma if root and Ge > 0.0 else 0.0
-        r_lo, r_hi = (math.sqrt(delta), math.sqrt(delta + length)) if root else (0.0, length)
-        edges = [r_lo]
-        seg_a = r_lo
-        while length > 0.0:
-            seg_b = 2.0 * seg_a if root and r_lo != 0.0 and 2.0 * seg_a < r_hi else r_hi
-            span = seg_b * seg_b - seg_a * seg_a if root else seg_b - seg_a
-            parts = max(1, int(math.ceil(span / self._max_panel)))
-            step = (seg_b - seg_a) / parts
-            edges += [seg_a + (jp + 1) * step for jp in range(parts - 1)] + [seg_b]
-            if seg_b >= r_hi:
-                break
-            seg_a = seg_b
-        r = np.array(edges)
-        m = len(r) - 1
-        weighted = root and r_lo == 0.0 and m > 0
-        args = (np.full(m, e), np.full(m, d), np.full(m, s), np.full(m, delta), np.full(m, root))
-        # G first (its increments do not depend on G), then the times with G at each panel's start.
-        G = np.full(m + 1, Ge)
-        tau = np.zeros(m + 1)
-        if m:
-            parts = [(slice(0, 1), self._weighted_rule, True), (slice(1, m), self._plain_rule, False)] if weighted \
-                else [(slice(0, m), self._plain_rule, False)]
-            dG = np.zeros(m)
-            for sl, rl, wt in parts:
-                dG[sl] = self._panels(rl, r[:-1][sl], r[1:][sl], np.zeros(len(r[:-1][sl])),
-                                      *(a[sl] for a in args), wt)[0]
-            G = np.cumsum(np.concatenate(([Ge], dG)))
-            times = np.zeros(m)
-            for sl, rl, wt in parts:
-                times[sl] = self._panels(rl, r[:-1][sl], r[1:][sl], G[:-1][sl], *(a[sl] for a in args), wt)[1]
-            tau = np.cumsum(np.concatenate(([0.0], times)))
-        half = _Half(e, d, s, root, delta, weighted, r, G, tau)
-        self._halves[key] = half
+        if half is None:
+            for sd, h in enumerate(self._skeleton(i)):
+                self._halves[(i, sd)] = h
+            half = self._halves[key]
         return half
+
+    def _skeleton(self, i: int) -> tuple:
+        """Both halves of interval ``i`` as :func:`symvib.numeric.engine.timing.quad` integrated them:
+        the plain engine's ``quad`` once more, in its mode that records the panels it accepts
+        (so the state at an event's time is the event's state to rounding)."""
+        if self._engine is None:
+            from symvib.numeric.driver import scene_row
+            from symvib.numeric.engine.bind import kernel_functions
+            from symvib.numeric.engine.plain import plain_functions, plain_rules
+            from symvib.numeric.engine.state import Kernels
+
+            fns = plain_functions()
+            K = Kernels(*kernel_functions(self._K))
+            setup = fns["setup_of"](scene_row(self.result.scene), K, self._cp)
+            self._engine = (fns, K, setup, plain_rules(self._R))
+        fns, K, S, R = self._engine
+        qa, qb, Ga, Gb, s, sigma = (float(v) for v in self._ivs[i, :IntervalColumn.t0])
+        s, sigma = int(s), int(sigma)
+        # The critical points the run knew there (for F_s' next to the cone edge).
+        region, roots, count = fns["map_new"](qa, S.lo, S.hi, S.mu, K, self._cp, fns["CRIT_STEP"] * S.scale)
+        roots = fns["map_extend"](region, roots, count, qb, S.mu, K, self._cp, fns["CRIT_STEP"] * S.scale)
+        n = max(len(R.Xw), len(R.Xp))
+        out = np.zeros((2 * fns["MAX_PANELS"] + 2, PANEL_COLUMNS))
+        rows = fns["quad"](qa, qb, Ga, Gb, s, sigma, S, K, self._cp, R, fns["scratch"](WORK_ROWS, n), PANELS,
+                           out, 0, roots, count)[4]
+        panels = out[:rows]
+        halves = []
+        for side, (e, d, Ge) in enumerate(((qa, float(sigma), Ga), (qb, -float(sigma), Gb))):
+            p = panels[panels[:, PanelColumn.half] == side]
+            if len(p):
+                root, delta = bool(p[0, PanelColumn.root]), float(p[0, PanelColumn.delta])
+                r = np.append(p[:, PanelColumn.r1], p[-1, PanelColumn.r2])
+                G = np.append(p[:, PanelColumn.G1], p[-1, PanelColumn.G2])
+                tau = np.append(p[:, PanelColumn.tau1], p[-1, PanelColumn.tau2])
+            else:  # an empty interval
+                root, delta = False, 0.0
+                r, G, tau = np.zeros(1), np.full(1, Ge), np.zeros(1)
+            halves.append(_Half(e, d, s, root, delta, root and len(r) > 1 and r[0] == 0.0, r, G, tau))
+        return tuple(halves)
 
     def _gather(self, i, side, x, by):
         """Per-query arrays of the panel where each query lies: ``x`` is the time from the

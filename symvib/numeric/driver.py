@@ -52,13 +52,22 @@ from symvib.numeric.kernels import load
 from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, SceneRow, StatusCode, Summary
 from symvib.numeric.quadrature import rule
 
-__all__ = ["simulate", "NODES", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET", "sample_pieces",
+__all__ = ["simulate", "NODES", "RTOL", "ATOL", "check_tolerances", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET",
+           "sample_pieces",
            "backend_available", "resolve_backend", "run_backend", "checked_status",
            "guarded_sweep",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
 
-#: Gauss-Legendre nodes per quadrature panel (the accuracy knob of the times).
+#: Gauss-Legendre nodes per quadrature panel (a panel's accuracy; the tolerance decides how many panels).
 NODES = 16
+#: Default relative tolerance of the time of every motion interval (physics.md, "Accuracy"): the
+#: quadrature refines its panels until each one's estimated error is below ``rtol`` of its time
+#: (plus its share of ``atol``), so an event's time is within about ``rtol`` of the time elapsed.
+RTOL = 1e-12
+#: Default absolute tolerance of the time of a motion interval, seconds.
+ATOL = 0.0
+#: Smallest rtol a run may ask for: a few rounding errors of a sum of quadrature terms.
+MIN_RTOL = 1e-14
 #: Samples per motion interval (at least) by default: smooth curves of F_N and P_mu.
 SAMPLES_PER_INTERVAL = 96
 #: Most samples per motion interval a run may ask for (memory: 80 bytes per sample).
@@ -136,8 +145,34 @@ def run_backend(shape, backend: str = "auto", entry: str = "simulate_bound") -> 
     return "numba" if is_compiled(load(shape), entry) else "python"
 
 
+def check_tolerances(rtol, atol) -> tuple:
+    """``(rtol, atol)`` as floats if a run can aim at them, else a ValueError naming the field.
+
+    Examples
+    --------
+    >>> check_tolerances(1e-10, 0)
+    (1e-10, 0.0)
+    >>> check_tolerances(0.0, 0.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: rtol must be a number in [1e-14, 1) (the relative tolerance of an interval's time), not 0.0
+    """
+    def number(value):
+        ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+        return float(value) if ok and math.isfinite(value) else None
+
+    r, a = number(rtol), number(atol)
+    if r is None or not MIN_RTOL <= r < 1.0:
+        raise ValueError(f"rtol must be a number in [{MIN_RTOL:g}, 1) (the relative tolerance of an interval's "
+                         f"time), not {rtol!r}")
+    if a is None or a < 0.0:
+        raise ValueError(f"atol must be a finite number >= 0 (seconds, the absolute tolerance of an interval's "
+                         f"time), not {atol!r}")
+    return r, a
+
+
 def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto",
-             samples_per_interval: int | None = None) -> Result:
+             samples_per_interval: int | None = None, rtol: float = RTOL, atol: float = ATOL) -> Result:
     """Simulate ``scene`` event by event until arrest, rest, ``t_max`` or ``max_events``.
 
     Parameters
@@ -159,6 +194,13 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         :data:`SAMPLES_PER_INTERVAL`, or one piece per interval (about 25 samples)
         for a run whose samples would pass :data:`SAMPLE_BUDGET` that way (a run of
         100,000 events keeps 2.5 million samples, not 10 million).
+    rtol, atol : float
+        Tolerance of the time of every motion interval, relative to its duration and in
+        seconds (physics.md, "Accuracy"): the quadrature refines its panels until its
+        error estimate is below ``rtol T + atol``; each event carries the sum of the
+        estimates before it (``Event.t_err``).  An interval whose estimate stays above
+        1000 times its tolerance (:data:`symvib.numeric.engine.loop.TOLERANCE_FACTOR`)
+        ends the run with status ``tolerance_not_met`` (``success`` is False).
 
     Returns
     -------
@@ -169,10 +211,11 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     if isinstance(spi, bool) or not isinstance(spi, (int, np.integer)) or not 1 <= spi <= MAX_SAMPLES_PER_INTERVAL:
         raise ValueError(f"samples_per_interval must be an integer from 1 to {MAX_SAMPLES_PER_INTERVAL}, "
                          f"not {spi!r}")
+    rtol, atol = check_tolerances(rtol, atol)
     shape = _run_shape(scene)
     requested, backend = backend, run_backend(shape, backend)
     mod, eng = bound_engine(shape, backend)
-    R = rules(nodes)
+    R = rules(nodes, rtol, atol)
     cp = tuple(float(v) for v in scene.param_values)
     row = scene_row(scene)
     try:
@@ -185,7 +228,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
     detail = "plastic" if scene.k == 0.0 else ""
     impact = int(EventCode.IMPACT)
-    events = [Event(kind_of(r[0]), r[1], r[2], r[3], r[4], r[5], detail if r[0] == impact else "")
+    events = [Event(kind_of(r[0]), r[1], r[2], r[3], r[4], r[5], detail if r[0] == impact else "", r[6])
               for r in out.events[:out.n_events].tolist()]
     zeno = out.zeno
     zinfo = None
@@ -208,18 +251,25 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         else:
             sampler = partial(_lazy_samples, partial(_sample_engine, shape, requested, backend), cp, row,
                               out.intervals, out.n_intervals, R, scene, mod, pieces)
-        interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], nodes)
+        interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], R)
+    stats = {"intervals": int(out.n_intervals) if samples else None, "backend": backend, "t_err": float(out.t_err)}
+    if status == StatusCode.TOLERANCE_NOT_MET:
+        stats["accuracy"] = (
+            f"error: the time of the motion interval from {scene.shape.q} = {float(out.q):.12g} to "
+            f"{float(out.q_bad):.12g} (starting at t = {float(out.t):.12g} s) could not be brought within its "
+            f"tolerance (rtol {rtol:g}, atol {atol:g} s); the run stopped at its start. Remedies: a looser "
+            f"tolerance (simulate(scene, rtol=...), symvib run --rtol), or more nodes per panel (nodes=...)")
     return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=sampler,
                   interpolant=interpolant,
                   energy_budget=budget, t_final=float(out.t), q_final=float(out.q), qdot_final=float(out.qdot),
-                  zeno=zinfo, stats={"intervals": int(out.n_intervals) if samples else None, "backend": backend})
+                  zeno=zinfo, stats=stats)
 
 
-def _dense(mod, cp, ivs, nodes, result):
+def _dense(mod, cp, ivs, R, result):
     """The dense output of ``result`` (:class:`symvib.numeric.dense.DenseOutput`) from its interval log."""
     from symvib.numeric.dense import DenseOutput
 
-    return DenseOutput(result, mod, cp, ivs, (nodes, plain_nodes(nodes)))
+    return DenseOutput(result, mod, cp, ivs, R)
 
 
 def _no_samples(message):
@@ -377,9 +427,10 @@ def scene_row(scene) -> np.ndarray:
     return row
 
 
-def sweep_function(scene, backend: str = "auto"):
+def sweep_function(scene, backend: str = "auto", *, rtol: float = RTOL, atol: float = ATOL):
     """The engine's checked sweep for the curve of ``scene``: a function
-    ``(scene_rows, param_rows, nodes, max_log) -> (summary, logs)``.
+    ``(scene_rows, param_rows, nodes, max_log) -> (summary, logs)``, its times within
+    ``rtol``/``atol`` (:func:`simulate`).
 
     ``scene_rows`` holds one :func:`scene_row` per scene, ``param_rows`` the
     curve's parameter values per scene; ``summary`` has the columns
@@ -387,12 +438,13 @@ def sweep_function(scene, backend: str = "auto"):
     of each scene (columns :class:`symvib.numeric.layout.EventColumn`).  Statuses
     are checked as :func:`simulate` checks them (:func:`checked_status`).
     """
+    rtol, atol = check_tolerances(rtol, atol)
     _, eng = bound_engine(scene.shape, backend)
     fn = guarded_sweep(eng.sweep)
 
     def run(scene_rows, param_rows, nodes, max_log):
         return fn(np.ascontiguousarray(scene_rows, dtype=float), np.ascontiguousarray(param_rows, dtype=float),
-                  rules(nodes), int(max_log))
+                  rules(nodes, rtol, atol), int(max_log))
 
     return run
 
@@ -431,18 +483,45 @@ def plain_nodes(nodes: int) -> int:
 
 
 @lru_cache(maxsize=8)
-def rules(nodes: int) -> Rules:
-    """The quadrature rules the engine takes (:class:`symvib.numeric.engine.state.Rules`;
+def rules(nodes: int, rtol: float = RTOL, atol: float = ATOL) -> Rules:
+    """The quadrature rules and tolerances the engine takes (:class:`symvib.numeric.engine.state.Rules`;
     see :func:`symvib.numeric.engine.timing.quad`).
 
     For panels that start on a root: nodes, weights and both integration
     matrices, transposed; for the others: nodes, weights and the matrix of the
-    :func:`plain_nodes` rule.
+    :func:`plain_nodes` rule; for each rule the rows of :func:`tail_rows`.
     """
     r, p = rule(nodes), rule(plain_nodes(nodes))
     # Fresh C-contiguous copies: the compiled engine's signature takes writable arrays.
-    return Rules(*(np.array(a, dtype=float, order="C") for a in (
-        r.x, r.weights, r.cumulative.T, r.cumulative_weighted.T, p.x, p.weights, p.cumulative.T)))
+    arrays = (np.array(a, dtype=float, order="C") for a in (
+        r.x, r.weights, r.cumulative.T, r.cumulative_weighted.T, p.x, p.weights, p.cumulative.T,
+        tail_rows(r.x, r.weights), tail_rows(p.x, p.weights)))
+    return Rules(*arrays, float(rtol), float(atol))
+
+
+def tail_rows(x, weights) -> np.ndarray:
+    """Rows ``E_k`` with ``E_k @ f = a_k``, the Legendre coefficient of degree ``k`` of the interpolant
+    of ``f`` at the Gauss-Legendre nodes ``x``, for ``k = n-1, n-2, n-3, n-4`` (``a_k = (2k + 1)/2
+    sum_j w_j P_k(x_j) f_j``, exact for the interpolant by the rule's exactness to degree ``2n - 1``);
+    degrees below 0 give zero rows.
+
+    Examples
+    --------
+    >>> from symvib.numeric.quadrature import rule
+    >>> r = rule(6)
+    >>> E = tail_rows(r.x, r.weights)
+    >>> bool(abs(E[0] @ r.x ** 5 - 8 / 63) < 1e-15)        # x^5 = (8/63) P_5 + lower degrees
+    True
+    """
+    n = len(x)
+    out = np.zeros((4, n))
+    for row in range(4):
+        k = n - 1 - row
+        if k >= 0:
+            unit = np.zeros(k + 1)
+            unit[k] = 1.0
+            out[row] = (2 * k + 1) / 2 * np.asarray(weights) * np.polynomial.legendre.legval(np.asarray(x), unit)
+    return out
 
 
 def sample_pieces(samples_per_interval: int, nodes: int) -> int:

@@ -43,7 +43,8 @@ Status.code = property(lambda self: StatusCode[self.name], doc="The engine's cod
 EventKind = _named("EventKind", EventCode, "What happened at an event.")
 EventKind.code = property(lambda self: EventCode[self.name], doc="The engine's code of this kind.")
 
-#: Statuses of a failed run: the state stopped being finite, or the energy budget does not close.
+#: Statuses of a failed run: the state stopped being finite, the energy budget does not close, or a
+#: time could not be computed within its tolerance.
 ERROR_STATUSES = tuple(Status[StatusCode(c).name] for c in ERROR_CODES)
 
 #: One sentence per status, for reports (a status without one is an error at import).
@@ -56,6 +57,8 @@ MESSAGES = {
     Status.LEFT_CURVE: "the normal force reached 0 and the particle left the curve (unilateral contact)",
     Status.NON_FINITE: "error: the state stopped being finite (overflow); the numbers are not a result",
     Status.ENERGY_BUDGET_MISMATCH: "error: the energy budget does not close; the numbers are not a result",
+    Status.TOLERANCE_NOT_MET: "error: the time of a motion interval could not be brought within its tolerance "
+                              "(rtol, atol); the run stopped at the start of that interval",
 }
 assert set(MESSAGES) == set(Status), "every status needs a message in MESSAGES"
 
@@ -92,6 +95,9 @@ class Event(NamedTuple):
         Total mechanical energy just after the event.
     detail : str
         Extra facts (a Zeno accumulation, a plastic impact).
+    t_err : float
+        Estimated error of ``t`` (s): the sum of the error estimates of the time
+        quadratures of the motion intervals before the event (physics.md, "Accuracy").
     """
 
     kind: EventKind
@@ -101,11 +107,12 @@ class Event(NamedTuple):
     qdot_after: float
     energy: float
     detail: str = ""
+    t_err: float = 0.0
 
     def to_dict(self) -> dict:
         """JSON-ready fields."""
-        out = {"kind": self.kind.value, "t": self.t, "q": self.q, "qdot_before": self.qdot_before,
-               "qdot_after": self.qdot_after, "energy": self.energy}
+        out = {"kind": self.kind.value, "t": self.t, "t_err": self.t_err, "q": self.q,
+               "qdot_before": self.qdot_before, "qdot_after": self.qdot_after, "energy": self.energy}
         if self.detail:
             out["detail"] = self.detail
         return out
@@ -258,7 +265,9 @@ class Result:
 
     @property
     def message(self) -> str:
-        return MESSAGES[self.status]
+        """One sentence on why the run stopped (:data:`MESSAGES`), with the interval and the remedy
+        for a run that ended ``tolerance_not_met``."""
+        return self.stats.get("accuracy") or MESSAGES[self.status]
 
     @property
     def success(self) -> bool:

@@ -52,10 +52,12 @@ class StatusCode(enum.IntEnum):
     NON_FINITE = 6
     ENERGY_BUDGET_MISMATCH = 7
     LEFT_CURVE = 8
+    TOLERANCE_NOT_MET = 9
 
 
 class EventColumn(enum.IntEnum):
-    """Columns of the engine's event log (one row per event)."""
+    """Columns of the engine's event log (one row per event); ``t_err`` is the estimated error
+    of ``t`` (s), the sum of the error estimates of the intervals before the event."""
 
     kind = 0
     t = 1
@@ -63,11 +65,13 @@ class EventColumn(enum.IntEnum):
     qdot_before = 3
     qdot_after = 4
     energy = 5
+    t_err = 6
 
 
 class IntervalColumn(enum.IntEnum):
     """Columns of the engine's interval log: the ends, ``G`` at the ends, the branch ``s``,
-    the direction ``sigma``, the start time, the duration and the friction work per unit mass."""
+    the direction ``sigma``, the start time, the duration, the friction work per unit mass and
+    the estimated error of the duration."""
 
     qa = 0
     qb = 1
@@ -78,6 +82,7 @@ class IntervalColumn(enum.IntEnum):
     t0 = 6
     T = 7
     W_friction = 8
+    T_err = 9
 
 
 class SceneRow(enum.IntEnum):
@@ -114,6 +119,7 @@ class Summary(enum.IntEnum):
     E0 = 10
     E_final = 11
     zeno_ratio = 12
+    t_err = 13
 
 
 def names(codes: type[enum.IntEnum], *, lower: bool = False) -> tuple:
@@ -128,7 +134,7 @@ EVENT_KINDS = names(EventCode, lower=True)
 #: Names of the statuses, indexed by :class:`StatusCode`.
 STATUSES = names(StatusCode, lower=True)
 #: Status codes of a failed run (its numbers are not a result).
-ERROR_CODES = (StatusCode.NON_FINITE, StatusCode.ENERGY_BUDGET_MISMATCH)
+ERROR_CODES = (StatusCode.NON_FINITE, StatusCode.ENERGY_BUDGET_MISMATCH, StatusCode.TOLERANCE_NOT_MET)
 EVENT_COLUMNS = names(EventColumn)
 INTERVAL_COLUMNS = names(IntervalColumn)
 SCENE_ROW = names(SceneRow)

@@ -14,7 +14,7 @@ A scene loads from TOML (:mod:`tomllib`) with this schema::
     [physics]
     g = 9.81
     m = 0.2
-    alpha0 = 0.05               # friction angle (mu = tan alpha0), or mu = ..., not both
+    alpha0 = 0.05               # friction angle (mu = tan alpha0), or mu = ...: one of them, not both
     restitution = 0.8
     [limiters]                  # positions in the coordinate q; either may be absent
     left = "-pi/6"
@@ -47,10 +47,15 @@ Examples
 >>> round(s.mu, 6), s.left, round(s.right, 6)
 (0.050042, None, 0.785398)
 >>> scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
-...                  "physics": {"restitution": 1.5}, "initial": {"q": 0, "qdot": 1}})
+...                  "physics": {"mu": 0.1, "restitution": 1.5}, "initial": {"q": 0, "qdot": 1}})
 Traceback (most recent call last):
 ...
 symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5
+>>> scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+...                  "physics": {"restitution": 1}, "initial": {"q": 0, "qdot": 1}})
+Traceback (most recent call last):
+...
+symvib.numeric.scene.SceneError: physics.mu: missing: the friction coefficient mu >= 0, or the friction angle ...
 """
 from __future__ import annotations
 
@@ -543,7 +548,7 @@ def check_numbers(n: SceneNumbers) -> None:
     Examples
     --------
     >>> s = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
-    ...     "physics": {"restitution": 1}, "initial": {"q": 0, "qdot": 1}})
+    ...     "physics": {"mu": 0, "restitution": 1}, "initial": {"q": 0, "qdot": 1}})
     >>> n = SceneNumbers.of(s)
     >>> n.k = 1.5
     >>> check_numbers(n)
@@ -577,7 +582,7 @@ def declared_domain(s: Scene, values=None) -> tuple:
     Examples
     --------
     >>> s = scene_from_dict({"curve": {"shape": "cycloid"}, "parameters": {"R": 1},
-    ...     "physics": {"restitution": 1}, "initial": {"q": 0, "qdot": 1}})
+    ...     "physics": {"mu": 0, "restitution": 1}, "initial": {"q": 0, "qdot": 1}})
     >>> [round(v, 6) for v in declared_domain(s)]
     [-3.141593, 3.141593]
     """
@@ -840,11 +845,14 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
     phys = data["physics"]
     if "mu" in phys and "alpha0" in phys:
         raise SceneError("physics", "give mu or alpha0 (mu = tan(alpha0)), not both")
+    if "mu" not in phys and "alpha0" not in phys:
+        raise SceneError("physics.mu", "missing: the friction coefficient mu >= 0, or the friction angle alpha0 "
+                                       "(mu = tan(alpha0)); mu = 0 for a frictionless curve")
     alpha0 = _number(phys, "alpha0", "physics", shape=shape)
     if alpha0 is not None:
         mu = friction_coefficient(alpha0)
     else:
-        mu = _number(phys, "mu", "physics", default=0.0, shape=shape)
+        mu = _number(phys, "mu", "physics", shape=shape)
     if "restitution" not in phys:
         raise SceneError("physics.restitution", "missing: the restitution coefficient k in [0, 1]")
     lim = data.get("limiters", {})

@@ -7,9 +7,9 @@ Columns and dtypes (``frame.attrs["units"]`` maps every column to its unit):
 
 * :func:`events_frame`, one row per event (index ``event``, from 0): ``kind``
   (a pandas ``Categorical`` whose categories are every event kind's name, in
-  the order of :class:`symvib.numeric.layout.EventCode`), ``t``, ``q``,
-  ``qdot_before``, ``qdot_after``, ``energy`` (``float64``) and ``detail``
-  (``object``, text; empty for most events);
+  the order of :class:`symvib.numeric.layout.EventCode`), ``t``, ``t_err`` (the
+  estimated error of ``t``, s), ``q``, ``qdot_before``, ``qdot_after``, ``energy``
+  (``float64``) and ``detail`` (``object``, text; empty for most events);
 * :func:`samples_frame`, one row per sample (index ``sample``): every field of
   :class:`symvib.numeric.events.Samples`, in its order (``t``, ``q``, ``qdot``,
   ``F_N``, ``P_mu``, ``Ek``, ``Ep``, ``E``, ... as ``float64``; ``interval`` and
@@ -46,6 +46,7 @@ QUANTITY_UNITS = {
     "qdot": FIELD_UNITS["initial.qdot"],
     "qdot_before": FIELD_UNITS["initial.qdot"],
     "qdot_after": FIELD_UNITS["initial.qdot"],
+    "t_err": FIELD_UNITS["run.t_max"],
     "kind": None,
     "detail": None,
     "energy": "J",
@@ -90,7 +91,7 @@ def result_units(result, *, samples: bool = False) -> dict:
     shape = result.scene.shape
     units = quantity_units(shape)
     out = {"t_final": units["t"], "q_final": units["q"], "qdot_final": units["qdot"],
-           "events": {k: units[k] for k in ("t", "q", "qdot_before", "qdot_after", "energy")},
+           "events": {k: units[k] for k in ("t", "t_err", "q", "qdot_before", "qdot_after", "energy")},
            "energy_budget": dict(BUDGET_UNITS)}
     if samples and result.samples is not None:
         out["samples"] = {name: units.get(name) for name in _sample_fields(result.samples)}
@@ -109,12 +110,18 @@ def _sample_fields(samples) -> list:
     return [f.name for f in dataclasses.fields(samples)]
 
 
+#: Columns of :func:`events_frame`: the fields of an :class:`~symvib.numeric.events.Event`, the
+#: estimated error of the time beside the time.
+EVENT_FRAME_COLUMNS = ("kind", "t", "t_err", "q", "qdot_before", "qdot_after", "energy", "detail")
+assert set(EVENT_FRAME_COLUMNS) == set(Event._fields), "every field of an Event needs its column"
+
+
 def events_frame(result):
     """The events of ``result`` as a DataFrame (columns in the module docstring)."""
     pd = require_pandas()
     events = result.events
     columns = {}
-    for name in Event._fields:
+    for name in EVENT_FRAME_COLUMNS:
         values = [getattr(e, name) for e in events]
         if name == "kind":
             columns[name] = pd.Categorical([v.value for v in values], categories=list(EVENT_KINDS))

@@ -6,6 +6,8 @@ Modules, each one concept (physics.md, "Events", for the algorithm):
 * :mod:`~symvib.numeric.engine.laws`: the mechanics (impact law, rest test,
   Zeno series, energies), each law once;
 * :mod:`~symvib.numeric.engine.roots`: root finders;
+* :mod:`~symvib.numeric.engine.anchor`: ``G`` carried from a nearby anchor where the
+  closed form cancels;
 * :mod:`~symvib.numeric.engine.scan`: where the next event is;
 * :mod:`~symvib.numeric.engine.timing`: times and friction work by quadrature;
 * :mod:`~symvib.numeric.engine.loop`: the event loop and its entry points;

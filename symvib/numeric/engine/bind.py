@@ -1,6 +1,6 @@
 """Binding a curve's kernels to the engine: plain Python, or compiled by numba.
 
-The engine (:mod:`~symvib.numeric.engine.laws`, ``roots``, ``scan``, ``timing``,
+The engine (:mod:`~symvib.numeric.engine.laws`, ``roots``, ``anchor``, ``scan``, ``timing``,
 ``loop``) is written once, as plain Python functions that receive the curve's
 kernels as an argument (a :class:`~symvib.numeric.engine.state.Kernels` tuple);
 no source text is pasted or executed.
@@ -36,14 +36,14 @@ from functools import cache, partial
 from pathlib import Path
 from typing import NamedTuple
 
-from symvib.numeric.engine import laws, loop, roots, scan, timing
+from symvib.numeric.engine import anchor, laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
 __all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
            "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS"]
 
 #: The engine's modules, in import order.
-ENGINE_MODULES = (laws, roots, scan, timing, loop)
+ENGINE_MODULES = (laws, roots, anchor, scan, timing, loop)
 #: Entry points compiled with explicit signatures (and cached on disk).
 ENTRY_POINTS = ("simulate_scene", "sample_scene", "sweep_block")
 
@@ -235,7 +235,7 @@ def _compiled_engine(ncp: int) -> dict:
     k_type = kernels_type(_signatures(ncp))
     cp_type = nt.Tuple([f64] * ncp)
     vec, mat = f64[::1], f64[:, ::1]
-    rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat], Rules)
+    rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat, mat, mat, f64, f64], Rules)
 
     options = {name: {"cache": True} for name in ENTRY_POINTS}
     options["sweep_block"] = {"cache": True, "nogil": True}

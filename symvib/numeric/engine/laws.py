@@ -18,7 +18,7 @@ import math
 
 from symvib.numeric.layout import EventCode, StatusCode
 
-__all__ = ["Fs", "dFs", "node", "energy", "qdot_of", "finite_state", "nsign_of", "impact", "side_at",
+__all__ = ["Fs", "dFs", "ddFs", "dF_edge", "node", "energy", "qdot_of", "finite_state", "nsign_of", "impact", "side_at",
            "rest", "rest_outcome", "zeno_series", "CONE_RTOL", "ZENO_W"]
 
 #: Relative tolerance of the arrest test |tan alpha| <= mu at a turning point.
@@ -28,6 +28,16 @@ CONE_ATOL = 4.0 * 2.220446049250313e-16
 #: A Zeno accumulation is summed analytically once w at an impact is below
 #: ZENO_W * g * (a length of the curve): the local model is then exact to rounding.
 ZENO_W = 1e-10
+#: 4-point Gauss-Legendre nodes and weights of :func:`dF_edge`.
+EDGE_X = (-0.8611363115940526, -0.33998104358485626, 0.33998104358485626, 0.8611363115940526)
+EDGE_W = (0.34785484513745385, 0.6521451548625461, 0.6521451548625461, 0.34785484513745385)
+#: ``F_s'`` is taken next to a critical point (:func:`dF_edge`) where it is below this share of the
+#: size of its terms ``exp(2 s mu alpha) h (1 + mu)``: there its direct value has lost more than
+#: ``eps / EDGE_SHARE`` of its relative accuracy.
+EDGE_SHARE = 1e-4
+#: Farthest a critical point may be, in units of q_scale, for :func:`dF_edge` (its 4-point rule
+#: then errs by about ``EDGE_REACH^8`` relative).
+EDGE_REACH = 0.01
 #: What :func:`rest` finds: the particle slides on, is arrested, or rests on a limiter.
 SLIDE, ARREST, REST_ON_LIMITER = 0, 1, 2
 
@@ -44,6 +54,32 @@ def dFs(s, q, mu, K, cp):
     if s > 0:
         return K.dF_p(q, mu, *cp)
     return K.dF_m(q, mu, *cp)
+
+
+def ddFs(s, q, mu, K, cp):
+    """``F_s''(q)``."""
+    if s > 0:
+        return K.ddF_p(q, mu, *cp)
+    return K.ddF_m(q, mu, *cp)
+
+
+def dF_edge(s, qc, off, mu, K, cp):
+    """``F_s'(qc + off)`` next to a critical point ``qc`` of branch ``s`` (``F_s'(qc) = 0``, the
+    friction-cone edge ``tan alpha = -s mu``) as ``Integral_0^off F_s''(qc + u) du`` (physics.md,
+    "Accuracy").
+
+    ``F_s' = exp(2 s mu alpha) (z' + s mu x')`` is there a difference of two terms far larger
+    than itself, so evaluated directly it carries their rounding, about ``eps h`` instead of
+    ``eps |F_s'|``; the integral of the smooth ``F_s''`` over the short ``[0, off]`` (4-point
+    Gauss-Legendre: exact to ``off^8``) keeps the relative accuracy, and is linear in
+    ``off`` as the motion about the edge is.  The caller gives ``off`` as a difference of
+    nearby numbers (``(e - qc) + d xi``), not as ``q - qc``: ``q`` itself is rounded to an
+    ulp of ``|q|``, which next to the edge can be a large part of ``off``.
+    """
+    total = 0.0
+    for j in range(4):
+        total += EDGE_W[j] * ddFs(s, qc + 0.5 * off * (EDGE_X[j] + 1.0), mu, K, cp)
+    return 0.5 * off * total
 
 
 def node(s, q, mu, K, cp):

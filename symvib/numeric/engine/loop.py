@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from symvib.numeric.engine.anchor import anchored_G, root_anchored
 from symvib.numeric.engine.laws import (
     SLIDE,
     Fs,
@@ -42,9 +43,19 @@ from symvib.numeric.engine.laws import (
     side_at,
     zeno_series,
 )
-from symvib.numeric.engine.scan import CRIT_STEP, End, locate, map_new, scratch
+from symvib.numeric.engine.scan import CRIT_STEP, End, curve_scale, locate, map_new, scratch
 from symvib.numeric.engine.state import Outcome, Setup, Zeno
-from symvib.numeric.engine.timing import WORK_ROWS, grown, quad, root_time, samples
+from symvib.numeric.engine.timing import (
+    EPS,
+    NONE,
+    QUAD_BUDGET,
+    QUAD_NEGATIVE,
+    WORK_ROWS,
+    grown,
+    quad,
+    root_time,
+    samples,
+)
 from symvib.numeric.layout import (
     EVENT_COLUMNS,
     INTERVAL_COLUMNS,
@@ -68,12 +79,17 @@ INTERVAL_LOG_START = 64
 EVENT_LOG_SPARE = 4
 #: Columns of the event log, the interval log and the sweep summary.
 EVENT_WIDTH, INTERVAL_WIDTH, SUMMARY_WIDTH = len(EVENT_COLUMNS), len(INTERVAL_COLUMNS), len(SUMMARY_COLUMNS)
+#: An interval whose estimated time error exceeds this many times the tolerance of the time at its
+#: end (``rtol (t + T) + atol``: the event times' promise) ends the run ``tolerance_not_met``: the
+#: quadrature aims at the tolerance, and a miss this large is not rounding of the estimate but an
+#: integral it could not resolve, or ``G`` lost to cancellation (physics.md, "Accuracy").
+TOLERANCE_FACTOR = 1000.0
 #: Column indices as plain ints (numpy indexes faster with an int than with an IntEnum).
-E_KIND, E_T, E_Q, E_BEFORE, E_AFTER, E_ENERGY = (int(c) for c in EventColumn)
-I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W = (int(c) for c in IntervalColumn)
+E_KIND, E_T, E_Q, E_BEFORE, E_AFTER, E_ENERGY, E_TERR = (int(c) for c in EventColumn)
+I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W, I_TERR = (int(c) for c in IntervalColumn)
 
 
-def put_event(events, ne, kind, t, q, before, after, e):
+def put_event(events, ne, kind, t, q, before, after, e, t_err):
     """Append an event (columns :class:`~symvib.numeric.layout.EventColumn`); the log doubles when full."""
     if ne == events.shape[0]:
         events = grown(events, ne, 2 * events.shape[0])
@@ -83,10 +99,11 @@ def put_event(events, ne, kind, t, q, before, after, e):
     events[ne, E_BEFORE] = before
     events[ne, E_AFTER] = after
     events[ne, E_ENERGY] = e
+    events[ne, E_TERR] = t_err
     return events, ne + 1
 
 
-def put_interval(ivs, ni, qa, qb, Ga, Gb, s, sigma, t0, T, Wi):
+def put_interval(ivs, ni, qa, qb, Ga, Gb, s, sigma, t0, T, Wi, T_err):
     """Append a motion interval (columns :class:`~symvib.numeric.layout.IntervalColumn`)."""
     if ni == ivs.shape[0]:
         ivs = grown(ivs, ni, 2 * ivs.shape[0])
@@ -99,6 +116,7 @@ def put_interval(ivs, ni, qa, qb, Ga, Gb, s, sigma, t0, T, Wi):
     ivs[ni, I_T0] = t0
     ivs[ni, I_T] = T
     ivs[ni, I_W] = Wi
+    ivs[ni, I_TERR] = T_err
     return ivs, ni + 1
 
 
@@ -122,6 +140,8 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
     t = 0.0
     Wf = 0.0
     Wimp = 0.0
+    t_err = 0.0
+    q_bad = math.nan
     zeno = Zeno(0.0, 0.0, 0.0, 0.0)
     status = StatusCode.RUNNING
     q = q0
@@ -137,13 +157,13 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
         status = StatusCode.NON_FINITE  # e.g. qdot0 = 1e200: w = inf from the start
     elif S.unilateral and K.N_w(q, w, g, *cp) < 0.0:
         # Unilateral contact and N < 0 at the start: the particle leaves the curve at once.
-        events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, q, qdot0, qdot0, E0)
+        events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, q, qdot0, qdot0, E0, t_err)
         status = StatusCode.LEFT_CURVE
     elif sigma == 0:
         what, direction = rest(q, side, mu, K, cp)
         if what != SLIDE:
             code, status = rest_outcome(what)
-            events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp))
+            events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp), t_err)
         sigma = direction
     while status == StatusCode.RUNNING:
         if not finite_state(t, q, w, Wf, Wimp):
@@ -155,7 +175,8 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
             qd = qdot_of(q, w, sigma, K, cp)
             qd_after, w_after, loss = impact(qd, w, k, m)
             Wimp += loss
-            events, ne = put_event(events, ne, EventCode.IMPACT, t, q, qd, qd_after, energy(q, w_after, m, g, K, cp))
+            events, ne = put_event(events, ne, EventCode.IMPACT, t, q, qd, qd_after, energy(q, w_after, m, g, K, cp),
+                                   t_err)
             side = int(sigma)
             w_before = w
             w = w_after
@@ -164,7 +185,7 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
                 what, direction = rest(q, side, mu, K, cp)
                 if what != SLIDE:
                     code, status = rest_outcome(what)
-                    events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp))
+                    events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp), t_err)
                     break
                 sigma = direction
             else:
@@ -179,9 +200,10 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
                         elif int(events[j, E_KIND]) != EventCode.REVERSAL:
                             break
                     t += remaining
+                    t_err += 4.0 * EPS * remaining
                     zeno = Zeno(ratio, float(simulated), remaining, float(side))
                     events, ne = put_event(events, ne, EventCode.REST_ON_LIMITER, t, q, 0.0, 0.0,
-                                           energy(q, 0.0, m, g, K, cp))
+                                           energy(q, 0.0, m, g, K, cp), t_err)
                     w = 0.0
                     status = StatusCode.RESTING_ON_LIMITER
                     break
@@ -199,33 +221,52 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
         if S.unilateral and nsign < 0:
             # N < 0 here (at the start, or after an impact): the particle is not held.
             events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, q, qdot_of(q, w, sigma, K, cp),
-                                   qdot_of(q, w, sigma, K, cp), energy(q, w, m, g, K, cp))
+                                   qdot_of(q, w, sigma, K, cp), energy(q, w, m, g, K, cp), t_err)
             status = StatusCode.LEFT_CURVE
             break
         s = sigma * nsign
         Ga = w * math.exp(2.0 * s * mu * K.alpha(q, *cp))
-        end, qb, Gb, roots = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X)
-        T, Wi, _ = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, False, dummy, 0)
+        end, qb, Gb, roots = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, R)
+        T, Wi, Te, flag, _, q_ok, G_ok, q_neg = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
+                                                     roots, count)
+        if flag == QUAD_NEGATIVE:
+            # G < 0 inside: a turning point the search stepped over (a narrow dip of G).
+            G_neg = anchored_G(q_neg, q_ok, G_ok, s, S, K, cp, R, roots, count)
+            if G_neg < 0.0 < G_ok:
+                qb = root_anchored(q_ok, G_ok, q_neg, G_neg, s, S, K, cp, R, roots, count)
+                Gb, end = 0.0, End.TURN
+                T, Wi, Te, flag, _, _, _, _ = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
+                                                   roots, count)
+            if flag == QUAD_NEGATIVE:
+                flag = QUAD_BUDGET
+        if flag == QUAD_BUDGET or not Te <= TOLERANCE_FACTOR * (R.rtol * (t + T) + R.atol):
+            # The interval's time could not be brought within its tolerance: stop at its start.
+            status = StatusCode.TOLERANCE_NOT_MET
+            q_bad = qb
+            break
         if t + T > t_max:
             # Stop inside this interval where t reaches t_max.
             target = t_max - t
             C = Ga + 2.0 * g * Fs(s, q, mu, K, cp)
-            pt = (q, Ga, C, s, sigma, S, K, cp, R, work, dummy, target)
+            pt = (q, Ga, C, s, sigma, S, K, cp, R, work, dummy, target, roots, count)
             qe = root_time(pt, q, qb, -target, T - target)
             Ge = max(C - 2.0 * g * Fs(s, qe, mu, K, cp), 0.0)
-            Tq, Wq, _ = quad(q, qe, Ga, Ge, s, sigma, S, K, cp, R, work, False, dummy, 0)
+            Tq, Wq, Tqe, _, _, _, _, _ = quad(q, qe, Ga, Ge, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
+                                              roots, count)
             if keep_intervals:
-                ivs, ni = put_interval(ivs, ni, q, qe, Ga, Ge, s, sigma, t, Tq, Wq)
+                ivs, ni = put_interval(ivs, ni, q, qe, Ga, Ge, s, sigma, t, Tq, Wq, Tqe)
             Wf += m * Wq
             t = t_max
+            t_err += Tqe
             q = qe
             w = math.exp(-2.0 * s * mu * K.alpha(qe, *cp)) * Ge
             status = StatusCode.T_MAX
             break
         wb = math.exp(-2.0 * s * mu * K.alpha(qb, *cp)) * Gb
         if keep_intervals:
-            ivs, ni = put_interval(ivs, ni, q, qb, Ga, Gb, s, sigma, t, T, Wi)
+            ivs, ni = put_interval(ivs, ni, q, qb, Ga, Gb, s, sigma, t, T, Wi, Te)
         t += T
+        t_err += Te
         Wf += m * Wi
         if end == End.TURN:
             side = side_at(qb, S.has_left, S.left, S.has_right, S.right)
@@ -236,23 +277,28 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
                 code, status = rest_outcome(what)
             else:
                 sigma = direction
-            events, ne = put_event(events, ne, code, t, qb, 0.0, 0.0, energy(qb, 0.0, m, g, K, cp))
+            events, ne = put_event(events, ne, code, t, qb, 0.0, 0.0, energy(qb, 0.0, m, g, K, cp), t_err)
         elif end == End.LIMIT:
             q, w = qb, wb
             pending_impact = True
         elif end == End.NSIGN and S.unilateral:
             qd = qdot_of(qb, wb, sigma, K, cp)
-            events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, qb, qd, qd, energy(qb, wb, m, g, K, cp))
+            events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, qb, qd, qd, energy(qb, wb, m, g, K, cp),
+                                   t_err)
             q, w = qb, wb
             status = StatusCode.LEFT_CURVE
         elif end == End.NSIGN:
             qd = qdot_of(qb, wb, sigma, K, cp)
             events, ne = put_event(events, ne, EventCode.NORMAL_SIGN_CHANGE, t, qb, qd, qd,
-                                   energy(qb, wb, m, g, K, cp))
+                                   energy(qb, wb, m, g, K, cp), t_err)
             q, w = qb, wb
             flip = True
         elif end == End.PASS:
             q, w = qb, wb
+        elif end == End.CUT:
+            # The tangent angle's branch cut: go on from the first double beyond it, where the
+            # kernels' alpha is the other branch's (w is continuous; one ulp of motion is not timed).
+            q, w = np.nextafter(qb, qb + sigma), wb
         else:
             q, w = qb, wb
             status = StatusCode.LEFT_DOMAIN
@@ -262,7 +308,7 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
         status = StatusCode.NON_FINITE  # e.g. mu = 1e65: an arrest reached at t = nan
     qdot_final = qdot_of(q, w, sigma, K, cp) if sigma != 0 else 0.0
     return Outcome(status.value, ne, events, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, energy(q, w, m, g, K, cp),
-                   zeno, scale)
+                   zeno, scale, t_err, q_bad)
 
 
 def params_of(row, n):
@@ -275,11 +321,14 @@ def params_of(row, n):
 
 
 def setup_of(row, K, cp):
-    """The scene constants (:class:`~symvib.numeric.engine.state.Setup`) of a scene row."""
+    """The scene constants (:class:`~symvib.numeric.engine.state.Setup`) of a scene row, with the
+    length scale of the run taken from the curve (:func:`~symvib.numeric.engine.scan.curve_scale`)."""
     lo, hi = K.domain(*cp)
-    return Setup(row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k],
-                 row[SceneRow.has_left] != 0.0, row[SceneRow.left], row[SceneRow.has_right] != 0.0,
-                 row[SceneRow.right], lo, hi, K.q_scale(*cp), row[SceneRow.unilateral] != 0.0)
+    has_left, left = row[SceneRow.has_left] != 0.0, row[SceneRow.left]
+    has_right, right = row[SceneRow.has_right] != 0.0, row[SceneRow.right]
+    scale = curve_scale(K, cp, row[SceneRow.q0], lo, hi, has_left, left, has_right, right, K.q_scale(*cp))
+    return Setup(row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k], has_left, left, has_right,
+                 right, lo, hi, scale, row[SceneRow.unilateral] != 0.0)
 
 
 def simulate_scene(K, cp, row, R, keep):
@@ -349,6 +398,7 @@ def sweep_block(K, rows, cp_rows, R, max_log, out, logs, start, stop):
         out[i, Summary.E0] = o.E0
         out[i, Summary.E_final] = o.E_final
         out[i, Summary.zeno_ratio] = o.zeno.ratio
+        out[i, Summary.t_err] = o.t_err
 
 
 #: The kernels of the curve a compiled engine is specialized to: a global of the entries

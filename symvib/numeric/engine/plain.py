@@ -31,7 +31,7 @@ import numpy as np
 
 from symvib.numeric.engine.state import Rules
 
-__all__ = ["scratch", "cumulate", "grown", "plain_rules", "plain_entries", "PRIMITIVES"]
+__all__ = ["scratch", "cumulate", "grown", "plain_rules", "plain_entries", "plain_functions", "PRIMITIVES"]
 
 
 def scratch(rows, n):
@@ -57,8 +57,10 @@ PRIMITIVES = {"scratch": scratch, "cumulate": cumulate, "grown": grown}
 
 
 def plain_rules(R: Rules) -> Rules:
-    """The rules with their nodes and weights as lists (the matrices stay arrays, for :func:`cumulate`)."""
-    return Rules(R.Xw.tolist(), R.Ww.tolist(), R.Sw, R.SWw, R.Xp.tolist(), R.Wp.tolist(), R.Sp)
+    """The rules with their nodes, weights and error-estimate rows as lists (the integration matrices
+    stay arrays, for :func:`cumulate`)."""
+    return R._replace(Xw=R.Xw.tolist(), Ww=R.Ww.tolist(), Xp=R.Xp.tolist(), Wp=R.Wp.tolist(), Tw=R.Tw.tolist(),
+                      Tp=R.Tp.tolist())
 
 
 @cache
@@ -68,6 +70,16 @@ def _engine() -> dict:
     from symvib.numeric.engine.bind import ENGINE_MODULES, rebound_functions
 
     return rebound_functions(ENGINE_MODULES, lambda name: True, names=PRIMITIVES)
+
+
+def plain_functions() -> dict:
+    """The plain engine's functions by name (as :func:`plain_entries` runs them), with the constants
+    its callers need (``CRIT_STEP``, ``MAX_PANELS``): for the dense output, which integrates on
+    the panels the engine's ``quad`` takes."""
+    from symvib.numeric.engine.scan import CRIT_STEP
+    from symvib.numeric.engine.timing import MAX_PANELS
+
+    return {**_engine(), "scratch": scratch, "CRIT_STEP": CRIT_STEP, "MAX_PANELS": MAX_PANELS}
 
 
 def plain_entries(K) -> tuple:

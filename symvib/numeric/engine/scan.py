@@ -3,8 +3,9 @@
 Within one motion interval the branch ``s`` is fixed and the phase trajectory
 (physics.md, eq. 2) ``G(q) = C - 2 g F_s(q)`` holds in closed form.  Walking in
 the direction of motion over pieces on which ``G`` is monotone (split where
-``F_s' = 0``: the critical points, found by a lazy scan of a lattice of
-``CRIT_STEP * q_scale``), the limiter ahead is hit iff ``G`` stays positive up
+``F_s' = 0``: the critical points, found by a lazy scan in steps over which the
+tangent turns by at most ``CRIT_TURN``, and at most ``CRIT_STEP`` of the curve's
+length scale, :func:`curve_scale`), the limiter ahead is hit iff ``G`` stays positive up
 to it; otherwise the first root of ``G`` is the turning point.  Where the normal
 force may change sign (outside the region where ``kappa >= 0`` and ``x' > 0``),
 its first zero ends the interval first (:func:`locate`).
@@ -21,16 +22,21 @@ import math
 
 import numpy as np
 
+from symvib.numeric.engine.anchor import anchored_G, root_anchored
 from symvib.numeric.engine.laws import Fs
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update, root_G
 
-__all__ = ["End", "Region", "scratch", "map_new", "locate", "CRIT_STEP", "WINDOW", "CHUNK", "DIP_ITER"]
+__all__ = ["End", "Region", "scratch", "map_new", "locate", "curve_scale", "branch_cut", "next_cut", "CRIT_STEP",
+           "CRIT_TURN", "WINDOW", "CHUNK", "DIP_ITER", "SCALE_POINTS", "SCALE_TURN"]
 
 #: Search window where no limiter bounds the motion, in units of q_scale.
 WINDOW = 2.0
-#: Spacing of the critical-point scan (F_s' = 0), in units of q_scale: a bump of the
-#: curve narrower than this may hide a pair of critical points.
+#: Longest step of the critical-point scan (F_s' = 0), in units of q_scale.
 CRIT_STEP = 1 / 32
+#: Largest turn of the tangent between two points of the scan (rad): F_s' changes sign where the
+#: tangent crosses the cone edge, so a pair of critical points hides between two scan points only
+#: where the tangent overshoots the edge by less than about this.
+CRIT_TURN = 1 / 32
 #: Lattice steps scanned ahead of the particle at a time.
 CHUNK = 16
 #: Golden-section steps of the search for a dip of the normal force below 0 around a local
@@ -42,8 +48,28 @@ GOLDEN = 0.6180339887498949
 EDGE_RTOL = 1e-12
 #: Stand-in for a positive value of N that is 0 at the start of an interval.
 N_FLOOR = 1e-300
+#: Points at which :func:`curve_scale` samples how fast the tangent turns.
+SCALE_POINTS = 17
+#: The run's length scale is at most the distance in q over which the tangent turns by this (rad).
+SCALE_TURN = 1.0
 #: Initial capacity of the list of critical points per branch.
 ROOTS_CAPACITY = 8
+#: Rows of the array of special points: the critical points of the branches s = +1 and s = -1,
+#: and the branch cuts of the tangent angle (:data:`CUT_ROW`).
+ROOT_ROWS = 3
+#: The row of the points where the kernels' tangent angle jumps by 2 pi (``atan2`` of a parametric
+#: curve whose tangent points along -x): each is stored as the last double before the jump.
+CUT_ROW = 2
+#: Bisection steps that bring a branch cut's bracket down to two neighbouring doubles.
+CUT_BISECT = 80
+#: The closed form ``G = C - 2 g F_s`` is trusted at a turning point or an interval's end while
+#: its rounding, ``NOISE_ROUNDS eps (|C| + 2 g |F_s|)``, is below ``CANCEL_RTOL`` of the ``G`` that
+#: decides there (the bracket's start, the end's value); else the interval is searched again
+#: with ``G`` carried from its start (:func:`symvib.numeric.engine.anchor.anchored_G`).
+CANCEL_RTOL = 1e-12
+NOISE_ROUNDS = 8.0
+#: Unit roundoff of a double.
+EPS = 2.220446049250313e-16
 
 
 class End(enum.IntEnum):
@@ -54,13 +80,14 @@ class End(enum.IntEnum):
     NSIGN = 2  # at a zero of the normal force
     PASS = 3  # at the end of the search window: the motion goes on
     EDGE = 4  # at an end of the curve's regular domain
+    CUT = 5  # at a branch cut of the tangent angle: the motion goes on from the other side
 
 
 class Region(enum.IntEnum):
-    """Entries of the scanned region of the lattice (a float array, mutated in place):
-    its ends, ``z' +- mu x'`` at the ends, the part where ``N > 0`` surely (``kappa >= 0``
-    and ``x' > 0``) and whether that part is still open at each end, the lattice
-    indices of the ends, and the domain pulled :data:`EDGE_RTOL` inside its ends."""
+    """Entries of the scanned region (a float array, mutated in place): its ends, ``z' +- mu x'``
+    at the ends, the part where ``N > 0`` surely (``kappa >= 0`` and ``x' > 0``) and whether that
+    part is still open at each end, the curve's turning rate ``|alpha'|`` at the ends, and the
+    domain pulled :data:`EDGE_RTOL` inside its ends."""
 
     x_lo = 0
     x_hi = 1
@@ -72,8 +99,8 @@ class Region(enum.IntEnum):
     safe_hi = 7
     safe_lo_open = 8
     safe_hi_open = 9
-    k_lo = 10
-    k_hi = 11
+    turn_lo = 10
+    turn_hi = 11
     lo_in = 12
     hi_in = 13
 
@@ -81,7 +108,7 @@ class Region(enum.IntEnum):
 #: Entries of the region array.
 REGION_SIZE = len(Region)
 #: The entries' indices as plain ints (numpy indexes faster with an int than with an IntEnum).
-(X_LO, X_HI, FP_LO, FM_LO, FP_HI, FM_HI, SAFE_LO, SAFE_HI, SAFE_LO_OPEN, SAFE_HI_OPEN, K_LO, K_HI, LO_IN,
+(X_LO, X_HI, FP_LO, FM_LO, FP_HI, FM_HI, SAFE_LO, SAFE_HI, SAFE_LO_OPEN, SAFE_HI_OPEN, TURN_LO, TURN_HI, LO_IN,
  HI_IN) = (int(r) for r in Region)
 
 
@@ -123,28 +150,67 @@ def scratch(rows, n):
     return np.empty((rows, n))
 
 
+def curve_scale(K, cp, q0, lo, hi, has_left, left, has_right, right, hint):
+    """The length scale of a run, in units of ``q``: the curve's declared ``q_scale`` (``hint``) at
+    most, and no more than the distance over which the tangent turns by :data:`SCALE_TURN` rad
+    anywhere on the stretch the run can reach first (between the limiters, or
+    ``WINDOW`` hints around ``q0``; sampled at :data:`SCALE_POINTS` points), nor the limiters' span.
+
+    The quadrature panels, the search window, the scan's longest step and the reach of
+    the cone-edge expansion are fractions of it, so a curve of any size is resolved alike
+    (physics.md, "Accuracy").
+    """
+    a = left if has_left else q0 - WINDOW * hint
+    b = right if has_right else q0 + WINDOW * hint
+    a = max(a, lo + EDGE_RTOL * max(1.0, abs(lo)))
+    b = min(b, hi - EDGE_RTOL * max(1.0, abs(hi)))
+    scale = hint
+    if has_left and has_right and right > left:
+        scale = min(scale, right - left)
+    if not b > a:
+        return scale
+    turn = 0.0
+    for i in range(SCALE_POINTS):
+        turn = max(turn, turn_rate(a + (b - a) * (i + 0.5) / SCALE_POINTS, K, cp))
+    if turn * scale > SCALE_TURN:
+        scale = SCALE_TURN / turn
+    return scale
+
+
+def turn_rate(x, K, cp):
+    """``|alpha'(x)| = |kappa h|``: how fast the tangent turns per unit of ``q`` (0 where not finite)."""
+    r = abs(K.kappa(x, *cp) * K.h(x, *cp))
+    return r if math.isfinite(r) else 0.0
+
+
+def scan_step(turn, step):
+    """The next scan step from a point where the tangent turns at ``turn``: at most ``step``, and
+    short enough that the tangent turns by at most :data:`CRIT_TURN` (physics.md, "Accuracy")."""
+    return step if turn * step <= CRIT_TURN else CRIT_TURN / turn
+
+
 def map_new(q0, lo, hi, mu, K, cp, step):
-    """The scanned region (:class:`Region`) and critical points at the start ``q0``."""
+    """The scanned region (:class:`Region`) and critical points at the start ``q0`` (scan steps at
+    most ``step``, :func:`scan_step`)."""
     region = scratch(1, REGION_SIZE)[0]
     lo_in = lo + EDGE_RTOL * max(1.0, abs(lo)) if math.isfinite(lo) else -math.inf
     hi_in = hi - EDGE_RTOL * max(1.0, abs(hi)) if math.isfinite(hi) else math.inf
-    k0 = math.floor(q0 / step)
-    x0 = min(max(k0 * step, lo_in), hi_in)
+    x0 = min(max(q0, lo_in), hi_in)
     region[X_LO] = x0
     region[X_HI] = x0
     zp, xp = K.dz(x0, *cp), K.dx(x0, *cp)
     region[FP_LO] = region[FP_HI] = zp + mu * xp
     region[FM_LO] = region[FM_HI] = zp - mu * xp
-    safe = xp > 0.0 and K.kappa(x0, *cp) >= 0.0 and is_safe(q0, K, cp)
+    safe = is_safe(x0, K, cp) and is_safe(q0, K, cp)
     region[SAFE_LO] = region[SAFE_HI] = x0
     region[SAFE_LO_OPEN] = region[SAFE_HI_OPEN] = 1.0 if safe else 0.0
     if not safe:
         region[SAFE_LO] = region[SAFE_HI] = q0
-    region[K_LO] = region[K_HI] = k0
+    region[TURN_LO] = region[TURN_HI] = turn_rate(x0, K, cp)
     region[LO_IN] = lo_in
     region[HI_IN] = hi_in
-    roots = np.empty((2, ROOTS_CAPACITY))
-    count = np.zeros(2, dtype=np.int64)
+    roots = np.empty((ROOT_ROWS, ROOTS_CAPACITY))
+    count = np.zeros(ROOT_ROWS, dtype=np.int64)
     if region[FP_LO] == 0.0:
         roots = add_root(roots, count, 0, x0)
     if region[FM_LO] == 0.0:
@@ -154,8 +220,8 @@ def map_new(q0, lo, hi, mu, K, cp, step):
 def add_root(roots, count, b, r):
     """Append the critical point ``r`` of branch row ``b`` (grows the array when full)."""
     if count[b] == roots.shape[1]:
-        new = np.empty((2, 2 * roots.shape[1]))
-        for i in range(2):
+        new = np.empty((ROOT_ROWS, 2 * roots.shape[1]))
+        for i in range(ROOT_ROWS):
             for j in range(roots.shape[1]):
                 new[i, j] = roots[i, j]  # element by element: see timing.grown
         roots = new
@@ -177,7 +243,7 @@ def changes_sign(f_old, f_new):
     return f_new == 0.0 or (f_old != 0.0 and (f_old > 0.0) != (f_new > 0.0))
 
 def map_extend(region, roots, count, target, mu, K, cp, step):
-    """Scan the lattice outward until target is covered (or the domain ends)."""
+    """Scan outward until target is covered (or the domain ends)."""
     if target > region[X_HI]:
         return extend_side(region, roots, count, target, mu, K, cp, step, 1.0)
     if target < region[X_LO]:
@@ -185,18 +251,26 @@ def map_extend(region, roots, count, target, mu, K, cp, step):
     return roots
 
 def extend_side(region, roots, count, target, mu, K, cp, step, up):
-    """Scan the lattice up (``up = 1``) or down (``up = -1``) until target is covered (or the domain ends)."""
+    """Scan up (``up = 1``) or down (``up = -1``) until target is covered (or the domain ends), in
+    steps that let the tangent turn by at most :data:`CRIT_TURN` (:func:`scan_step`)."""
     if up > 0.0:
-        ix, ifp, ifm, isafe, iopen, ik, iedge = X_HI, FP_HI, FM_HI, SAFE_HI, SAFE_HI_OPEN, K_HI, HI_IN
+        ix, ifp, ifm, isafe, iopen, iturn, iedge = X_HI, FP_HI, FM_HI, SAFE_HI, SAFE_HI_OPEN, TURN_HI, HI_IN
     else:
-        ix, ifp, ifm, isafe, iopen, ik, iedge = X_LO, FP_LO, FM_LO, SAFE_LO, SAFE_LO_OPEN, K_LO, LO_IN
+        ix, ifp, ifm, isafe, iopen, iturn, iedge = X_LO, FP_LO, FM_LO, SAFE_LO, SAFE_LO_OPEN, TURN_LO, LO_IN
     x_old, edge = region[ix], region[iedge]
-    fp_old, fm_old, k, safe_open = region[ifp], region[ifm], region[ik], region[iopen] != 0.0
+    fp_old, fm_old, turn, safe_open = region[ifp], region[ifm], region[iturn], region[iopen] != 0.0
     while (target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0:
-        k += up
-        x = k * step
-        if (x - edge) * up > 0.0:
-            x = edge
+        h = scan_step(turn, step)
+        while True:
+            x = x_old + up * h
+            if (x - edge) * up > 0.0:
+                x = edge
+            ka, hh = K.kappa(x, *cp), K.h(x, *cp)
+            turn_new = abs(ka * hh) if math.isfinite(ka * hh) else 0.0
+            # The tangent turned faster ahead than behind: a shorter step, from the new rate.
+            if turn_new * abs(x - x_old) <= 2.0 * CRIT_TURN or abs(x - x_old) <= EDGE_RTOL * max(1.0, abs(x)):
+                break
+            h = CRIT_TURN / turn_new
         zp, xp = K.dz(x, *cp), K.dx(x, *cp)
         fp, fm = zp + mu * xp, zp - mu * xp
         if not (fp * fp_old > 0.0 and fm * fm_old > 0.0):
@@ -205,15 +279,57 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
                 roots = crossing(roots, count, 0, x_old, x, fp_old, fp, mu, K, cp)
             if changes_sign(fm_old, fm):
                 roots = crossing(roots, count, 1, x_old, x, fm_old, fm, mu, K, cp)
+        if xp < 0.0 and (fp + fm) * (fp_old + fm_old) <= 0.0:
+            # z' changed sign with the tangent along -x: where atan2's angle jumps, if it does.
+            roots = branch_cut(roots, count, min(x_old, x), max(x_old, x), K, cp)
         if safe_open:
-            if xp > 0.0 and K.kappa(x, *cp) >= 0.0:
+            if xp > 0.0 and ka >= 0.0:
                 region[isafe] = x
             else:
                 safe_open = False
-        x_old, fp_old, fm_old = x, fp, fm
-    region[ix], region[ifp], region[ifm], region[ik] = x_old, fp_old, fm_old, k
+        x_old, fp_old, fm_old, turn = x, fp, fm, turn_new
+    region[ix], region[ifp], region[ifm], region[iturn] = x_old, fp_old, fm_old, turn
     region[iopen] = 1.0 if safe_open else 0.0
     return roots
+
+def branch_cut(roots, count, a, b, K, cp):
+    """Record where the kernels' tangent angle jumps by more than pi between ``a < b`` (if it does),
+    as the last double before the jump (bisection on ``alpha`` down to neighbouring doubles).
+
+    A parametric curve's ``alpha = atan2(z', x')`` jumps by ``2 pi`` where its tangent turns
+    through ``-x``; the factor ``exp(2 s mu alpha)`` of eq. 2 must not, so a motion interval
+    ends there and the next begins on the other side (physics.md, "Accuracy").
+    """
+    fa, fb = K.alpha(a, *cp), K.alpha(b, *cp)
+    if not abs(fb - fa) > math.pi:
+        return roots
+    for _ in range(CUT_BISECT):
+        m = 0.5 * (a + b)
+        if not a < m < b:
+            break
+        fm = K.alpha(m, *cp)
+        if abs(fm - fa) > math.pi:
+            b, fb = m, fm
+        else:
+            a, fa = m, fm
+    for i in range(count[CUT_ROW]):
+        if roots[CUT_ROW, i] == a:
+            return roots
+    return add_root(roots, count, CUT_ROW, a)
+
+
+def next_cut(roots, count, a, b, sigma):
+    """The nearest branch cut strictly between ``a`` and ``b`` in direction ``sigma`` (nan if none):
+    the double the motion stops at before the jump (the stored one moving up, the next one down)."""
+    best = math.nan
+    for i in range(count[CUT_ROW]):
+        c = roots[CUT_ROW, i]
+        if sigma < 0:
+            c = np.nextafter(c, math.inf)
+        if (a < c < b or b < c < a) and (math.isnan(best) or abs(c - a) < abs(best - a)):
+            best = c
+    return best
+
 
 def next_crit(roots, count, s, a, b, sigma):
     """The known critical point of branch s nearest a strictly between a and b (nan if none)."""
@@ -260,18 +376,68 @@ def dip_below(pn, a, b):
             fd = normal_on(d, pn)
     return math.nan, 0.0
 
-def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X):
+def walk(q, sigma, s, Ga, C, bound, kind, anchored, S, K, cp, region, roots, count, R):
+    """Walk from ``q`` towards ``bound`` over the pieces on which ``G`` is monotone: the first
+    root of ``G`` (a turning point), else ``bound`` (of ``kind``).
+
+    ``G`` at the pieces' ends is the closed form ``C - 2 g F_s``, or with ``anchored``
+    carried from ``q`` (:func:`~symvib.numeric.engine.anchor.anchored_G`).  Returns
+    ``(qe, Ge, kind, roots, sure)``; ``sure`` is False when the closed form's rounding
+    was too large for the ``G`` that decided the end (:data:`CANCEL_RTOL`): walk again anchored.
+    """
+    g2 = 2.0 * S.g
+    mu = S.mu
+    step = CRIT_STEP * S.scale
+    a, Gq = q, Ga
+    while True:
+        # Scan at most CHUNK longest steps ahead of a; between a and the scanned edge
+        # the known critical points are all there are, so G is monotone between them.
+        ahead = a + sigma * CHUNK * step
+        target = min(ahead, bound) if sigma > 0 else max(ahead, bound)
+        roots = map_extend(region, roots, count, target, mu, K, cp, step)
+        edge = min(region[X_HI], bound) if sigma > 0 else max(region[X_LO], bound)
+        cut = next_cut(roots, count, a, edge, sigma)
+        if not math.isnan(cut):
+            bound, kind, edge = cut, End.CUT, cut
+        c = next_crit(roots, count, s, a, edge, sigma)
+        b = edge if math.isnan(c) else c
+        if b == a:
+            b = bound  # the domain ends here: nothing left to scan
+        if anchored:
+            Gb = anchored_G(b, a, Gq, s, S, K, cp, R, roots, count)
+        else:
+            Fb = Fs(s, b, mu, K, cp)
+            Gb = C - g2 * Fb
+            if (Gb <= 0.0 or b == bound) and NOISE_ROUNDS * EPS * (abs(C) + g2 * abs(Fb)) > CANCEL_RTOL * max(Gq, Gb):
+                return bound, 0.0, kind, roots, False
+        if math.isnan(Gb):
+            Gb = -math.inf
+        if Gb <= 0.0:
+            # A non-finite G at a domain end stands in as -1 (the finder bisects there).
+            Gb = Gb if math.isfinite(Gb) else -1.0
+            if anchored:
+                qe = root_anchored(a, Gq, b, Gb, s, S, K, cp, R, roots, count) if Gb < 0.0 else b
+            else:
+                qe = root_G(s, C, a, b, Gq, Gb, g2, mu, K, cp)
+            return qe, 0.0, End.TURN, roots, True
+        if b == bound:
+            return bound, Gb, kind, roots, True
+        a, Gq = b, Gb
+
+def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, R):
     """The end of the motion interval that starts at ``q`` moving ``sigma`` on branch ``s``
     with ``G(q) = Ga``, for the scene constants ``S`` (:class:`~symvib.numeric.engine.state.Setup`).
 
     Returns ``(end, qe, Ge, roots)``: how it ends (:class:`End`), where, ``G`` there,
-    and the (possibly grown) array of critical points.  ``X`` are the Gauss nodes at
-    which the normal force is scanned where it may change sign.
+    and the (possibly grown) array of critical points.  ``R`` are the rules
+    (:class:`~symvib.numeric.engine.state.Rules`): the normal force is scanned at the
+    nodes ``R.Xw`` where it may change sign, and ``G`` carried from the start with ``R.Xp``
+    where the closed form cancels (:data:`CANCEL_RTOL`).
     """
     g, mu, left, right, lo, hi, scale = S.g, S.mu, S.left, S.right, S.lo, S.hi, S.scale
     has_left, has_right = S.has_left, S.has_right
+    X = R.Xw
     g2 = 2.0 * g
-    step = CRIT_STEP * scale
     C = Ga + g2 * Fs(s, q, mu, K, cp)
     if sigma > 0 and has_right:
         bound, kind = right, End.LIMIT
@@ -284,31 +450,9 @@ def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X):
             bound, kind = edge, End.EDGE
         else:
             bound, kind = window, End.PASS
-    a, Gq = q, Ga
-    qe, Ge, kind_out = bound, 0.0, kind
-    while True:
-        # Scan at most CHUNK lattice steps ahead of a; between a and the scanned edge
-        # the known critical points are all there are, so G is monotone between them.
-        ahead = a + sigma * CHUNK * step
-        target = min(ahead, bound) if sigma > 0 else max(ahead, bound)
-        roots = map_extend(region, roots, count, target, mu, K, cp, step)
-        edge = min(region[X_HI], bound) if sigma > 0 else max(region[X_LO], bound)
-        c = next_crit(roots, count, s, a, edge, sigma)
-        b = edge if math.isnan(c) else c
-        if b == a:
-            b = bound  # the domain ends here: nothing left to scan
-        Gb = C - g2 * Fs(s, b, mu, K, cp)
-        if math.isnan(Gb):
-            Gb = -math.inf
-        if Gb <= 0.0:
-            # A non-finite G at a domain end stands in as -1 (the finder bisects there).
-            qe = root_G(s, C, a, b, Gq, Gb if math.isfinite(Gb) else -1.0, g2, mu, K, cp)
-            Ge, kind_out = 0.0, End.TURN
-            break
-        if b == bound:
-            qe, Ge, kind_out = bound, Gb, kind
-            break
-        a, Gq = b, Gb
+    qe, Ge, kind_out, roots, sure = walk(q, sigma, s, Ga, C, bound, kind, False, S, K, cp, region, roots, count, R)
+    if not sure:
+        qe, Ge, kind_out, roots, _ = walk(q, sigma, s, Ga, C, bound, kind, True, S, K, cp, region, roots, count, R)
     # An earlier zero of N on [q, qe] ends the interval there instead.
     safe_lo = region[SAFE_LO]
     safe_hi = region[SAFE_HI]

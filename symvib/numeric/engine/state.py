@@ -14,8 +14,8 @@ Examples
 --------
 >>> KERNEL_INTERFACE["F_p"]
 ('F_p_scalar', ('q', 'mu'), 1)
->>> Kernels._fields[:4]
-('F_p', 'F_m', 'dF_p', 'dF_m')
+>>> Kernels._fields[:6]
+('F_p', 'F_m', 'dF_p', 'dF_m', 'ddF_p', 'ddF_m')
 """
 from __future__ import annotations
 
@@ -30,6 +30,8 @@ KERNEL_INTERFACE = {
     "F_m": ("F_m_scalar", ("q", "mu"), 1),
     "dF_p": ("dF_p_scalar", ("q", "mu"), 1),
     "dF_m": ("dF_m_scalar", ("q", "mu"), 1),
+    "ddF_p": ("ddF_p_scalar", ("q", "mu"), 1),
+    "ddF_m": ("ddF_m_scalar", ("q", "mu"), 1),
     "node_p": ("node_p_scalar", ("q", "mu"), 5),
     "node_m": ("node_m_scalar", ("q", "mu"), 5),
     "z": ("z_scalar", ("q",), 1),
@@ -56,6 +58,8 @@ class Kernels(NamedTuple):
     F_m: object
     dF_p: object
     dF_m: object
+    ddF_p: object
+    ddF_m: object
     node_p: object
     node_m: object
     z: object
@@ -91,11 +95,15 @@ class Setup(NamedTuple):
 
 
 class Rules(NamedTuple):
-    """Gauss-Legendre rules of the time quadrature (:func:`symvib.numeric.driver.rules`).
+    """Gauss-Legendre rules and tolerances of the time quadrature (:func:`symvib.numeric.driver.rules`).
 
     ``Xw, Ww, Sw, SWw``: nodes, weights and the transposed cumulative and weighted
     cumulative matrices of the rule for panels that start on a root; ``Xp, Wp, Sp``:
-    nodes, weights and transposed cumulative matrix of the rule for every other panel.
+    nodes, weights and transposed cumulative matrix of the rule for every other panel;
+    ``Tw, Tp``: the rows that give the four highest Legendre coefficients of an integrand
+    from its values at the nodes of each rule (the error estimate of a panel,
+    :func:`symvib.numeric.engine.timing.tail_error`); ``rtol, atol``: the tolerance a
+    motion interval's time aims at (relative to its duration; seconds).
     """
 
     Xw: object
@@ -105,6 +113,10 @@ class Rules(NamedTuple):
     Xp: object
     Wp: object
     Sp: object
+    Tw: object
+    Tp: object
+    rtol: float
+    atol: float
 
 
 class Zeno(NamedTuple):
@@ -122,7 +134,10 @@ class Outcome(NamedTuple):
     """What a run returns: status code, the event log (``n_events`` rows, columns
     :class:`~symvib.numeric.layout.EventColumn`), the interval log (``n_intervals``
     rows, columns :class:`~symvib.numeric.layout.IntervalColumn`), the final state,
-    the energy sums and the Zeno summary."""
+    the energy sums, the Zeno summary, the length scale the run used, the estimated error
+    of the final time (s; physics.md, "Time") and, for a run that ended
+    ``tolerance_not_met``, the far end of the interval whose time missed its tolerance
+    (``nan`` otherwise: the run stopped at its start, ``q``)."""
 
     status: int
     n_events: int
@@ -138,3 +153,5 @@ class Outcome(NamedTuple):
     E_final: float
     zeno: Zeno
     scale: float
+    t_err: float
+    q_bad: float

@@ -1,4 +1,4 @@
-"""Times and friction work of a motion interval, by Gauss-Legendre quadrature.
+"""Times and friction work of a motion interval, by adaptive Gauss-Legendre quadrature.
 
 ``t = Integral h dq / sqrt(w)`` (physics.md, "Time").  Each interval is split at
 its midpoint and each half is anchored at its outer end, where ``G`` is known
@@ -9,10 +9,25 @@ near a (real or virtual) root at distance ``delta`` behind the anchor the
 variable ``r = sqrt(xi)``, ``xi`` the distance from that root, removes the
 inverse square root, with panels graded geometrically from ``sqrt(delta)``.
 
+Error control (physics.md, "Accuracy"): every panel estimates the truncation error
+of its time and of its increment of ``G`` from the four highest Legendre
+coefficients of the integrands at its nodes (:func:`tail_error`), and the time's
+sensitivity to an error in ``G``; a panel whose estimate exceeds the tolerance
+(``R.rtol`` of its time, plus its share of ``R.atol``) is halved, the next one
+doubles back.  The error of an interval is the sum over its panels of the
+truncation estimates and of the propagated uncertainty of ``G`` (rounding of the
+anchor and of every increment, bounded by the size of ``F_s'``'s terms), plus the
+mismatch of the two halves at the midpoint.  :func:`quad` says when the budget of
+panels was spent or a node found ``G < 0`` (a turning point the search missed).
+
 Examples
 --------
->>> PANEL_Q, ROOT_RATIO, WORK_ROWS
-(1.0, 1.0, 10)
+>>> PANEL_Q, ROOT_RATIO, WORK_ROWS, MAX_PANELS
+(1.0, 1.0, 10, 400)
+>>> tail_error(1e-3, 1e-3, 1e-3, 1e-3, 12) == 2e-3     # not decaying: the tail itself
+True
+>>> tail_error(1e-12, 0.0, 1e-8, 0.0, 12) < 1e-20       # decaying by 1e-2 a step
+True
 """
 from __future__ import annotations
 
@@ -21,23 +36,65 @@ from math import sqrt
 
 import numpy as np
 
-from symvib.numeric.engine.laws import Fs, dFs, node
+from symvib.numeric.engine.anchor import PANEL_Q, crit_near
+from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, Fs, dF_edge, dFs, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update
-from symvib.numeric.engine.scan import scratch
+from symvib.numeric.engine.scan import ROOT_ROWS, scratch
 from symvib.numeric.layout import IntervalColumn
 
-__all__ = ["quad", "cumulate", "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO",
-           "WORK_ROWS", "SampleColumn"]
+__all__ = ["quad", "panel", "PanelColumn", "PANEL_COLUMNS", "NONE", "SAMPLES", "PANELS", "tail_error", "cumulate",
+           "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO", "WORK_ROWS", "MAX_PANELS",
+           "SampleColumn", "QUAD_OK", "QUAD_BUDGET", "QUAD_NEGATIVE"]
 
-#: Widest quadrature panel, in units of the curve's q_scale.
-PANEL_Q = 1.0
-#: A half-interval uses the root substitution when its anchor's (virtual) root
-#: is closer than ROOT_RATIO times the half's length.
+#: A half-interval uses the root substitution when its anchor's (virtual) root is
+#: closer than ROOT_RATIO times the half's length.
 ROOT_RATIO = 1.0
 #: Smallest positive double, used to keep 1/sqrt(G) finite at a node on a root.
 TINY = np.finfo(float).tiny
+#: Unit roundoff of a double.
+EPS = 2.220446049250313e-16
 #: Rows of the quadrature's scratch array (node values and the cumulative sums).
 WORK_ROWS = 10
+#: Most panels a half-interval may accept; with at most MAX_TRIES evaluated, including the
+#: halved ones.  A half that needs more ends the run ``tolerance_not_met``.
+MAX_PANELS = 400
+MAX_TRIES = 4 * MAX_PANELS
+#: Narrowest panel, relative to the size of its end in the quadrature variable: below it
+#: a panel is not halved (its nodes would not be distinct doubles).
+MIN_PANEL_RTOL = 1e3 * EPS
+#: A ratio of successive Legendre coefficients at and above which the tail is taken as
+#: not decaying (the integrand is not resolved on the panel).
+UNRESOLVED = 0.5
+#: A node's G more negative than this many times its uncertainty is a root the search missed.
+NEGATIVE_MARGIN = 8.0
+#: What :func:`quad` writes to its ``out``: nothing, the samples at the nodes, or the panels it took.
+NONE, SAMPLES, PANELS = 0, 1, 2
+
+
+class PanelColumn:
+    """Columns of the rows :func:`quad` writes in mode :data:`PANELS` (one per accepted panel; plain
+    ints, for numba): the half (0 anchored at the start, 1 at the end), the panel's ends in the
+    quadrature variable ``r``, ``G`` and the time from the anchor at its ends, whether the half
+    uses the root substitution, and its ``delta`` (``xi = r^2 - delta``)."""
+
+    half = 0
+    r1 = 1
+    r2 = 2
+    G1 = 3
+    G2 = 4
+    tau1 = 5
+    tau2 = 6
+    root = 7
+    delta = 8
+
+
+#: Columns of a row of :class:`PanelColumn`.
+PANEL_COLUMNS = 9
+
+
+#: What :func:`quad` reports: the tolerance was met (or the interval is done); the budget of
+#: panels was spent first; a node found G < 0 (the interval's end is wrong).
+QUAD_OK, QUAD_BUDGET, QUAD_NEGATIVE = 0, 1, 2
 
 
 class SampleColumn:
@@ -57,8 +114,8 @@ class SampleColumn:
 
 #: Columns of a sample (:class:`SampleColumn`).
 SAMPLE_COLUMNS = 1 + max(v for k, v in vars(SampleColumn).items() if not k.startswith("_"))
-#: Nodes per quadrature piece a sample buffer grows by at least, times the rule's nodes.
-SAMPLE_GROWTH = 200
+#: Panels a sample buffer grows by at least, times the rule's nodes (both halves of a piece).
+SAMPLE_GROWTH = 2 * MAX_PANELS
 
 
 def cumulate(St, v, n, acc):
@@ -73,30 +130,179 @@ def cumulate(St, v, n, acc):
     return acc
 
 
-def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
-    """Time and friction work (per unit mass) of one interval; node samples into out[o:].
+def tail_error(c1, c2, c3, c4, n):
+    """Error estimate of an ``n``-point Gauss-Legendre integral over ``[-1, 1]`` from the integrand's
+    Legendre coefficients ``c1 = a_{n-1}, c2 = a_{n-2}, c3 = a_{n-3}, c4 = a_{n-4}``.
 
-    ``R``: the rules (:class:`~symvib.numeric.engine.state.Rules`; see
-    :func:`symvib.numeric.driver.plain_nodes`); ``S``: the scene constants
-    (:class:`~symvib.numeric.engine.state.Setup`); ``work``: scratch rows
-    (:data:`WORK_ROWS`).  Returns ``(T, W_friction / m, o)``.
+    The coefficients of an integrand analytic in a Bernstein ellipse decay as
+    ``rho^-k``; ``r = 1/rho`` is estimated from the two pairs (pairs, so that an even or
+    odd integrand, whose every other coefficient vanishes, is not taken for a resolved
+    one), and the error as ``2 t r^(n/2 + 1)``, ``t`` the larger of the last pair: half
+    the decay the rule earns, which over a test set of peaks, virtual roots and Runge
+    functions never fell below the true error where it was below ``1e-10``.  A tail
+    that does not decay (``r >= UNRESOLVED``) is its own estimate: ``2 t``.
     """
-    Xw, Ww, Sw, SWw, Xp, Wtp, Sp = R.Xw, R.Ww, R.Sw, R.SWw, R.Xp, R.Wp, R.Sp
-    g, mu, scale = S.g, S.mu, S.scale
-    g2 = 2.0 * g
-    L = abs(qb - qa)
-    if L == 0.0:
-        return 0.0, 0.0, o
-    half = 0.5 * L
-    maxq = PANEL_Q * scale
+    t1 = max(abs(c1), abs(c2))
+    t2 = max(abs(c3), abs(c4))
+    if t1 == 0.0:
+        return 0.0
+    r = 1.0 if t2 == 0.0 else sqrt(t1 / t2)
+    if r >= UNRESOLVED:
+        return 2.0 * t1
+    return 2.0 * t1 * r ** (n // 2 + 1)
+
+
+def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out, o, roots, count):
+    """One panel ``[r1, r2]`` of a half-interval anchored at ``e`` (entered in direction ``d``),
+    with ``G = Gstart`` at ``r1``: its nodes, ``G`` rebuilt at them, the integrals and their errors.
+
+    ``r`` is the quadrature variable (``xi = r^2 - delta`` next to a root, ``xi = r``
+    otherwise; ``q = e + d xi``); a panel that starts on the root itself takes the
+    weighted rule.  In mode :data:`SAMPLES` the nodes' ``q, w, N`` go to ``out[o:]`` and the
+    time, path and friction-work integrands to the scratch rows 7-9.  Where ``F_s'`` at a node is
+    small next to its terms and a critical point of ``roots`` is near, it is taken from there
+    (:func:`~symvib.numeric.engine.laws.dF_edge`).
+
+    Returns ``(dG, T, W, P, err_T, err_G, sens, round_G, G_min, q_min)``: the increment of
+    ``G`` over the panel, its time, friction work per unit mass and path length, the
+    truncation errors of the time and of ``dG`` (:func:`tail_error`), the time's
+    sensitivity ``dT/dG`` to an offset of ``G`` (``Integral f / (2 G)``), a bound of the
+    rounding of ``dG`` (``F_s'`` is a difference of terms as large as ``exp(2 s mu alpha)
+    h (1 + mu)``, which near the cone edge is far above its value), and the smallest
+    ``G`` at a node, with its ``q``.
+    """
+    g, mu = S.g, S.mu
+    hw = 0.5 * (r2 - r1)
+    weighted = root and r1 == 0.0
+    if weighted:
+        X, Wt, St2, Tl = R.Xw, R.Ww, R.SWw, R.Tw
+    else:
+        X, Wt, St2, Tl = R.Xp, R.Wp, R.Sp, R.Tp
+    n = len(X)
+    T0, T1, T2, T3 = Tl[0], Tl[1], Tl[2], Tl[3]
     # Per node: the integrand of G's cumulative integral, q, h dq/dr, exp(s mu alpha), kappa,
     # cos alpha, G's cumulative integral; with samples, the integrands of time, path and work.
     cum, qn, hd, exn, kn, cn, acc = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
     ft, fp, fw = work[7], work[8], work[9]
+    total = 0.0
+    size = 0.0
+    terms = 0.0
+    a1, a2, a3, a4 = 0.0, 0.0, 0.0, 0.0
+    for j in range(n):
+        r = r1 + hw * (X[j] + 1.0)
+        if root:
+            xi = r * r - delta
+            dq = 2.0 * r
+        else:
+            xi = r
+            dq = 1.0
+        qj = e + d * xi
+        # laws.node, called here directly (the plain engine's hottest call)
+        if s > 0:
+            dF, hh, ex, ka, co = K.node_p(qj, mu, *cp)
+        else:
+            dF, hh, ex, ka, co = K.node_m(qj, mu, *cp)
+        noise = ex * ex * hh * (1.0 + mu)
+        if abs(dF) < EDGE_SHARE * noise:
+            qc = crit_near(roots, count, s, qj, EDGE_REACH * S.scale)
+            if qc == qc:
+                dF = dF_edge(s, qc, (e - qc) + d * xi, mu, K, cp)
+                noise = 8.0 * abs(dF)
+        gj = gd * dF
+        dG = gj * dq
+        wj = Wt[j]
+        total += wj * dG
+        size += wj * abs(dG)
+        terms += wj * noise * dq
+        a1 += T0[j] * dG
+        a2 += T1[j] * dG
+        a3 += T2[j] * dG
+        a4 += T3[j] * dG
+        # The integrand of G's cumulative integral: gamma with the weight r next to a root.
+        cum[j] = gj if weighted else dG
+        hd[j] = hh * dq
+        exn[j] = ex
+        kn[j] = ka
+        cn[j] = co
+        qn[j] = qj
+    total *= hw
+    err_G = hw * tail_error(a1, a2, a3, a4, n)
+    round_G = EPS * hw * (4.0 * size + 2.0 * g * terms)
+    # G at the nodes: the anchor plus the cumulative integral of dG/dr.
+    acc = cumulate(St2, cum, n, acc)
+    scale_acc = 2.0 * hw * hw if weighted else hw
+    T = 0.0
+    W = 0.0
+    P = 0.0
+    sens = 0.0
+    G_min = math.inf
+    q_min = e
+    b1, b2, b3, b4 = 0.0, 0.0, 0.0, 0.0
+    for j in range(n):
+        G = Gstart + acc[j] * scale_acc
+        if G < G_min:
+            G_min = G
+            q_min = qn[j]
+        if G < TINY:
+            G = TINY
+        ex = exn[j]
+        hdj = hd[j]
+        f = hdj * ex / sqrt(G)
+        w = G / (ex * ex)
+        N = kn[j] * w + g * cn[j]
+        wj = Wt[j]
+        T += wj * f
+        W += wj * mu * abs(N) * hdj
+        sens += wj * f / G
+        b1 += T0[j] * f
+        b2 += T1[j] * f
+        b3 += T2[j] * f
+        b4 += T3[j] * f
+        if mode == SAMPLES:
+            ft[j] = f
+            fp[j] = hdj
+            fw[j] = mu * abs(N) * hdj
+            P += wj * hdj
+            out[o + j, 1] = qn[j]
+            out[o + j, 2] = w
+            out[o + j, 3] = N
+    err_T = hw * tail_error(b1, b2, b3, b4, n)
+    return total, hw * T, hw * W, hw * P, err_T, err_G, 0.5 * hw * sens, round_G, G_min, q_min
+
+
+def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count):
+    """Time and friction work (per unit mass) of one interval, with an error estimate; in mode
+    :data:`SAMPLES` the nodes' samples into ``out[o:]``, in mode :data:`PANELS` a row per
+    accepted panel (columns :class:`PanelColumn`).
+
+    ``R``: the rules and tolerances (:class:`~symvib.numeric.engine.state.Rules`; see
+    :func:`symvib.numeric.driver.rules`); ``S``: the scene constants
+    (:class:`~symvib.numeric.engine.state.Setup`); ``work``: scratch rows
+    (:data:`WORK_ROWS`); ``roots, count``: the critical points known
+    (:func:`~symvib.numeric.engine.scan.map_new`).  Returns ``(T, W_friction / m, err, flag, o, q_ok, G_ok, q_neg)``:
+    the time, the friction work, the estimated error of the time (s), :data:`QUAD_OK`,
+    :data:`QUAD_BUDGET` (a half needed more than :data:`MAX_PANELS` panels) or
+    :data:`QUAD_NEGATIVE` (``G < 0`` at the node ``q_neg``, after ``G = G_ok > 0`` at
+    ``q_ok``: a turning point lies between them), and the next free sample row.
+    """
+    g, mu, scale = S.g, S.mu, S.scale
+    rtol, atol = R.rtol, R.atol
+    g2 = 2.0 * g
+    L = abs(qb - qa)
+    if L == 0.0:
+        return 0.0, 0.0, 0.0, QUAD_OK, o, qa, Ga, qa
+    half = 0.5 * L
+    maxq = PANEL_Q * scale
+    ft, fp, fw, acc = work[7], work[8], work[9], work[6]
     T = 0.0
     Wf = 0.0
     P = 0.0
+    err = 0.0
+    flag = QUAD_OK
     half_b = o
+    G_mid_a = 0.0
+    T_a = 0.0
+    q_ok, G_ok, q_neg = qa, Ga, qa
     for kh in range(2):
         if kh == 0:
             e, d, Ge = qa, float(sigma), Ga
@@ -107,9 +313,13 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
         gamma = gd * dFs(s, e, mu, K, cp)
         root = Ge == 0.0 or (gamma > 0.0 and Ge < ROOT_RATIO * gamma * half)
         Gstart = Ge
+        unsure = 4.0 * EPS * abs(Ge)  # the anchor's own rounding (0 on a root)
         tau0 = 0.0
         path0 = 0.0
         work0 = 0.0
+        sens_half = 0.0
+        tries = 0
+        accepted = 0
         if root:
             delta = Ge / gamma if Ge > 0.0 else 0.0
             r_lo = math.sqrt(delta)
@@ -127,72 +337,56 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
             span = seg_b * seg_b - seg_a * seg_a if root else seg_b - seg_a
             parts = max(1, int(math.ceil(span / maxq)))
             step = (seg_b - seg_a) / parts
-            for jp in range(parts):
-                r1 = seg_a + jp * step
-                r2 = seg_a + (jp + 1) * step if jp + 1 < parts else seg_b
-                hw = 0.5 * (r2 - r1)
-                weighted = root and r1 == 0.0
-                if weighted:
-                    X, Wt, St, St2 = Xw, Ww, Sw, SWw
+            r1 = seg_a
+            width = step
+            while r1 < seg_b:
+                r2 = r1 + width
+                if r2 >= seg_b or seg_b - r2 < 0.25 * width:
+                    r2 = seg_b
+                dG, Tp, Wp, Pp, eT, eG, sens, rG, G_min, q_min = panel(
+                    r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out, o, roots, count)
+                tries += 1
+                share = atol * (r2 - r1) / (r_hi - r_lo) if r_hi > r_lo else atol
+                tol = rtol * Tp + share
+                if root and r1 == 0.0:
+                    # From the root itself G is rebuilt as a multiple of the increment, so its errors
+                    # are relative: the time's is half of theirs (dT/T = -dG/(2G)).
+                    rel = 0.5 * Tp / abs(dG) if dG != 0.0 else 0.0
+                    fixable = eT + rel * eG
+                    spread = rel * (eG + rG)
                 else:
-                    X, Wt, St, St2 = Xp, Wtp, Sp, Sp
-                n = len(X)
-                total = 0.0
-                for j in range(n):
-                    r = r1 + hw * (X[j] + 1.0)
-                    if root:
-                        xi = r * r - delta
-                        dq = 2.0 * r
+                    fixable = eT + sens * eG
+                    spread = sens * (unsure + eG + rG)
+                narrow = (r2 - r1) <= MIN_PANEL_RTOL * max(abs(r1), abs(r2))
+                if fixable > tol and not narrow and tries < MAX_TRIES and accepted < MAX_PANELS:
+                    width = 0.5 * (r2 - r1)
+                    continue
+                if G_min < -NEGATIVE_MARGIN * (unsure + eG + rG) and flag == QUAD_OK:
+                    # G < 0 at a node: the interval's end is past a turning point.
+                    flag = QUAD_NEGATIVE
+                    q_neg = q_min
+                    if kh == 0:
+                        q_ok, G_ok = e + d * ((r1 * r1 - delta) if root else r1), Gstart
                     else:
-                        xi = r
-                        dq = 1.0
-                    qj = e + d * xi
-                    # laws.node, called here directly (the plain engine's hottest call)
-                    if s > 0:
-                        dF, hh, ex, ka, co = K.node_p(qj, mu, *cp)
-                    else:
-                        dF, hh, ex, ka, co = K.node_m(qj, mu, *cp)
-                    gj = gd * dF
-                    dG = gj * dq
-                    total += Wt[j] * dG
-                    # The integrand of G's cumulative integral: gamma with the weight r next to a root.
-                    cum[j] = gj if weighted else dG
-                    hd[j] = hh * dq
-                    exn[j] = ex
-                    kn[j] = ka
-                    cn[j] = co
-                    if keep:
-                        qn[j] = qj
-                total *= hw
-                Tp = 0.0
-                Wp = 0.0
-                Pp = 0.0
-                # G at the nodes: the anchor plus the cumulative integral of dG/dr.
-                acc = cumulate(St2, cum, n, acc)
-                scale_acc = 2.0 * hw * hw if weighted else hw
-                for j in range(n):
-                    G = Gstart + acc[j] * scale_acc
-                    if G < TINY:
-                        G = TINY
-                    ex = exn[j]
-                    hdj = hd[j]
-                    f = hdj * ex / sqrt(G)
-                    w = G / (ex * ex)
-                    N = kn[j] * w + g * cn[j]
-                    wj = Wt[j]
-                    Tp += wj * f
-                    Wp += wj * mu * abs(N) * hdj
-                    if keep:
-                        ft[j] = f
-                        fp[j] = hdj
-                        fw[j] = mu * abs(N) * hdj
-                        Pp += wj * fp[j]
-                        out[o + j, 1] = qn[j]
-                        out[o + j, 2] = w
-                        out[o + j, 3] = N
-                if keep:
+                        q_ok, G_ok = 0.5 * (qa + qb), G_mid_a
+                    return T, Wf, err, flag, o, q_ok, G_ok, q_neg
+                if fixable > tol:
+                    flag = QUAD_BUDGET
+                accepted += 1
+                err += eT + spread
+                unsure += eG + rG
+                sens_half += sens
+                if mode == PANELS:
+                    out[o, 0], out[o, 1], out[o, 2], out[o, 3], out[o, 4] = kh, r1, r2, Gstart, Gstart + dG
+                    out[o, 5], out[o, 6], out[o, 7], out[o, 8] = tau0, tau0 + Tp, 1.0 if root else 0.0, delta
+                    o += 1
+                elif mode == SAMPLES:
                     # Time, path and friction work at every node: the same cumulative
                     # Gauss-Legendre integral as the interval's totals.
+                    weighted = root and r1 == 0.0
+                    St = R.Sw if weighted else R.Sp
+                    n = len(R.Xw) if weighted else len(R.Xp)
+                    hw = 0.5 * (r2 - r1)
                     acc = cumulate(St, ft, n, acc)
                     for j in range(n):
                         out[o + j, 0] = tau0 + hw * acc[j]
@@ -203,33 +397,46 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, keep, out, o):
                     for j in range(n):
                         out[o + j, 5] = work0 + hw * acc[j]
                     o += n
-                Tp *= hw
-                Wp *= hw
-                Pp *= hw
                 tau0 += Tp
                 path0 += Pp
                 work0 += Wp
                 T += Tp
                 Wf += Wp
                 P += Pp
-                Gstart += total
+                Gstart += dG
+                width = min(2.0 * (r2 - r1), step)
+                r1 = r2
             if seg_b >= r_hi:
                 break
             seg_a = seg_b
-    if keep:
+        if kh == 0:
+            G_mid_a = Gstart
+            T_a = T
+        else:
+            # The two halves meet at the midpoint: what they disagree on there is an error of
+            # one of the anchors (or of the search), beyond their propagated uncertainties.  Next
+            # to a root it moves the root (the time of the half scales as the root's distance,
+            # sqrt of G at the midpoint); elsewhere it is an offset of G over the half.
+            miss = abs(Gstart - G_mid_a)
+            if root:
+                G_mid = max(Gstart, G_mid_a)
+                err += 0.5 * (T - T_a) * miss / G_mid if G_mid > 0.0 else 0.0
+            else:
+                err += sens_half * miss
+    if mode == SAMPLES:
         # The half anchored at qb was integrated from qb backwards.
         for j in range(half_b, o):
             out[j, 0] = T - out[j, 0]
             out[j, 4] = P - out[j, 4]
             out[j, 5] = Wf - out[j, 5]
-    return T, Wf, o
+    return T, Wf, err, flag, o, q_ok, G_ok, q_neg
 
 
 def time_excess(x, p):
     """Time from the start of an interval to x, minus a target (for the t_max stop)."""
-    q, Ga, C, s, sigma, S, K, cp, R, work, dummy, target = p
+    q, Ga, C, s, sigma, S, K, cp, R, work, dummy, target, roots, count = p
     Gx = max(C - 2.0 * S.g * Fs(s, x, S.mu, K, cp), 0.0)
-    T, _, _ = quad(q, x, Ga, Gx, s, sigma, S, K, cp, R, work, False, dummy, 0)
+    T = quad(q, x, Ga, Gx, s, sigma, S, K, cp, R, work, NONE, dummy, 0, roots, count)[0]
     return T - target
 
 
@@ -305,6 +512,8 @@ def samples(ivs, ni, S, K, cp, R, pieces):
     n = max(len(R.Xw), len(R.Xp))
     work = scratch(WORK_ROWS, n)
     g, k = S.g, S.k
+    roots = np.empty((ROOT_ROWS, 1))  # no critical points known: F_s' from its kernel
+    count = np.zeros(ROOT_ROWS, dtype=np.int64)
     cap = max(ni * pieces * 4 * n, 16)
     out = np.zeros((cap, SAMPLE_COLUMNS))
     index = np.zeros(cap, dtype=np.int64)
@@ -342,7 +551,7 @@ def samples(ivs, ni, S, K, cp, R, pieces):
                 w1, N1 = _state_at(q1, G1, s, S, K, cp)
                 o = put_sample(out, index, o, tp, q1, w1, N1, coord, path, Wf, Wimp, s, sigma, motion)
             start = o
-            Tq, Wq, o = quad(q1, q2, G1, G2, s, sigma, S, K, cp, R, work, True, out, o)
+            Tq, Wq, _, _, o, _, _, _ = quad(q1, q2, G1, G2, s, sigma, S, K, cp, R, work, SAMPLES, out, o, roots, count)
             for j in range(start, o):
                 dp, dw = out[j, 4], out[j, 5]
                 out[j, 0] += tp

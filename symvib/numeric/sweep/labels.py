@@ -63,6 +63,7 @@ COLUMN_LABELS = {
     "E0": ("initial energy", "J", "E_0"),
     "E_final": ("final energy", "J", "E_\\mathrm{{final}}"),
     "zeno_ratio": ("ratio of successive bounce speeds of a Zeno accumulation (0 if none)", "1", "r_\\mathrm{{Zeno}}"),
+    "t_err": ("estimated error of the final time (physics.md, Accuracy)", "s", "\\delta t_\\mathrm{{final}}"),
     "impact_share": ("share of the energy lost to impacts, W_impacts / (W_friction + W_impacts)", "1",
                      "W_\\mathrm{{impacts}} / (W_\\mathrm{{friction}} + W_\\mathrm{{impacts}})"),
 }

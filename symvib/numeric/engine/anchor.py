@@ -1,0 +1,87 @@
+"""``G`` from a nearby anchor: the phase trajectory where ``C - 2 g F_s(q)`` cancels (physics.md, "Accuracy").
+
+The closed form ``G(q) = C - 2 g F_s(q)`` (physics.md, eq. 2) carries the rounding of
+``C`` and ``F_s``, about ``eps (|C| + 2 g |F_s|)``: where ``G`` itself is far smaller (a
+start at rest, a particle that nearly stops, motion next to the friction-cone edge),
+that is a large relative error of ``G``, hence of a turning point and of the time
+spent near it.  Here ``G`` is carried instead from a point where it is known (the
+start of the interval, where ``G = w exp(2 s mu alpha)``) by integrating ``G' = -2 g
+F_s'`` (:func:`anchored_G`), which errs by ``eps`` of what it integrates; and next to a
+critical point of ``F_s`` (the cone edge, where ``F_s'`` is itself a cancelling
+difference) ``F_s'`` is taken as the integral of ``F_s''`` from there
+(:func:`dF_best`, :func:`~symvib.numeric.engine.laws.dF_edge`).
+
+Examples
+--------
+>>> import numpy as np
+>>> roots = np.array([[0.5, 2.0], [0.0, 0.0]]); count = np.array([2, 0])
+>>> crit_near(roots, count, 1, 0.6, 0.2), crit_near(roots, count, 1, 1.0, 0.2)
+(0.5, nan)
+"""
+from __future__ import annotations
+
+import math
+
+from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, dF_edge, node
+from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update
+
+__all__ = ["crit_near", "dF_best", "anchored_G", "root_anchored", "PANEL_Q"]
+
+#: Widest quadrature panel, in units of the curve's q_scale (here and in the time quadrature).
+PANEL_Q = 1.0
+
+
+def crit_near(roots, count, s, x, reach):
+    """The known critical point of branch ``s`` nearest ``x``, if it is within ``reach`` (nan otherwise)."""
+    row = 0 if s > 0 else 1
+    best = math.nan
+    dist = reach
+    for i in range(count[row]):
+        d = abs(roots[row, i] - x)
+        if d <= dist:
+            best = roots[row, i]
+            dist = d
+    return best
+
+
+def dF_best(s, base, u, S, K, cp, roots, count):
+    """``F_s'`` at ``base + u``: its kernel, or :func:`~symvib.numeric.engine.laws.dF_edge` where that
+    has lost its relative accuracy next to a known critical point (as the time quadrature takes it)."""
+    mu = S.mu
+    x = base + u
+    dF, hh, ex, _, _ = node(s, x, mu, K, cp)
+    if abs(dF) < EDGE_SHARE * ex * ex * hh * (1.0 + mu):
+        qc = crit_near(roots, count, s, x, EDGE_REACH * S.scale)
+        if qc == qc:
+            return dF_edge(s, qc, (base - qc) + u, mu, K, cp)
+    return dF
+
+
+def anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count):
+    """``G(x) = G(qa) - 2 g Integral_qa^x F_s'``: ``G`` from a nearby anchor, by Gauss-Legendre panels
+    of at most ``PANEL_Q`` q_scale, free of the cancellation of ``C - 2 g F_s(x)`` where ``G`` is
+    small next to ``F_s`` (physics.md, "Accuracy")."""
+    X, Wt = R.Xp, R.Wp
+    L = x - qa
+    if L == 0.0:
+        return Ga
+    parts = max(1, int(math.ceil(abs(L) / (PANEL_Q * S.scale))))
+    step = L / parts
+    total = 0.0
+    for jp in range(parts):
+        for j in range(len(X)):
+            total += Wt[j] * dF_best(s, qa, (jp + 0.5 * (X[j] + 1.0)) * step, S, K, cp, roots, count)
+    return Ga - S.g * step * total
+
+
+def root_anchored(qa, Ga, b, Gb, s, S, K, cp, R, roots, count):
+    """The root of :func:`anchored_G` (anchored at ``qa``, where ``G = Ga > 0``) between ``qa``
+    and ``b`` (``G(b) = Gb < 0``), by the Illinois method."""
+    a, fa, fb = qa, Ga, Gb
+    for _ in range(ROOT_MAXITER):
+        x = illinois_point(a, b, fa, fb)
+        a, b, fa, fb, done = illinois_update(a, b, fa, fb, x,
+                                             anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count))
+        if done:
+            break
+    return b
