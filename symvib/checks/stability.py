@@ -199,6 +199,15 @@ def _from_reference(scene, status, tol=EVENT_TOL, max_events=None):
                     positions=tuple(r[2] for r in rows), tol=tol)
 
 
+def _from_time_reference(scene, status, tol=EVENT_TOL, max_events=None):
+    from symvib.checks.reference_time import time_reference
+
+    ref = time_reference(scene, dps=TRUTH_DPS, max_events=max_events)
+    rows = [(e.kind, float(e.t), float(e.q), float(e.qdot_before)) for e in ref]
+    return Expected(labels=labels(rows), status=status, times=tuple(r[1] for r in rows),
+                    positions=tuple(r[2] for r in rows), tol=tol)
+
+
 def frictionless_events(scene, max_events: int, dps: int = TRUTH_DPS) -> list:
     """Events of ``scene`` with ``mu = 0`` from energy conservation (mpmath, ``dps`` digits).
 
@@ -362,6 +371,29 @@ def _large_friction_truth(scene):
     return Expected(labels=("arrest",), status="arrested", times=(float(t),), positions=(float(qs),))
 
 
+def _near_edge_truth(scene):
+    """Released at rest just outside the cone edge of the paper parabola: it slides through the edge
+    and stops at the mirror point, where friction holds it.
+
+    On the branch ``s = -1`` (moving down, ``N > 0``) ``G(phi) = 2 g (F_-(phi0) - F_-(phi))`` with the
+    closed form ``F_-(phi) = p exp(-2 mu phi) / (2 cos(phi)^2)``; the turning point is its other root
+    and the time ``Integral h exp(-mu phi) / sqrt(G) dphi`` (``h = p / cos(phi)^3``), both at 50 digits,
+    where the cancellation of ``F_-(phi0) - F_-(phi)`` (about 1e-18 of ``F``) costs nothing.
+    """
+    import mpmath
+
+    with mpmath.workdps(50):
+        mu, g = mpmath.tan(mpmath.mpf(_ALPHA0)), mpmath.mpf(repr(scene.g))
+        q0 = mpmath.mpf(repr(scene.q0))
+        F = _parabola_F(-mu)
+        G = lambda x: 2 * g * (F(q0) - F(x))  # noqa: E731
+        edge = mpmath.atan(mu)
+        qs = mpmath.findroot(G, (2 * edge - q0 - (q0 - edge), edge), solver="anderson")
+        t = mpmath.quad(lambda x: mpmath.exp(-mu * x) / mpmath.cos(x) ** 3 / mpmath.sqrt(G(x)), [qs, edge, q0])
+    assert abs(mpmath.tan(qs)) <= mu
+    return Expected(labels=("arrest",), status="arrested", times=(float(t),), positions=(float(qs),), tol=1e-9)
+
+
 def _zeno_truth(scene):
     t1, qdot1, tz = _incline_truth(scene)
     return Expected(labels=("impact-", "rest_on_limiter"), status="resting_on_limiter", times=(t1,),
@@ -444,6 +476,27 @@ def cases() -> list:
              _circle(_ALPHA0, 8.5, max_events=8),
              "no limiter, phidot0 = 8.5 on R = 0.5: N < 0 above the diameter; mpmath phase reference",
              lambda s: _from_reference(s, "max_events")),
+        Case("near-stop", "near-stop inside an interval (circle, over the top at a crawl)",
+             scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+                              "physics": {"g": _G, "m": _M, "mu": 0.05, "restitution": 0.8},
+                              "initial": {"q": 0.0, "qdot": 11.965}, "run": {"t_max": 3.0}}),
+             "phidot0 = 11.965 on R = 0.5, mu = 0.05: the speed nearly vanishes inside the second interval "
+             "(1/sqrt(w) peaks there); events: mpmath time reference (eq. 1 integrated at 30 digits), to 1e-9 s",
+             lambda s: _from_time_reference(s, "t_max", tol=1e-9)),
+        Case("short-scale", "a user curve 1e-4 m across, no q_scale given",
+             scene_from_dict({"curve": {"z": "x**2/(2*p)"}, "parameters": {"p": 1e-4},
+                              "physics": {"g": _G, "m": _M, "mu": 0.05, "restitution": 0.8},
+                              "limiters": {"left": -1e-4, "right": 1.5e-4}, "initial": {"q": 0.0, "qdot": 0.05},
+                              "run": {"max_events": 6}}),
+             "the parabola z = x^2/(2p), p = 1e-4 m, as a user writes it (the default q_scale is 1 m); events: "
+             "mpmath time reference (eq. 1 integrated at 30 digits), to 1e-9 s",
+             lambda s: _from_time_reference(s, "max_events", tol=1e-9)),
+        Case("near-edge", "released at rest 1e-9 (relative) outside the friction-cone edge",
+             _paper_parabola(initial={"q": _ALPHA0 * (1 + 1e-9), "qdot": 0.0}),
+             "paper parabola released at rest at phi0 = alpha0 (1 + 1e-9): it slides through the edge and is "
+             "arrested at the mirror point after half a period of the motion about the edge; closed form F_- "
+             "at 50 digits (time by tanh-sinh), to 1e-9 s",
+             _near_edge_truth),
         Case("looping", "looping a full circle, no limiter",
              _circle(0.02, 11.0, max_events=8),
              "phidot0 = 11 on R = 0.5 goes over the top three times (N < 0 near it from the second pass) "

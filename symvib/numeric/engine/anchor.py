@@ -23,12 +23,16 @@ from __future__ import annotations
 import math
 
 from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, dF_edge, node
-from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update
+from symvib.numeric.engine.roots import ROOT_MAXITER, ROOT_RTOL
 
 __all__ = ["crit_near", "dF_best", "anchored_G", "root_anchored", "PANEL_Q"]
 
 #: Widest quadrature panel, in units of the curve's q_scale (here and in the time quadrature).
 PANEL_Q = 1.0
+#: Unit roundoff of a double.
+EPS = 2.220446049250313e-16
+#: :func:`root_anchored` stops where ``|G|`` is below this many rounding errors of the anchor's ``G``.
+ROOT_NOISE = 4.0
 
 
 def crit_near(roots, count, s, x, reach):
@@ -74,14 +78,30 @@ def anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count):
     return Ga - S.g * step * total
 
 
-def root_anchored(qa, Ga, b, Gb, s, S, K, cp, R, roots, count):
+def root_anchored(qa, Ga, b, Gb, x, s, S, K, cp, R, roots, count):
     """The root of :func:`anchored_G` (anchored at ``qa``, where ``G = Ga > 0``) between ``qa``
-    and ``b`` (``G(b) = Gb < 0``), by the Illinois method."""
-    a, fa, fb = qa, Ga, Gb
+    and ``b`` (``G(b) = Gb < 0``): Newton's method on ``G' = -2 g F_s'`` (:func:`dF_best`) from
+    ``x`` (the closed form's root: off by its rounding only, so a step or two), kept in the
+    bracket by bisection (as :func:`symvib.numeric.engine.roots.root_G`)."""
+    g2 = 2.0 * S.g
+    lo, hi = b, qa  # G(lo) < 0 < G(hi)
+    if not (min(qa, b) < x < max(qa, b)):
+        x = qa + (b - qa) * Ga / (Ga - Gb)
+    if not (min(qa, b) < x < max(qa, b)):
+        x = 0.5 * (qa + b)
     for _ in range(ROOT_MAXITER):
-        x = illinois_point(a, b, fa, fb)
-        a, b, fa, fb, done = illinois_update(a, b, fa, fb, x,
-                                             anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count))
-        if done:
-            break
-    return b
+        fx = anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count)
+        if abs(fx) <= ROOT_NOISE * EPS * Ga:
+            return x  # G is 0 to the rounding of its integral from the anchor
+        if fx < 0.0:
+            lo = x
+        else:
+            hi = x
+        dfx = -g2 * dF_best(s, x, 0.0, S, K, cp, roots, count)
+        new = x - fx / dfx if dfx != 0.0 else math.nan
+        if not (min(lo, hi) < new < max(lo, hi)):
+            new = 0.5 * (lo + hi)
+        if abs(new - x) <= ROOT_RTOL * abs(x) or abs(hi - lo) <= ROOT_RTOL * abs(x):
+            return new
+        x = new
+    return x

@@ -49,7 +49,7 @@ EDGE_RTOL = 1e-12
 #: Stand-in for a positive value of N that is 0 at the start of an interval.
 N_FLOOR = 1e-300
 #: Points at which :func:`curve_scale` samples how fast the tangent turns.
-SCALE_POINTS = 17
+SCALE_POINTS = 9
 #: The run's length scale is at most the distance in q over which the tangent turns by this (rad).
 SCALE_TURN = 1.0
 #: Initial capacity of the list of critical points per branch.
@@ -66,7 +66,7 @@ CUT_BISECT = 80
 #: its rounding, ``NOISE_ROUNDS eps (|C| + 2 g |F_s|)``, is below ``CANCEL_RTOL`` of the ``G`` that
 #: decides there (the bracket's start, the end's value); else the interval is searched again
 #: with ``G`` carried from its start (:func:`symvib.numeric.engine.anchor.anchored_G`).
-CANCEL_RTOL = 1e-12
+CANCEL_RTOL = 1e-11
 NOISE_ROUNDS = 8.0
 #: Unit roundoff of a double.
 EPS = 2.220446049250313e-16
@@ -86,8 +86,8 @@ class End(enum.IntEnum):
 class Region(enum.IntEnum):
     """Entries of the scanned region (a float array, mutated in place): its ends, ``z' +- mu x'``
     at the ends, the part where ``N > 0`` surely (``kappa >= 0`` and ``x' > 0``) and whether that
-    part is still open at each end, the curve's turning rate ``|alpha'|`` at the ends, and the
-    domain pulled :data:`EDGE_RTOL` inside its ends."""
+    part is still open at each end, the tangent's turning rate over the last step at each end, the
+    domain pulled :data:`EDGE_RTOL` inside its ends, and the tangent angle at the ends."""
 
     x_lo = 0
     x_hi = 1
@@ -103,13 +103,15 @@ class Region(enum.IntEnum):
     turn_hi = 11
     lo_in = 12
     hi_in = 13
+    alpha_lo = 14
+    alpha_hi = 15
 
 
 #: Entries of the region array.
 REGION_SIZE = len(Region)
 #: The entries' indices as plain ints (numpy indexes faster with an int than with an IntEnum).
 (X_LO, X_HI, FP_LO, FM_LO, FP_HI, FM_HI, SAFE_LO, SAFE_HI, SAFE_LO_OPEN, SAFE_HI_OPEN, TURN_LO, TURN_HI, LO_IN,
- HI_IN) = (int(r) for r in Region)
+ HI_IN, ALPHA_LO, ALPHA_HI) = (int(r) for r in Region)
 
 
 def crit_f(x, p):
@@ -206,7 +208,8 @@ def map_new(q0, lo, hi, mu, K, cp, step):
     region[SAFE_LO_OPEN] = region[SAFE_HI_OPEN] = 1.0 if safe else 0.0
     if not safe:
         region[SAFE_LO] = region[SAFE_HI] = q0
-    region[TURN_LO] = region[TURN_HI] = turn_rate(x0, K, cp)
+    region[TURN_LO] = region[TURN_HI] = 0.0
+    region[ALPHA_LO] = region[ALPHA_HI] = K.alpha(x0, *cp)
     region[LO_IN] = lo_in
     region[HI_IN] = hi_in
     roots = np.empty((ROOT_ROWS, ROOTS_CAPACITY))
@@ -252,12 +255,16 @@ def map_extend(region, roots, count, target, mu, K, cp, step):
 
 def extend_side(region, roots, count, target, mu, K, cp, step, up):
     """Scan up (``up = 1``) or down (``up = -1``) until target is covered (or the domain ends), in
-    steps that let the tangent turn by at most :data:`CRIT_TURN` (:func:`scan_step`)."""
+    steps over which the tangent turns by at most about :data:`CRIT_TURN` (:func:`scan_step`, the
+    rate of the step before; a step that turned more than twice that is taken again, shorter).
+    A jump of the kernels' ``alpha`` by more than ``pi`` is its branch cut (:func:`branch_cut`)."""
     if up > 0.0:
-        ix, ifp, ifm, isafe, iopen, iturn, iedge = X_HI, FP_HI, FM_HI, SAFE_HI, SAFE_HI_OPEN, TURN_HI, HI_IN
+        ix, ifp, ifm, isafe, iopen, iturn, iedge, ial = X_HI, FP_HI, FM_HI, SAFE_HI, SAFE_HI_OPEN, TURN_HI, HI_IN, \
+            ALPHA_HI
     else:
-        ix, ifp, ifm, isafe, iopen, iturn, iedge = X_LO, FP_LO, FM_LO, SAFE_LO, SAFE_LO_OPEN, TURN_LO, LO_IN
-    x_old, edge = region[ix], region[iedge]
+        ix, ifp, ifm, isafe, iopen, iturn, iedge, ial = X_LO, FP_LO, FM_LO, SAFE_LO, SAFE_LO_OPEN, TURN_LO, LO_IN, \
+            ALPHA_LO
+    x_old, edge, al_old = region[ix], region[iedge], region[ial]
     fp_old, fm_old, turn, safe_open = region[ifp], region[ifm], region[iturn], region[iopen] != 0.0
     while (target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0:
         h = scan_step(turn, step)
@@ -265,12 +272,14 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
             x = x_old + up * h
             if (x - edge) * up > 0.0:
                 x = edge
-            ka, hh = K.kappa(x, *cp), K.h(x, *cp)
-            turn_new = abs(ka * hh) if math.isfinite(ka * hh) else 0.0
-            # The tangent turned faster ahead than behind: a shorter step, from the new rate.
-            if turn_new * abs(x - x_old) <= 2.0 * CRIT_TURN or abs(x - x_old) <= EDGE_RTOL * max(1.0, abs(x)):
+            al = K.alpha(x, *cp)
+            turned = abs(al - al_old)
+            jump = turned > math.pi
+            dx = abs(x - x_old)
+            turn = 0.0 if jump or not math.isfinite(turned) else turned / dx
+            if jump or turned <= 2.0 * CRIT_TURN or dx <= EDGE_RTOL * max(1.0, abs(x)) or turn == 0.0:
                 break
-            h = CRIT_TURN / turn_new
+            h = CRIT_TURN / turn
         zp, xp = K.dz(x, *cp), K.dx(x, *cp)
         fp, fm = zp + mu * xp, zp - mu * xp
         if not (fp * fp_old > 0.0 and fm * fm_old > 0.0):
@@ -279,16 +288,15 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
                 roots = crossing(roots, count, 0, x_old, x, fp_old, fp, mu, K, cp)
             if changes_sign(fm_old, fm):
                 roots = crossing(roots, count, 1, x_old, x, fm_old, fm, mu, K, cp)
-        if xp < 0.0 and (fp + fm) * (fp_old + fm_old) <= 0.0:
-            # z' changed sign with the tangent along -x: where atan2's angle jumps, if it does.
+        if jump:
             roots = branch_cut(roots, count, min(x_old, x), max(x_old, x), K, cp)
         if safe_open:
-            if xp > 0.0 and ka >= 0.0:
+            if xp > 0.0 and K.kappa(x, *cp) >= 0.0:
                 region[isafe] = x
             else:
                 safe_open = False
-        x_old, fp_old, fm_old, turn = x, fp, fm, turn_new
-    region[ix], region[ifp], region[ifm], region[iturn] = x_old, fp_old, fm_old, turn
+        x_old, fp_old, fm_old, al_old = x, fp, fm, al
+    region[ix], region[ifp], region[ifm], region[iturn], region[ial] = x_old, fp_old, fm_old, turn, al_old
     region[iopen] = 1.0 if safe_open else 0.0
     return roots
 
@@ -376,19 +384,21 @@ def dip_below(pn, a, b):
             fd = normal_on(d, pn)
     return math.nan, 0.0
 
-def walk(q, sigma, s, Ga, C, bound, kind, anchored, S, K, cp, region, roots, count, R):
+def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, R):
     """Walk from ``q`` towards ``bound`` over the pieces on which ``G`` is monotone: the first
-    root of ``G`` (a turning point), else ``bound`` (of ``kind``).
+    root of ``G`` (a turning point), else ``bound`` (of ``kind``).  Returns ``(qe, Ge, kind, roots)``.
 
-    ``G`` at the pieces' ends is the closed form ``C - 2 g F_s``, or with ``anchored``
-    carried from ``q`` (:func:`~symvib.numeric.engine.anchor.anchored_G`).  Returns
-    ``(qe, Ge, kind, roots, sure)``; ``sure`` is False when the closed form's rounding
-    was too large for the ``G`` that decided the end (:data:`CANCEL_RTOL`): walk again anchored.
+    ``G`` at the pieces' ends is the closed form ``C - 2 g F_s``, until its rounding is too
+    large for the ``G`` that decides a turning point or the end (:data:`CANCEL_RTOL`):
+    from there on it is carried from ``q``, where it is exact
+    (:func:`~symvib.numeric.engine.anchor.anchored_G`), and a turning point is found on
+    that form (:func:`~symvib.numeric.engine.anchor.root_anchored`).
     """
     g2 = 2.0 * S.g
     mu = S.mu
     step = CRIT_STEP * S.scale
     a, Gq = q, Ga
+    anchored = False
     while True:
         # Scan at most CHUNK longest steps ahead of a; between a and the scanned edge
         # the known critical points are all there are, so G is monotone between them.
@@ -409,19 +419,26 @@ def walk(q, sigma, s, Ga, C, bound, kind, anchored, S, K, cp, region, roots, cou
             Fb = Fs(s, b, mu, K, cp)
             Gb = C - g2 * Fb
             if (Gb <= 0.0 or b == bound) and NOISE_ROUNDS * EPS * (abs(C) + g2 * abs(Fb)) > CANCEL_RTOL * max(Gq, Gb):
-                return bound, 0.0, kind, roots, False
+                anchored = True
+                if a != q:
+                    Gq = anchored_G(a, q, Ga, s, S, K, cp, R, roots, count)
+                Gb = anchored_G(b, a, Gq, s, S, K, cp, R, roots, count)
         if math.isnan(Gb):
             Gb = -math.inf
         if Gb <= 0.0:
             # A non-finite G at a domain end stands in as -1 (the finder bisects there).
             Gb = Gb if math.isfinite(Gb) else -1.0
-            if anchored:
-                qe = root_anchored(a, Gq, b, Gb, s, S, K, cp, R, roots, count) if Gb < 0.0 else b
-            else:
-                qe = root_G(s, C, a, b, Gq, Gb, g2, mu, K, cp)
-            return qe, 0.0, End.TURN, roots, True
+            if not anchored:
+                return root_G(s, C, a, b, Gq, Gb, g2, mu, K, cp), 0.0, End.TURN, roots
+            if Gq <= 0.0:
+                return a, 0.0, End.TURN, roots
+            # The closed form's root, then the anchored form's from there.
+            Fa = C - g2 * Fs(s, a, mu, K, cp)
+            Fb = C - g2 * Fs(s, b, mu, K, cp)
+            x = root_G(s, C, a, b, Fa, Fb, g2, mu, K, cp) if Fa > 0.0 >= Fb else math.nan
+            return root_anchored(a, Gq, b, Gb, x, s, S, K, cp, R, roots, count), 0.0, End.TURN, roots
         if b == bound:
-            return bound, Gb, kind, roots, True
+            return bound, Gb, kind, roots
         a, Gq = b, Gb
 
 def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, R):
@@ -450,9 +467,7 @@ def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, R):
             bound, kind = edge, End.EDGE
         else:
             bound, kind = window, End.PASS
-    qe, Ge, kind_out, roots, sure = walk(q, sigma, s, Ga, C, bound, kind, False, S, K, cp, region, roots, count, R)
-    if not sure:
-        qe, Ge, kind_out, roots, _ = walk(q, sigma, s, Ga, C, bound, kind, True, S, K, cp, region, roots, count, R)
+    qe, Ge, kind_out, roots = walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, R)
     # An earlier zero of N on [q, qe] ends the interval there instead.
     safe_lo = region[SAFE_LO]
     safe_hi = region[SAFE_HI]
