@@ -377,8 +377,8 @@ def _near_edge_truth(scene):
 
     On the branch ``s = -1`` (moving down, ``N > 0``) ``G(phi) = 2 g (F_-(phi0) - F_-(phi))`` with the
     closed form ``F_-(phi) = p exp(-2 mu phi) / (2 cos(phi)^2)``; the turning point is its other root
-    and the time ``Integral h exp(-mu phi) / sqrt(G) dphi`` (``h = p / cos(phi)^3``), both at 50 digits,
-    where the cancellation of ``F_-(phi0) - F_-(phi)`` (about 1e-18 of ``F``) costs nothing.
+    and the time ``Integral h exp(-mu phi) / sqrt(G) dphi`` (``h = p / cos(phi)^3``, ``p = 1``), both at
+    50 digits, where the cancellation of ``F_-(phi0) - F_-(phi)`` (about 1e-18 of ``F``) costs nothing.
     """
     import mpmath
 
@@ -389,7 +389,15 @@ def _near_edge_truth(scene):
         G = lambda x: 2 * g * (F(q0) - F(x))  # noqa: E731
         edge = mpmath.atan(mu)
         qs = mpmath.findroot(G, (2 * edge - q0 - (q0 - edge), edge), solver="anderson")
-        t = mpmath.quad(lambda x: mpmath.exp(-mu * x) / mpmath.cos(x) ** 3 / mpmath.sqrt(G(x)), [qs, edge, q0])
+        # x = c + r sin(theta) takes the inverse square roots at both ends away (G ~ r^2 cos^2 there).
+        c, r = (q0 + qs) / 2, (q0 - qs) / 2
+
+        def rate(theta):
+            x = c + r * mpmath.sin(theta)
+            Gx = G(x)
+            return mpmath.exp(-mu * x) / mpmath.cos(x) ** 3 * r * mpmath.cos(theta) / mpmath.sqrt(Gx) if Gx > 0 else 0
+
+        t = mpmath.quad(rate, [-mpmath.pi / 2, 0, mpmath.pi / 2])
     assert abs(mpmath.tan(qs)) <= mu
     return Expected(labels=("arrest",), status="arrested", times=(float(t),), positions=(float(qs),), tol=1e-9)
 

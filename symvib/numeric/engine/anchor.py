@@ -82,26 +82,39 @@ def root_anchored(qa, Ga, b, Gb, x, s, S, K, cp, R, roots, count):
     """The root of :func:`anchored_G` (anchored at ``qa``, where ``G = Ga > 0``) between ``qa``
     and ``b`` (``G(b) = Gb < 0``): Newton's method on ``G' = -2 g F_s'`` (:func:`dF_best`) from
     ``x`` (the closed form's root: off by its rounding only, so a step or two), kept in the
-    bracket by bisection (as :func:`symvib.numeric.engine.roots.root_G`)."""
+    bracket by bisection (as :func:`symvib.numeric.engine.roots.root_G`).
+
+    Returns ``(root, G there)``: the double where Newton's step or ``G`` itself is below rounding,
+    or the end of the closed bracket where ``G >= 0``, and (about) ``G`` there.  The caller takes the root as on that double (``G = 0``): a turning point displaced by
+    its quantization is a consistent motion, whose time differs from the true one to first order by
+    ``T ulp / (2 L)`` (``L`` the distance travelled), and next to the cone edge, where short intervals
+    occur, only to second order (the motion about the edge is harmonic: its half period does not
+    depend on the amplitude).  ``G`` itself there would miss the time of the last ulp, which next to
+    the edge is ``2 sqrt(ulp / |G'|)``: a microsecond at 1e-10 from the edge.
+    """
     g2 = 2.0 * S.g
     lo, hi = b, qa  # G(lo) < 0 < G(hi)
     if not (min(qa, b) < x < max(qa, b)):
         x = qa + (b - qa) * Ga / (Ga - Gb)
     if not (min(qa, b) < x < max(qa, b)):
         x = 0.5 * (qa + b)
+    f_hi = Ga
     for _ in range(ROOT_MAXITER):
         fx = anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count)
-        if abs(fx) <= ROOT_NOISE * EPS * Ga:
-            return x  # G is 0 to the rounding of its integral from the anchor
         if fx < 0.0:
             lo = x
         else:
-            hi = x
+            hi, f_hi = x, fx
+        if abs(fx) <= ROOT_NOISE * EPS * Ga:
+            return x, fx  # G is 0 to the rounding of its integral from the anchor
         dfx = -g2 * dF_best(s, x, 0.0, S, K, cp, roots, count)
         new = x - fx / dfx if dfx != 0.0 else math.nan
         if not (min(lo, hi) < new < max(lo, hi)):
             new = 0.5 * (lo + hi)
-        if abs(new - x) <= ROOT_RTOL * abs(x) or abs(hi - lo) <= ROOT_RTOL * abs(x):
-            return new
+        if abs(new - x) <= ROOT_RTOL * abs(x):
+            return new, 0.0  # converged: G vanishes within a rounding error of the step
+        if abs(hi - lo) <= ROOT_RTOL * abs(x):
+            break
         x = new
-    return x
+    # The bracket has closed: its end where G >= 0.
+    return hi, f_hi

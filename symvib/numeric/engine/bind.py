@@ -317,7 +317,8 @@ def _specialized_engine(module, ncp: int) -> dict:
     # Threads of Python over blocks of scenes (threaded_sweep), not numba's parallel loop (prange):
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
     options["sweep_bound"] = {"cache": True, "nogil": True}
-    options.update({name: {"inline": "always", **INNER} for name in ("simulate_scene", "sample_scene", "sweep_block")})
+    options.update({name: {"inline": "always", **INNER}
+                    for name in ("simulate_scene", "sample_scene", "sweep_block", "panel")})
     names = {"params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,

@@ -233,7 +233,7 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
             # G < 0 inside: a turning point the search stepped over (a narrow dip of G).
             G_neg = anchored_G(q_neg, q_ok, G_ok, s, S, K, cp, R, roots, count)
             if G_neg < 0.0 < G_ok:
-                qb = root_anchored(q_ok, G_ok, q_neg, G_neg, math.nan, s, S, K, cp, R, roots, count)
+                qb = root_anchored(q_ok, G_ok, q_neg, G_neg, math.nan, s, S, K, cp, R, roots, count)[0]
                 Gb, end = 0.0, End.TURN
                 T, Wi, Te, flag, _, _, _, _ = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
                                                    roots, count)

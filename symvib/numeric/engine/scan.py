@@ -436,7 +436,7 @@ def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, R):
             Fa = C - g2 * Fs(s, a, mu, K, cp)
             Fb = C - g2 * Fs(s, b, mu, K, cp)
             x = root_G(s, C, a, b, Fa, Fb, g2, mu, K, cp) if Fa > 0.0 >= Fb else math.nan
-            return root_anchored(a, Gq, b, Gb, x, s, S, K, cp, R, roots, count), 0.0, End.TURN, roots
+            return root_anchored(a, Gq, b, Gb, x, s, S, K, cp, R, roots, count)[0], 0.0, End.TURN, roots
         if b == bound:
             return bound, Gb, kind, roots
         a, Gq = b, Gb

@@ -39,8 +39,8 @@ from math import sqrt
 
 import numpy as np
 
-from symvib.numeric.engine.anchor import PANEL_Q, crit_near
-from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, Fs, dF_edge, dFs, node
+from symvib.numeric.engine.anchor import PANEL_Q, crit_near, dF_best
+from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, Fs, dF_edge, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update
 from symvib.numeric.engine.scan import ROOT_ROWS, scratch
 from symvib.numeric.layout import IntervalColumn
@@ -78,6 +78,8 @@ ERROR_SAFETY = 2.0
 GEOM_SLACK = 1.25
 #: A node's G more negative than this many times its uncertainty is a root the search missed.
 NEGATIVE_MARGIN = 8.0
+#: Ulps of q within which a turning point sits on its double (the root finders' tolerance, doubled).
+ROOT_ULPS = 16.0
 #: What :func:`quad` writes to its ``out``: nothing, the samples at the nodes, or the panels it took.
 NONE, SAMPLES, PANELS = 0, 1, 2
 
@@ -341,7 +343,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
     :data:`QUAD_NEGATIVE` (``G < 0`` at the node ``q_neg``, after ``G = G_ok > 0`` at
     ``q_ok``: a turning point lies between them), and the next free sample row.
     """
-    g, mu, scale = S.g, S.mu, S.scale
+    g, scale = S.g, S.scale
     rtol, atol = R.rtol, R.atol
     g2 = 2.0 * g
     L = abs(qb - qa)
@@ -366,7 +368,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
             e, d, Ge = qb, -float(sigma), Gb
             half_b = o
         gd = -d * g2  # G' = gd F_s' along the half (d = +-1: gd F_s' is -2 g F_s' d exactly)
-        gamma = gd * dFs(s, e, mu, K, cp)
+        gamma = gd * dF_best(s, e, 0.0, S, K, cp, roots, count)
         root = Ge == 0.0 or (gamma > 0.0 and Ge < ROOT_RATIO * gamma * half)
         Gstart = Ge
         unsure = 4.0 * EPS * abs(Ge)  # the anchor's own rounding (0 on a root)
@@ -475,6 +477,9 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
             # sqrt of G at the midpoint); elsewhere it is an offset of G over the half.
             miss = abs(Gstart - G_mid_a)
             if root:
+                # Less what placing a turning point on a double explains (anchor.root_anchored: a
+                # consistent motion, second order next to the cone edge where it is not negligible).
+                miss = max(0.0, miss - ROOT_ULPS * EPS * abs(qb) * abs(gamma))
                 G_mid = max(Gstart, G_mid_a)
                 err += 0.5 * (T - T_a) * miss / G_mid if G_mid > 0.0 else 0.0
             else:
