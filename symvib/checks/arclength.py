@@ -79,7 +79,7 @@ BUDGET_SECONDS = 60.0
 BUDGET_CHECK_CALLS = 256
 #: Most right-hand-side calls of one DOP853 segment: beyond them the steps have collapsed (a
 #: right-hand side whose rounding noise exceeds the tolerance, next to the cone edge).
-MAX_SEGMENT_CALLS = 200_000
+MAX_SEGMENT_CALLS = 100_000
 #: Tolerances of the location of a limiter crossed within a DOP853 step (relative to T, and to t).
 ROOT_XTOL, ROOT_RTOL = 1e-18, 4 * 2.220446049250313e-16
 #: The quadratures :func:`reference_run` offers.
@@ -255,7 +255,8 @@ def curve_frame(scene, digits: int | None = None):
     Examples
     --------
     >>> from symvib.numeric.scene import scene_from_dict
-    >>> s = scene_from_dict({"curve": {"z": "x**2/2"}, "initial": {"q": 0, "qdot": 1}})
+    >>> s = scene_from_dict({"curve": {"z": "x**2/2"}, "physics": {"mu": 0, "restitution": 1},
+    ...                      "initial": {"q": 0, "qdot": 1}})
     >>> [round(x, 6) for x in curve_frame(s)(1.0)]
     [1.414214, 0.707107, 0.707107, 0.353553]
     """
@@ -273,7 +274,8 @@ def scene_scales(scene) -> tuple:
     --------
     >>> from symvib.numeric.scene import scene_from_dict
     >>> s = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
-    ...                      "limiters": {"left": -1, "right": 1}, "initial": {"q": 0, "qdot": 0}})
+    ...                      "physics": {"mu": 0, "restitution": 1}, "limiters": {"left": -1, "right": 1},
+    ...                      "initial": {"q": 0, "qdot": 0}})
     >>> [round(x, 4) for x in scene_scales(s)]
     [1.0, 3.1321, 0.3193]
     """
