@@ -83,17 +83,22 @@ CONE_BAND = 1e-10
 #: A time difference within an event's ``t_err`` plus this counts as flagged.
 FLAG_SLACK = 1e-12
 #: Events the reference runs beyond ``max_events`` (it keeps bouncing where the engine sums a Zeno series).
-ZENO_EXTRA_EVENTS = 40
+ZENO_EXTRA_EVENTS = 4
 #: Ulps by which the reference's second run moves the start.
 PERTURB_ULPS = 4
 #: CPU seconds of a DOP853 reference run, and of a GBS run.
 DOP853_BUDGET, GBS_BUDGET = 60.0, 300.0
 #: Upper bounds of the bins of ``max_dt`` in the summary (the last bin is ``>= 1e-3``).
 DT_BINS = (1e-13, 1e-12, 1e-11, 1e-10, 1e-9, 1e-6, 1e-3)
+#: Share of the near-stop scenes that pass a crest on a curve that has one (the others barely reach a limiter).
+CREST_SHARE = 0.5
+#: Events of a near-stop scene (the first ones matter; the 30-digit reference runs them all).
+NEAR_STOP_EVENTS = 8
 #: Bisection steps of a near-stop speed, and the doublings allowed to find a speed that passes.
 BISECTIONS, DOUBLINGS = 60, 12
-#: Grid steps of the search for the cone edge past a crest; draws of a climb to a limiter.
-EXIT_GRID, TRIES = 400, 20
+#: Grid steps of the search for the cone edge past a crest; draws of a climb to a limiter, and its
+#: grid of slope checks; events a speed test may run to find its first decision.
+EXIT_GRID, TRIES, CLIMB_GRID, DECISION_EVENTS = 400, 20, 16, 4
 _TRUNCATED = ("t_max", "max_events")
 _TURNS = ("reversal", "arrest")
 _G = 9.81
@@ -231,9 +236,13 @@ def _generic(rng, track, note="generic"):
 
 
 def _first_decision(scene):
-    """The first event that is not a normal-force sign change of a short reference run (or None)."""
-    run = reference_run(scene_from_dict(scene), max_events=6, budget=DOP853_BUDGET)
-    return next((e for e in run.events if e[0] != "normal_sign_change"), None), run
+    """``(first event that is not a normal-force sign change, or None; final q)`` of a short reference run."""
+    s = scene_from_dict(scene)
+    for m in range(1, DECISION_EVENTS + 1):
+        run = reference_run(s, max_events=m, budget=DOP853_BUDGET)
+        if run.events and run.events[-1][0] != "normal_sign_change" or run.status != "max_events":
+            break
+    return next((e for e in run.events if e[0] != "normal_sign_change"), None), run.q_final
 
 
 def _bisect_speed(scene, passes, h, v_guess):
@@ -242,7 +251,7 @@ def _bisect_speed(scene, passes, h, v_guess):
 
     def ok(v):
         scene["initial"]["qdot"] = sign * v / h
-        return passes(_first_decision(scene)[0])
+        return passes(*_first_decision(scene))
 
     lo, hi = 0.0, v_guess
     for _ in range(DOUBLINGS):
@@ -284,10 +293,10 @@ def _near_stop(rng, track):
     mu = 0.0 if rng.random() < 0.3 else rng.uniform(0.0, 0.3)
     k = rng.uniform(0.0, 1.0)
     T = _time_scale(track)
-    t_max = (8.0 + 1.5 * math.log(1.0 / ratio)) * T
+    t_max = (4.0 + 1.5 * math.log(1.0 / ratio)) * T
     lo, hi = track.span
     frame = curve_frame(scene_from_dict(_base(track, mu, k, None, None, 0.5 * (lo + hi), 1.0, 1.0, 1)))
-    if track.humps and rng.random() < 0.7:
+    if track.humps:
         top, side, width = track.humps[int(rng.integers(len(track.humps)))]
         exit_ = _cone_exit(frame, top, -side, width, mu)
         if exit_ is None:
@@ -296,10 +305,13 @@ def _near_stop(rng, track):
         beyond = top - side * rng.uniform(0.2, 0.6) * width if rng.random() < 0.7 else None
         behind = q0 + side * rng.uniform(0.1, 0.3) * width if rng.random() < 0.5 else None
         left, right = (beyond, behind) if side > 0 else (behind, beyond)
-        scene = _base(track, mu, k, left, right, q0, -side, t_max, 20)
+        scene = _base(track, mu, k, left, right, q0, -side, t_max, NEAR_STOP_EVENTS)
 
-        def passes(e):
-            return e is not None and (e[0] == "impact" or -side * (e[2] - exit_) > 0)
+        def passes(e, q_final):
+            # Past the slowest point: an impact beyond, any event beyond it, or no event and beyond it at t_max.
+            if e is None:
+                return -side * (q_final - exit_) > 0
+            return -side * (e[2] - exit_) > 0 or (e[0] == "impact" and -side * (e[2] - top) > 0)
 
         what = f"passes the crest q = {top:.6g} (slowest at q = {exit_:.6g})"
     else:
@@ -307,18 +319,19 @@ def _near_stop(rng, track):
         for _ in range(TRIES):
             q0, direction = rng.uniform(lo, hi), float(rng.choice((-1.0, 1.0)))
             lim = q0 + direction * rng.uniform(0.2, 0.6) * width
-            # Climb towards the limiter: z rises on the way to it.
-            if lo <= lim <= hi and direction * frame(0.5 * (q0 + lim))[1] > 0:
+            # Climb towards the limiter: z rises all the way to it (no crest on the way).
+            if lo <= lim <= hi and all(direction * frame(q0 + (lim - q0) * j / CLIMB_GRID)[1] > 0
+                                       for j in range(CLIMB_GRID + 1)):
                 break
         else:
             return _generic(rng, track, "generic (no climb to a limiter found)")
         behind = q0 - direction * rng.uniform(0.0, 1.0) * (q0 - lo if direction > 0 else hi - q0)
         behind = behind if track.bounded or rng.random() < 0.5 else None
         left, right = (behind, lim) if direction > 0 else (lim, behind)
-        scene = _base(track, mu, k, left, right, q0, direction, t_max, 20)
+        scene = _base(track, mu, k, left, right, q0, direction, t_max, NEAR_STOP_EVENTS)
 
-        def passes(e):
-            return e is not None and e[0] == "impact"
+        def passes(e, q_final):
+            return e is not None and e[0] == "impact" and e[2] == lim
 
         what = f"barely reaches the limiter q = {lim:.6g}"
     h = curve_frame(scene_from_dict(scene))(scene["initial"]["q"])[0]
@@ -428,7 +441,11 @@ def random_scenes(seed: int, n: int, curves=None, quotas=None, categories=CATEGO
         pool = [t for t in tracks if _ELIGIBLE[category](t)] or tracks
         for j in range(counts.get(category, 0)):
             rng = np.random.default_rng([seed, ci, j])
-            track = pool[j % len(pool)] if category == "generic" else pool[int(rng.integers(len(pool)))]
+            choices = pool
+            if category == "near-stop":
+                crest = rng.random() < CREST_SHARE
+                choices = [t for t in pool if bool(t.humps) == crest] or pool
+            track = choices[j % len(choices)] if category == "generic" else choices[int(rng.integers(len(choices)))]
             scene, note = _MAKERS[category](rng, track)
             out.append(RandomScene(len(out), category, track.name, scene, note))
     return tuple(out)
@@ -750,9 +767,22 @@ class Report:
         return "\n".join(lines)
 
 
-def check_scenes(scenes, simulate=None, progress=None) -> Report:
-    """Check every scene (:func:`check_scene`); ``progress(record)`` is called after each."""
+def check_scenes(scenes, simulate=None, progress=None, workers: int = 1) -> Report:
+    """Check every scene (:func:`check_scene`) and return the :class:`Report`.
+
+    ``progress(record)`` is called after each scene; ``workers > 1`` checks them in that
+    many processes (``simulate`` must then pickle: a module-level function or None).
+    """
     records = []
+    if workers > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(workers) as pool:
+            for record in pool.map(check_scene, scenes, [simulate] * len(scenes)):
+                records.append(record)
+                if progress is not None:
+                    progress(record)
+        return Report(tuple(records))
     for rs in scenes:
         record = check_scene(rs, simulate)
         records.append(record)

@@ -204,8 +204,12 @@ class _Physics:
     def rates(self, q, v, sigma, nsign):
         """``(dq/dt, dv/dt)`` on the branch of direction ``sigma`` and normal-force sign ``nsign``."""
         self.calls += 1
-        h, sin, cos, kappa = self.frame(q)
-        return v / h, -self.g * sin - sigma * nsign * self.mu * (kappa * v * v + self.g * cos)
+        xp, zp, xpp, zpp = self._frame(q, *self.cp)
+        h2 = xp * xp + zp * zp
+        inv = 1 / self.sqrt(h2)
+        # kappa v^2 + g cos(alpha) = ((x' z'' - z' x'') v^2 / h^2 + g x') / h
+        normal = ((xp * zpp - zp * xpp) * v * v / h2 + self.g * xp) * inv
+        return v * inv, -self.g * zp * inv - (sigma * nsign) * self.mu * normal
 
     def normal(self, q, v):
         """``N = kappa v**2 + g cos(alpha)`` per unit mass."""
