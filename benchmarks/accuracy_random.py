@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     curves = [c.strip() for c in args.curves.split(",") if c.strip()] or None
     start = time.perf_counter()
-    scenes = random_scenes(args.seed, args.n, curves)
+    scenes = random_scenes(args.seed, args.n, curves, workers=args.workers)
     drawn = time.perf_counter() - start
 
     def progress(r):

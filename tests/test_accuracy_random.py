@@ -3,6 +3,7 @@
 The verdicts themselves are tested on hand-made results first (:func:`symvib.checks.accuracy.compare`).
 """
 import math
+import os
 from types import SimpleNamespace
 from typing import NamedTuple
 
@@ -23,6 +24,8 @@ pytest.importorskip("scipy")
 
 #: The harness's scenes: how many, on how many curves at least, and the seed.
 N_SCENES, MIN_CURVES, SEED = 200, 10, 20261125
+#: Processes the slow test draws and checks scenes in (the verdicts do not depend on it).
+WORKERS = min(4, os.cpu_count() or 1)
 
 INCLINE = {"curve": {"z": "c*x"}, "parameters": {"c": 0.5}, "physics": {"mu": 0.1, "restitution": 0.8},
            "limiters": {"left": 0.0, "right": 2.0}, "initial": {"q": 1.0, "qdot": 0.0},
@@ -147,10 +150,10 @@ def test_random_scenes_are_seeded_and_spread_over_curves_and_categories():
 def test_random_scenes_are_right_or_flagged():
     # Every seeded random scene: the engine's event kinds and times agree with the independent
     # reference to 1e-9 s, or the engine says it is not accurate; never a silent miss.
-    scenes = random_scenes(SEED, N_SCENES)
+    scenes = random_scenes(SEED, N_SCENES, workers=WORKERS)
     assert len(scenes) == N_SCENES and len({s.curve for s in scenes}) >= MIN_CURVES
     assert {s.category for s in scenes} == set(CATEGORIES)
-    report = check_scenes(scenes)
+    report = check_scenes(scenes, workers=WORKERS)
     counts = report.counts()
     misses = [f"{r.scene.index} {r.scene.category} {r.scene.curve}: {r.verdict.detail}"
               for r in report.records if r.verdict.verdict == "silent_miss"]

@@ -1,30 +1,11 @@
-"""Random scenes nobody designed, and a verdict on the engine against an independent reference.
-
-:func:`random_scenes` draws seeded scenes (a NumPy ``Generator`` per scene, so
-scene ``i`` of a seed is the same whatever ``n``) on the curves of
-:data:`TRACKS` (catalogue shapes and curves of :mod:`symvib.checks.corpus`), in
-the categories of :data:`CATEGORIES` with the quotas of :data:`QUOTAS`:
-
-``generic``
-    random limiters (none, one, two), ``mu`` in ``[0, 0.6]`` (sometimes 0),
-    ``k`` in ``[0, 1]`` (sometimes exactly 0 or 1), start anywhere between them;
-``near-stop``
-    the speed nearly vanishes: the start speed is bisected against the reference
-    so that the particle barely passes a hump (the top of a loop, the crest of a
-    double well) or barely reaches a limiter, with ``w_min / w0`` about
-    ``1e-4 .. 1e-10``;
-``near-edge``
-    a start at rest a relative ``1e-9 .. 1e-5`` beyond the friction-cone edge
-    ``|tan alpha| = mu``: it slides slowly and stops just past the edge;
-``looping``
-    full loops on the circle and the ellipse;
-``scale``
-    a generic scene with every length scaled by ``1e-6 .. 1e3`` (limiters,
-    speeds and ``t_max`` scaled with it).
+"""A verdict on the engine against the independent reference, over random scenes.
 
 :func:`compare` gives a :class:`Verdict` of an engine result against a
-:class:`~symvib.checks.arclength.ReferenceRun` (see :data:`VERDICTS`), and
-:func:`check_scenes` runs a list of scenes and summarises (:class:`Report`).
+:class:`~symvib.checks.arclength.ReferenceRun` (see :data:`VERDICTS`),
+:func:`reference_for` the reference of a scene, and :func:`check_scenes` runs a
+list of scenes (:func:`symvib.checks.randomscenes.random_scenes`) on the engine
+and summarises them (:class:`Report`: verdicts per category, the distribution
+of the largest event-time difference per scene, the worst cases).
 
 **Tolerance.** Event times agree within :func:`time_tolerance`: ``1e-9 s``, or
 ``1e-9`` relative to the scene's time scale ``T = L / V``
@@ -42,9 +23,14 @@ it keeps bouncing where the engine summed a Zeno series.
 
 Examples
 --------
->>> scenes = random_scenes(seed=1, n=3, categories=("generic",))
->>> [s.category for s in scenes], len({s.curve for s in scenes})
-(['generic', 'generic', 'generic'], 3)
+>>> from symvib.numeric.scene import scene_from_dict
+>>> scene = {"curve": {"shape": "parabola-x"}, "parameters": {"p": 1.0},
+...          "physics": {"mu": 0.2, "restitution": 0.5}, "limiters": {"right": 0.5},
+...          "initial": {"q": 0.0, "qdot": 3.0}, "run": {"max_events": 4}}
+>>> import symvib
+>>> v = compare(symvib.simulate(scene), reference_for(scene).run)
+>>> v.verdict, v.max_dt < 1e-12
+('agree', True)
 """
 from __future__ import annotations
 
@@ -56,22 +42,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from symvib.checks.arclength import CONE_RTOL, curve_frame, reference_run, scene_scales
+from symvib.checks.randomscenes import CATEGORIES, QUOTAS, TRACKS, RandomScene, random_scenes
 from symvib.numeric.scene import scene_from_dict
 
-__all__ = ["Track", "TRACKS", "RandomScene", "Verdict", "Record", "Report", "VERDICTS", "CATEGORIES", "QUOTAS",
-           "DT_BINS", "random_scenes", "reference_for", "compare", "check_scene", "check_scenes",
-           "time_tolerance", "TIME_TOL"]
+__all__ = ["Verdict", "Reference", "Record", "Report", "VERDICTS", "DT_BINS", "TIME_TOL", "reference_for",
+           "compare", "check_scene", "check_scenes", "time_tolerance",
+           # the random scenes, for convenience (symvib.checks.randomscenes)
+           "CATEGORIES", "QUOTAS", "TRACKS", "RandomScene", "random_scenes"]
 
 #: Verdicts, best first.  ``agree``: the same events, every time within the tolerance;
-#: ``flagged``: not so, but the engine says so (``success`` False, an error status, or the
-#: event's ``t_err`` covers the difference, or it raised); ``ambiguous``: the first difference
+#: ``flagged``: not so, but the engine says so (``success`` False, an error status, the
+#: events' ``t_err`` covers the difference, or it raised); ``ambiguous``: the first difference
 #: is a decision both answers can defend within rounding (a grazing impact, the cone edge,
 #: a decision on which the double-precision reference's own two runs split);
 #: ``reference_failed``: the reference could not decide; ``silent_miss``: anything else.
 VERDICTS = ("agree", "flagged", "ambiguous", "reference_failed", "silent_miss")
-CATEGORIES = ("generic", "near-stop", "near-edge", "looping", "scale")
-#: Share of each category in :func:`random_scenes`.
-QUOTAS = {"generic": 0.35, "near-stop": 0.2, "near-edge": 0.15, "looping": 0.1, "scale": 0.2}
 #: Event times agree within this many seconds (relative to ``T`` where ``T > 1 s``).
 TIME_TOL = 1e-9
 #: The reference must be this fraction of the tolerance sure of itself, or the GBS run decides.
@@ -90,365 +75,8 @@ PERTURB_ULPS = 4
 DOP853_BUDGET, GBS_BUDGET = 60.0, 300.0
 #: Upper bounds of the bins of ``max_dt`` in the summary (the last bin is ``>= 1e-3``).
 DT_BINS = (1e-13, 1e-12, 1e-11, 1e-10, 1e-9, 1e-6, 1e-3)
-#: Share of the near-stop scenes that pass a crest on a curve that has one (the others barely reach a limiter).
-CREST_SHARE = 0.5
-#: Events of a near-stop scene (the first ones matter; the 30-digit reference runs them all).
-NEAR_STOP_EVENTS = 8
-#: Bisection steps of a near-stop speed, and the doublings allowed to find a speed that passes.
-BISECTIONS, DOUBLINGS = 60, 12
-#: Grid steps of the search for the cone edge past a crest; draws of a climb to a limiter, and its
-#: grid of slope checks; events a speed test may run to find its first decision.
-EXIT_GRID, TRIES, CLIMB_GRID, DECISION_EVENTS = 400, 20, 16, 4
 _TRUNCATED = ("t_max", "max_events")
 _TURNS = ("reversal", "arrest")
-_G = 9.81
-
-
-# --- the curves -----------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Track:
-    """A curve the random scenes use.
-
-    Attributes
-    ----------
-    name : str
-        A catalogue shape or a :mod:`symvib.checks.corpus` entry.
-    curve, parameters : dict
-        The scene's ``curve`` and ``parameters`` tables.
-    span : (float, float)
-        Where limiters and starts go (units of ``q``).
-    bounded : bool
-        The domain is bounded: every scene has both limiters.
-    humps : tuple of (q_top, side, width)
-        Crests to pass barely: start at ``q_top + side * (0.3 .. 0.9) * width`` towards it.
-    edge : (float, float) or None
-        An interval of ``q`` on which ``|tan alpha|`` grows (near-edge starts).
-    loops : bool
-    length : float
-        A length of the curve (m).
-    q_length : bool
-        ``q`` is a length (a graph), not an angle.
-    scalable : bool
-        Every parameter is a length: the curve scales with them.
-    numeric : bool
-        The corpus tags it ``numeric`` (its first derivation takes up to a minute).
-    """
-
-    name: str
-    curve: dict
-    parameters: dict
-    span: tuple
-    bounded: bool = False
-    humps: tuple = ()
-    edge: tuple | None = None
-    loops: bool = False
-    length: float = 1.0
-    q_length: bool = True
-    scalable: bool = True
-    numeric: bool = False
-
-
-def _track(name, curve, parameters, span, **kw):
-    return Track(name, curve, parameters, span, **kw)
-
-
-_PI = math.pi
-#: The curves of the random scenes.
-TRACKS = {t.name: t for t in (
-    _track("circle", {"shape": "circle"}, {"R": 0.5}, (-2.5, 2.5), humps=((_PI, -1, _PI), (-_PI, 1, _PI)),
-           edge=(0.0, 1.4), loops=True, length=0.5, q_length=False),
-    _track("parabola", {"shape": "parabola"}, {"p": 1.0}, (-1.3, 1.3), bounded=True, edge=(0.0, 1.3),
-           q_length=False),
-    _track("cycloid", {"shape": "cycloid"}, {"R": 0.5}, (-2.8, 2.8), bounded=True, edge=(0.0, 2.8), length=0.5,
-           q_length=False),
-    _track("parabola-x", {"shape": "parabola-x"}, {"p": 1.0}, (-1.5, 1.5), edge=(0.0, 1.5)),
-    _track("ellipse", {"shape": "ellipse"}, {"a": 1.0, "b": 0.5}, (-1.4, 1.4), bounded=True, edge=(0.0, 1.4),
-           length=0.5, q_length=False),
-    _track("quartic", {"shape": "quartic"}, {"c": 1.0}, (-1.5, 1.5), edge=(0.0, 1.5)),
-    _track("catenary", {"shape": "catenary"}, {"a": 1.0}, (-1.5, 1.5), edge=(0.0, 1.5)),
-    _track("double-well", {"z": "a*((x/b)**2 - 1)**2"}, {"a": 0.05, "b": 0.4}, (-0.8, 0.8),
-           humps=((0.0, -1, 0.4), (0.0, 1, 0.4)), length=0.4),
-    _track("cubic", {"z": "x**3/3 - a**2*x"}, {"a": 0.5}, (-1.1, 1.1), humps=((-0.5, 1, 1.0),), length=0.5,
-           scalable=False),
-    _track("witch", {"z": "a*x**2/(x**2 + b**2)"}, {"a": 0.3, "b": 0.5}, (-1.2, 1.2), length=0.5),
-    _track("tanh-step", {"z": "a*tanh(x/b)"}, {"a": 0.2, "b": 0.3}, (-0.6, 0.6), length=0.3),
-    _track("log-cosh", {"z": "a*log(cosh(x/a))"}, {"a": 0.4}, (-1.2, 1.2), edge=(0.0, 1.2), length=0.4),
-    _track("hyperbola-graph", {"z": "sqrt(x**2 + a**2) - a"}, {"a": 0.3}, (-1.4, 1.4), edge=(0.0, 1.4),
-           length=0.3),
-    _track("bowl", {"z": "R - sqrt(R**2 - x**2)", "domain": ["-R", "R"]}, {"R": 0.5}, (-0.45, 0.45),
-           bounded=True, edge=(0.0, 0.45), length=0.5),
-    _track("exponential-slope", {"z": "a*exp(x/a)"}, {"a": 0.5}, (-1.5, 0.8), edge=(-2.5, 0.5), length=0.5),
-    _track("ellipse-loop", {"x": "a*sin(q)", "z": "b*(1 - cos(q))", "q": "q"}, {"a": 0.5, "b": 0.3}, (-2.5, 2.5),
-           humps=((_PI, -1, _PI),), loops=True, length=0.4, q_length=False, numeric=True),
-)}
-
-
-@dataclass(frozen=True)
-class RandomScene:
-    """One random scene: its category, curve, the scene as a dict of tables, and how it was made."""
-
-    index: int
-    category: str
-    curve: str
-    scene: dict
-    note: str = ""
-
-
-# --- drawing scenes -------------------------------------------------------------------------------
-def _base(track, mu, k, left, right, q0, qdot0, t_max, max_events):
-    limiters = {k_: float(v) for k_, v in (("left", left), ("right", right)) if v is not None}
-    return {"name": f"random-{track.name}", "curve": dict(track.curve), "parameters": dict(track.parameters),
-            "physics": {"g": _G, "m": 1.0, "mu": float(mu), "restitution": float(k)}, "limiters": limiters,
-            "initial": {"q": float(q0), "qdot": float(qdot0)}, "run": {"t_max": float(t_max),
-                                                                     "max_events": int(max_events)}}
-
-
-def _physics(rng, mu_max=0.6):
-    mu = 0.0 if rng.random() < 0.15 else rng.uniform(0.0, mu_max)
-    u = rng.random()
-    k = 0.0 if u < 0.1 else 1.0 if u < 0.2 else rng.uniform(0.0, 1.0)
-    return mu, k
-
-
-def _time_scale(track):
-    return math.sqrt(track.length / _G)
-
-
-def _generic(rng, track, note="generic"):
-    mu, k = _physics(rng)
-    lo, hi = track.span
-    nlim = 2 if track.bounded else int(rng.integers(0, 3))
-    a, b = sorted(rng.uniform(lo, hi, 2))
-    if nlim == 2:
-        left, right = a, b
-    elif nlim == 1:
-        left, right = (a, None) if rng.random() < 0.5 else (None, b)
-    else:
-        left = right = None
-    q0 = rng.uniform(left if left is not None else lo, right if right is not None else hi)
-    if rng.random() < 0.05 and left is not None:
-        q0 = left  # on a limiter
-    speed = 0.0 if rng.random() < 0.15 else rng.uniform(0.0, 2.0) * math.sqrt(_G * track.length)
-    h = curve_frame(scene_from_dict(_base(track, mu, k, left, right, q0, 1.0, 1.0, 1)))(q0)[0]
-    qdot0 = rng.choice((-1.0, 1.0)) * speed / h
-    T = _time_scale(track)
-    return _base(track, mu, k, left, right, q0, qdot0, rng.uniform(3.0, 10.0) * T, 40), note
-
-
-def _first_decision(scene):
-    """``(first event that is not a normal-force sign change, or None; final q)`` of a short reference run."""
-    s = scene_from_dict(scene)
-    for m in range(1, DECISION_EVENTS + 1):
-        run = reference_run(s, max_events=m, budget=DOP853_BUDGET)
-        if run.events and run.events[-1][0] != "normal_sign_change" or run.status != "max_events":
-            break
-    return next((e for e in run.events if e[0] != "normal_sign_change"), None), run.q_final
-
-
-def _bisect_speed(scene, passes, h, v_guess):
-    """The smallest start speed (m/s) for which ``passes(first event)``, bracketed to ``BISECTIONS`` halvings."""
-    sign = 1.0 if scene["initial"]["qdot"] >= 0 else -1.0
-
-    def ok(v):
-        scene["initial"]["qdot"] = sign * v / h
-        return passes(*_first_decision(scene))
-
-    lo, hi = 0.0, v_guess
-    for _ in range(DOUBLINGS):
-        if ok(hi):
-            break
-        lo, hi = hi, 2.0 * hi
-    else:
-        return None
-    if ok(lo):
-        return None
-    for _ in range(BISECTIONS):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if ok(mid) else (mid, hi)
-        if hi - lo <= 1e-15 * hi:
-            break
-    return hi
-
-
-def _cone_exit(frame, top, direction, width, mu):
-    """The first ``q`` past the crest ``top`` (moving ``direction``) where ``|tan alpha| > mu``, or None:
-    from there on the particle speeds up, so it has passed (the slowest point is there)."""
-    prev = top
-    for j in range(1, EXIT_GRID + 1):
-        q = top + direction * width * j / EXIT_GRID
-        _, s, c, _ = frame(q)
-        if abs(s) > mu * abs(c):
-            a, b = prev, q
-            for _ in range(BISECTIONS):
-                m = 0.5 * (a + b)
-                _, s, c, _ = frame(m)
-                a, b = (a, m) if abs(s) > mu * abs(c) else (m, b)
-            return b
-        prev = q
-    return None
-
-
-def _near_stop(rng, track):
-    ratio = 10.0 ** rng.uniform(-10.0, -4.0)
-    mu = 0.0 if rng.random() < 0.3 else rng.uniform(0.0, 0.3)
-    k = rng.uniform(0.0, 1.0)
-    T = _time_scale(track)
-    t_max = (4.0 + 1.5 * math.log(1.0 / ratio)) * T
-    lo, hi = track.span
-    frame = curve_frame(scene_from_dict(_base(track, mu, k, None, None, 0.5 * (lo + hi), 1.0, 1.0, 1)))
-    if track.humps:
-        top, side, width = track.humps[int(rng.integers(len(track.humps)))]
-        exit_ = _cone_exit(frame, top, -side, width, mu)
-        if exit_ is None:
-            mu, exit_ = 0.0, top
-        q0 = top + side * rng.uniform(0.3, 0.9) * width
-        beyond = top - side * rng.uniform(0.2, 0.6) * width if rng.random() < 0.7 else None
-        behind = q0 + side * rng.uniform(0.1, 0.3) * width if rng.random() < 0.5 else None
-        left, right = (beyond, behind) if side > 0 else (behind, beyond)
-        scene = _base(track, mu, k, left, right, q0, -side, t_max, NEAR_STOP_EVENTS)
-
-        def passes(e, q_final):
-            # Past the slowest point: an impact beyond, any event beyond it, or no event and beyond it at t_max.
-            if e is None:
-                return -side * (q_final - exit_) > 0
-            return -side * (e[2] - exit_) > 0 or (e[0] == "impact" and -side * (e[2] - top) > 0)
-
-        what = f"passes the crest q = {top:.6g} (slowest at q = {exit_:.6g})"
-    else:
-        width = hi - lo
-        for _ in range(TRIES):
-            q0, direction = rng.uniform(lo, hi), float(rng.choice((-1.0, 1.0)))
-            lim = q0 + direction * rng.uniform(0.2, 0.6) * width
-            # Climb towards the limiter: z rises all the way to it (no crest on the way).
-            if lo <= lim <= hi and all(direction * frame(q0 + (lim - q0) * j / CLIMB_GRID)[1] > 0
-                                       for j in range(CLIMB_GRID + 1)):
-                break
-        else:
-            return _generic(rng, track, "generic (no climb to a limiter found)")
-        behind = q0 - direction * rng.uniform(0.0, 1.0) * (q0 - lo if direction > 0 else hi - q0)
-        behind = behind if track.bounded or rng.random() < 0.5 else None
-        left, right = (behind, lim) if direction > 0 else (lim, behind)
-        scene = _base(track, mu, k, left, right, q0, direction, t_max, NEAR_STOP_EVENTS)
-
-        def passes(e, q_final):
-            return e is not None and e[0] == "impact" and e[2] == lim
-
-        what = f"barely reaches the limiter q = {lim:.6g}"
-    h = curve_frame(scene_from_dict(scene))(scene["initial"]["q"])[0]
-    v = _bisect_speed(scene, passes, h, 2.0 * math.sqrt(_G * track.length))
-    if v is None:
-        return _generic(rng, track, "generic (no near-stop found)")
-    scene["initial"]["qdot"] = math.copysign(v * math.sqrt(1.0 + ratio) / h, scene["initial"]["qdot"])
-    return scene, f"near-stop: {what}, w_min/w0 about {ratio:.1e}"
-
-
-def _tan_root(frame, target, a, b):
-    """``q`` in ``[a, b]`` where ``|tan alpha| = target`` (``|tan alpha|`` growing on it), to 40 digits."""
-    import mpmath
-
-    with mpmath.workdps(40):
-        a, b = mpmath.mpf(a), mpmath.mpf(b)
-        for _ in range(140):
-            m = (a + b) / 2
-            _, s, c, _ = frame(m)
-            a, b = (m, b) if abs(s / c) < target else (a, m)
-        return float((a + b) / 2)
-
-
-def _near_edge(rng, track):
-    import mpmath
-
-    k = rng.uniform(0.0, 1.0)
-    a, b = track.edge
-    probe = _base(track, 0.0, k, None, None, a, 0.0, 1.0, 1)
-    frame = curve_frame(scene_from_dict(probe), 40)
-    with mpmath.workdps(40):
-        tan_b = float(abs(frame(mpmath.mpf(b))[1] / frame(mpmath.mpf(b))[2]))
-    mu = rng.uniform(0.1, 0.8) * min(tan_b, 0.75)
-    delta = 10.0 ** rng.uniform(-9.0, -5.0)
-    q0 = _tan_root(frame, mpmath.mpf(mu) * (1 + mpmath.mpf(delta)), a, b)
-    lo, hi = track.span
-    left, right = (lo, hi) if track.bounded else (None, None)
-    T = _time_scale(track)
-    return _base(track, mu, k, left, right, q0, 0.0, 12.0 * T, 10), \
-        f"near-edge: at rest, |tan alpha| / mu - 1 about {delta:.1e}"
-
-
-def _looping(rng, track):
-    mu = 0.0 if rng.random() < 0.2 else rng.uniform(0.0, 0.25)
-    k = rng.uniform(0.0, 1.0)
-    q0 = rng.uniform(-0.5, 0.5)
-    h = curve_frame(scene_from_dict(_base(track, mu, k, None, None, q0, 1.0, 1.0, 1)))(q0)[0]
-    speed = math.sqrt(_G * track.length * rng.uniform(5.0, 14.0))
-    T = _time_scale(track)
-    return _base(track, mu, k, None, None, q0, rng.choice((-1.0, 1.0)) * speed / h, rng.uniform(3.0, 8.0) * T,
-                 40), "looping"
-
-
-def _scaled(rng, track):
-    scene, _ = _generic(rng, track)
-    lam = 10.0 ** rng.uniform(-6.0, 3.0)
-    scene["parameters"] = {k: v * lam for k, v in scene["parameters"].items()}
-    qs = lam if track.q_length else 1.0
-    scene["limiters"] = {k: v * qs for k, v in scene["limiters"].items()}
-    scene["initial"] = {"q": scene["initial"]["q"] * qs,
-                        "qdot": scene["initial"]["qdot"] * math.sqrt(lam) * qs / lam}
-    scene["run"]["t_max"] *= math.sqrt(lam)
-    return scene, f"scale: lengths times {lam:.3g}"
-
-
-_MAKERS = {"generic": _generic, "near-stop": _near_stop, "near-edge": _near_edge, "looping": _looping,
-           "scale": _scaled}
-_ELIGIBLE = {"generic": lambda t: True, "near-stop": lambda t: True, "near-edge": lambda t: t.edge is not None,
-             "looping": lambda t: t.loops, "scale": lambda t: t.scalable}
-
-
-def _counts(n, quotas, categories):
-    """Scenes per category: the quotas' shares of ``n`` by largest remainders."""
-    shares = {c: quotas.get(c, 0.0) for c in categories}
-    total = sum(shares.values())
-    exact = {c: n * s / total for c, s in shares.items()}
-    out = {c: int(x) for c, x in exact.items()}
-    for c in sorted(exact, key=lambda c: out[c] - exact[c])[:n - sum(out.values())]:
-        out[c] += 1
-    return out
-
-
-def random_scenes(seed: int, n: int, curves=None, quotas=None, categories=CATEGORIES) -> tuple:
-    """``n`` random scenes (:class:`RandomScene`), seeded.
-
-    Parameters
-    ----------
-    seed : int
-    n : int
-    curves : sequence of str, optional
-        Names of :data:`TRACKS` (default: every track not tagged ``numeric``).
-    quotas : dict, optional
-        Shares of the categories (default :data:`QUOTAS`).
-    categories : sequence of str
-        The categories drawn (of :data:`CATEGORIES`).
-
-    Notes
-    -----
-    Scene ``j`` of a category takes its own generator, ``default_rng([seed, category, j])``,
-    and the generic scenes take the curves in turn, so that every curve is used.  The
-    near-stop scenes run the reference to bisect their speed (about a second each).
-    """
-    tracks = [TRACKS[c] for c in curves] if curves else [t for t in TRACKS.values() if not t.numeric]
-    counts = _counts(n, QUOTAS if quotas is None else quotas, categories)
-    out = []
-    for ci, category in enumerate(CATEGORIES):
-        pool = [t for t in tracks if _ELIGIBLE[category](t)] or tracks
-        for j in range(counts.get(category, 0)):
-            rng = np.random.default_rng([seed, ci, j])
-            choices = pool
-            if category == "near-stop":
-                crest = rng.random() < CREST_SHARE
-                choices = [t for t in pool if bool(t.humps) == crest] or pool
-            track = choices[j % len(choices)] if category == "generic" else choices[int(rng.integers(len(choices)))]
-            scene, note = _MAKERS[category](rng, track)
-            out.append(RandomScene(len(out), category, track.name, scene, note))
-    return tuple(out)
 
 
 # --- the reference --------------------------------------------------------------------------------
@@ -771,18 +399,20 @@ def check_scenes(scenes, simulate=None, progress=None, workers: int = 1) -> Repo
     """Check every scene (:func:`check_scene`) and return the :class:`Report`.
 
     ``progress(record)`` is called after each scene; ``workers > 1`` checks them in that
-    many processes (``simulate`` must then pickle: a module-level function or None).
+    many spawned processes (``simulate`` must then pickle: a module-level function or None).
     """
-    records = []
     if workers > 1:
+        import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        with ProcessPoolExecutor(workers) as pool:
+        records = []
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
             for record in pool.map(check_scene, scenes, [simulate] * len(scenes)):
                 records.append(record)
                 if progress is not None:
                     progress(record)
         return Report(tuple(records))
+    records = []
     for rs in scenes:
         record = check_scene(rs, simulate)
         records.append(record)
