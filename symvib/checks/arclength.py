@@ -93,8 +93,9 @@ GBS_SEQUENCE = (2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24)
 GBS_GROWTH, GBS_SAFETY = 4, 0.8
 #: GBS: first step as a fraction of the scene's time scale, and the factor of a rejected step.
 GBS_FIRST_STEP, GBS_REJECT = 0.02, 0.25
-#: GBS: iterations of the event location, and the relative step of its finite-difference derivative.
-GBS_ROOT_ITERATIONS = 80
+#: GBS: iterations of the event location, and the step of its finite-difference derivative along
+#: the flow, ``10**(-digits * GBS_FD_EXPONENT) T`` (its error is the square of that, relative).
+GBS_ROOT_ITERATIONS, GBS_FD_EXPONENT = 80, 1 / 3
 
 
 class _Budget(RuntimeError):
@@ -140,7 +141,7 @@ class ReferenceRun:
 # --- the curve ------------------------------------------------------------------------------------
 @lru_cache(maxsize=64)
 def _lambdified(shape_key, module: str):
-    """``(frame(q, *p) -> (x', z', x'', z''), z(q, *p), domain(*p) -> (lo, hi), q_scale(*p))``."""
+    """``(frame(q, *p) -> (x', z', x'', z''), domain(*p) -> (lo, hi), q_scale(*p))``."""
     import sympy as sp
 
     curve = shape_key.curve()
@@ -149,10 +150,9 @@ def _lambdified(shape_key, module: str):
     # A DiracDelta is the second derivative of an Abs at its kink, a point of measure zero.
     exprs = [e.replace(sp.DiracDelta, lambda *a: sp.S.Zero) for e in (xp, zp, sp.diff(xp, q), sp.diff(zp, q))]
     frame = sp.lambdify([q, *params], exprs, modules=module, cse=True)
-    zf = sp.lambdify([q, *params], curve.z, modules=module)
     domain = sp.lambdify(params, list(curve.domain), modules="mpmath")
     scale = sp.lambdify(params, curve.q_scale, modules="mpmath")
-    return frame, zf, domain, scale
+    return frame, domain, scale
 
 
 class _Hashable:
@@ -178,7 +178,7 @@ class _Physics:
     def __init__(self, scene, digits=None):
         self.mp = digits is not None
         key = _Hashable(scene.shape)
-        self._frame, self._z, domain, scale = _lambdified(key, "mpmath" if self.mp else "math")
+        self._frame, domain, scale = _lambdified(key, "mpmath" if self.mp else "math")
         num = mpmath.mpf if self.mp else float
         self.num = num
         self.sqrt = mpmath.sqrt if self.mp else math.sqrt
@@ -449,7 +449,7 @@ def _locate(P, y, H, fn, g0, g1, sigma, nsign, scales, tol, deadline, T):
     (Newton on ``tau`` with a finite-difference derivative along the flow, kept in its bracket)."""
     lo, hi, glo = mpmath.mpf(0), H, g0
     tau = H * g0 / (g0 - g1)
-    eps = mpmath.mpf(10) ** (-mpmath.mp.dps // 3) * T
+    eps = mpmath.mpf(10) ** (-mpmath.mp.dps * GBS_FD_EXPONENT) * T
     z = None
     for _ in range(GBS_ROOT_ITERATIONS):
         z = _advance(P, y, tau, sigma, nsign, scales, tol, deadline)
