@@ -276,8 +276,8 @@ def compare(result, reference, *, scene=None, tol: float | None = None, split_at
         q_lim = sym[-1][2]
         ends_at_rest = bool(extra) and extra[-1][0] == "rest_on_limiter" and extra[-1][2] == q_lim
         bounces = extra[:len(extra) - ends_at_rest]
-        if not body or not bounces or any(e[0] not in ("impact", "reversal") or e[0] == "impact" and e[2] != q_lim
-                                          for e in bounces) or not (ends_at_rest or reference.status in _TRUNCATED):
+        if not body or any(e[0] not in ("impact", "reversal") or e[0] == "impact" and e[2] != q_lim for e in bounces) \
+                or not (ends_at_rest or bounces and reference.status in _TRUNCATED):
             return mismatch(len(body), "the engine summed a Zeno series; the reference does not keep bouncing")
         remaining = _zeno_remaining(scene, ref[len(body) - 1])
         if remaining is None:

@@ -297,9 +297,20 @@ def scene_scales(scene) -> tuple:
 
 
 # --- segments -------------------------------------------------------------------------------------
-def _segment_dop853(P, t0, q0, v0, sigma, nsign, t_end, T, deadline, rtol):
-    """Integrate one segment from ``(t0, q0, v0)``: ``(kind, t, q, v)``, kind in ``"limiter"``,
-    ``"domain"``, ``"turn"``, ``"normal"``, ``"t_max"``."""
+def _two_sum(a, b):
+    """``(s, e)`` with ``s = fl(a + b)`` and ``a + b = s + e`` exactly (Knuth)."""
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+def _segment_dop853(P, t0, q0, dq0, v0, sigma, nsign, t_end, T, deadline, rtol):
+    """Integrate one segment from ``(t0, q0 + dq0, v0)``: ``(kind, t, q, dq, v)``, kind in ``"limiter"``,
+    ``"domain"``, ``"turn"``, ``"normal"``, ``"t_max"``.
+
+    The position is ``q + dq`` (a float and its residual): the state integrated is the offset
+    from ``q0``, so that a bounce of a billionth of the limiter's coordinate keeps its digits.
+    """
     from scipy.integrate import solve_ivp
 
     first = P.calls
@@ -312,7 +323,7 @@ def _segment_dop853(P, t0, q0, v0, sigma, nsign, t_end, T, deadline, rtol):
                 raise RuntimeError(f"DOP853: more than {MAX_SEGMENT_CALLS} calls in one segment (steps collapsed)")
         return P.rates(q0 + y[0], y[1], sigma, nsign)
 
-    a0 = fun(0.0, (0.0, v0))[1]
+    a0 = fun(0.0, (dq0, v0))[1]
     v_scale = max(abs(v0), abs(a0) * T)
     h0 = P.frame(q0)[0]
     atol = [ATOL_REL * v_scale * T / h0, ATOL_REL * v_scale]
@@ -328,13 +339,13 @@ def _segment_dop853(P, t0, q0, v0, sigma, nsign, t_end, T, deadline, rtol):
     normal.terminal, normal.direction = True, -nsign
     events += [turn, normal]
     kinds += [("turn", None), ("normal", None)]
-    sol = solve_ivp(fun, (0.0, t_end - t0), [0.0, v0], method="DOP853", rtol=rtol, atol=atol, events=events,
+    sol = solve_ivp(fun, (0.0, t_end - t0), [dq0, v0], method="DOP853", rtol=rtol, atol=atol, events=events,
                     max_step=MAX_STEP_FRACTION * T, dense_output=True)
     if sol.status == -1:
         raise RuntimeError(f"DOP853: {sol.message}")
     hits = [(float(te[0]), i) for i, te in enumerate(sol.t_events) if len(te)]
     if not hits:
-        return "t_max", t_end, q0 + float(sol.y[0, -1]), float(sol.y[1, -1])
+        return ("t_max", t_end, *_two_sum(q0, float(sol.y[0, -1])), float(sol.y[1, -1]))
     tau, i = min(hits)
     kind, qe = kinds[i]
     dq, v = (float(x) for x in sol.y_events[i][0])
@@ -345,9 +356,9 @@ def _segment_dop853(P, t0, q0, v0, sigma, nsign, t_end, T, deadline, rtol):
                 from scipy.optimize import brentq
 
                 tau = brentq(lambda s: sol.sol(s)[0] - (qe_ - q0), 0.0, tau, xtol=ROOT_XTOL * T, rtol=ROOT_RTOL)
-                return kind_, t0 + tau, qe_, float(sol.sol(tau)[1])
-    q = qe if qe is not None else q0 + dq
-    return kind, t0 + tau, q, (0.0 if kind == "turn" else v)
+                return kind_, t0 + tau, qe_, 0.0, float(sol.sol(tau)[1])
+    q, dq = (qe, 0.0) if qe is not None else _two_sum(q0, dq)
+    return kind, t0 + tau, q, dq, (0.0 if kind == "turn" else v)
 
 
 def _gbs_step(P, y, H, sigma, nsign, scales, tol):
@@ -401,10 +412,11 @@ def _advance(P, y, H, sigma, nsign, scales, tol, deadline):
     return y
 
 
-def _segment_gbs(P, t0, q0, v0, sigma, nsign, t_end, T, deadline, digits):
-    """As :func:`_segment_dop853`, by Gragg-Bulirsch-Stoer extrapolation at ``digits`` digits."""
+def _segment_gbs(P, t0, q0, dq0, v0, sigma, nsign, t_end, T, deadline, digits):
+    """As :func:`_segment_dop853`, by Gragg-Bulirsch-Stoer extrapolation at ``digits`` digits
+    (``q`` an mpf, ``dq`` 0)."""
     tol = mpmath.mpf(10) ** (GBS_GUARD_DIGITS - digits)
-    t, y = mpmath.mpf(t0), (mpmath.mpf(q0), mpmath.mpf(v0))
+    t, y = mpmath.mpf(t0), (mpmath.mpf(q0) + dq0, mpmath.mpf(v0))
     a0 = P.rates(y[0], y[1], sigma, nsign)[1]
     v_scale = max(abs(y[1]), abs(a0) * T)
     scales = (v_scale * T / P.frame(y[0])[0], v_scale)
@@ -437,9 +449,9 @@ def _segment_gbs(P, t0, q0, v0, sigma, nsign, t_end, T, deadline, digits):
                         kind, qe = kind_, qe_
                         break
             q = qe if qe is not None else z[0]
-            return kind, t + tau, q, (mpmath.mpf(0) if kind == "turn" else z[1])
+            return kind, t + tau, q, 0, (mpmath.mpf(0) if kind == "turn" else z[1])
         if t + H >= t_end:
-            return "t_max", t_end, new[0], new[1]
+            return "t_max", t_end, new[0], 0, new[1]
         t, y, before = t + H, new, after
         H = h_next
 
@@ -514,7 +526,7 @@ def _run(scene, P, method, max_events, t_max, deadline, segment):
     T = P.num(scene_scales(scene)[2])
     events, v_start = [], []
     num = P.num
-    t, q = num(0), num(scene.q0)
+    t, q, dq = num(0), num(scene.q0), 0
     v = P.frame(q)[0] * num(scene.qdot0)
     status, message = None, ""
 
@@ -565,7 +577,7 @@ def _run(scene, P, method, max_events, t_max, deadline, segment):
                 status = "left_curve"
                 break
             v_seg = v
-            kind, t, q, v = segment(P, t, q, v, sigma, nsign, num(t_max), T, deadline)
+            kind, t, q, dq, v = segment(P, t, q, dq, v, sigma, nsign, num(t_max), T, deadline)
             if not all(math.isfinite(float(x)) for x in (t, q, v)):
                 raise FloatingPointError("the state stopped being finite")
             if kind == "t_max":
@@ -583,7 +595,7 @@ def _run(scene, P, method, max_events, t_max, deadline, segment):
                     put("normal_sign_change", t, q, qd, qd, v_seg)
                     flipped = -nsign
             else:
-                sigma = at_rest(q, P.side(q), v_seg)
+                sigma = at_rest(q, P.side(q) if dq == 0 else 0, v_seg)
                 if status is None:
                     put("reversal", t, q, 0.0, 0.0, v_seg)
     except (_Budget, RuntimeError, FloatingPointError, ZeroDivisionError, ValueError, OverflowError) as exc:
