@@ -51,8 +51,32 @@ __all__ = ["Track", "TRACKS", "RandomScene", "CATEGORIES", "QUOTAS", "random_sce
 CATEGORIES = ("generic", "near-stop", "near-edge", "looping", "scale")
 #: Share of each category in :func:`random_scenes`.
 QUOTAS = {"generic": 0.35, "near-stop": 0.2, "near-edge": 0.15, "looping": 0.1, "scale": 0.2}
-#: Share of the generic scenes with unilateral contact (physics.md, "Assumptions").
-UNILATERAL_SHARE = 0.1
+#: Generic scenes: the largest mu, the shares with mu = 0, with k = 0 (and as many with k = 1), at
+#: rest, on a limiter and with unilateral contact (physics.md, "Assumptions"); the start speed in
+#: units of sqrt(g L), t_max in units of the time scale sqrt(L / g), and the event bound.
+MU_MAX, MU_ZERO_SHARE, K_EXACT_SHARE = 0.6, 0.15, 0.1
+AT_REST_SHARE, ON_LIMITER_SHARE, UNILATERAL_SHARE = 0.15, 0.05, 0.1
+SPEED_RANGE, T_MAX_RANGE, GENERIC_EVENTS = (0.0, 2.0), (3.0, 10.0), 40
+#: Near-stop scenes: the range of log10(w_min / w0), the largest mu, the share with mu = 0, where
+#: the start is (a fraction of the crest's width, or of the span to a limiter), and t_max
+#: ``(a + b ln(w0 / w_min)) T`` (the time through a near stop grows as the logarithm).
+RATIO_RANGE, NEAR_STOP_MU_MAX, NEAR_STOP_MU_ZERO = (-10.0, -4.0), 0.3, 0.3
+CREST_START, CLIMB_START, NEAR_STOP_T_MAX = (0.3, 0.9), (0.2, 0.6), (4.0, 1.5)
+#: Near-stop limiters: beyond the crest (a share of the scenes, at a fraction of its width past it)
+#: and behind the start (a share, at a fraction of the width).
+BEYOND_SHARE, BEYOND_RANGE, BEHIND_SHARE, BEHIND_RANGE = 0.7, (0.2, 0.6), 0.5, (0.1, 0.3)
+#: Near-edge scenes: the range of log10(|tan alpha| / mu - 1) at the start, mu as a fraction of the
+#: largest slope on the edge interval (and at most NEAR_EDGE_MU_MAX), t_max in T and the event bound.
+DELTA_RANGE, NEAR_EDGE_MU, NEAR_EDGE_MU_MAX = (-9.0, -5.0), (0.1, 0.8), 0.75
+NEAR_EDGE_T_MAX, NEAR_EDGE_EVENTS = 12.0, 10
+#: Looping scenes: the largest mu, the share with mu = 0, the start within +-LOOP_START, the start
+#: speed squared in units of g L, t_max in T, and the event bound.
+LOOP_MU_MAX, LOOP_MU_ZERO, LOOP_START = 0.25, 0.2, 0.5
+LOOP_SPEED2, LOOP_T_MAX, LOOP_EVENTS = (5.0, 14.0), (3.0, 8.0), 40
+#: Scaled scenes: the range of log10 of the length factor.
+SCALE_RANGE = (-6.0, 3.0)
+#: Digits and bisection steps of the start on the cone edge.
+EDGE_DIGITS, EDGE_BISECTIONS = 40, 140
 #: Share of the near-stop scenes that pass a crest on a curve that has one (the others barely reach a limiter).
 CREST_SHARE = 0.5
 #: Events of a near-stop scene (the first ones matter; the 30-digit reference runs them all).
@@ -62,8 +86,8 @@ BISECTIONS, DOUBLINGS = 60, 12
 #: Grid steps of the search for the cone edge past a crest; draws of a climb to a limiter, and its
 #: grid of slope checks; events a speed test may run to find its first decision.
 EXIT_GRID, TRIES, CLIMB_GRID, DECISION_EVENTS = 400, 20, 16, 4
-#: CPU seconds of a reference run of the speed bisection.
-BISECT_BUDGET = 60.0
+#: CPU seconds of a reference run of the speed bisection, and its relative resolution.
+BISECT_BUDGET, BISECT_RTOL = 60.0, 1e-15
 _G = 9.81
 
 
@@ -166,10 +190,10 @@ def _base(track, mu, k, left, right, q0, qdot0, t_max, max_events):
                                                                      "max_events": int(max_events)}}
 
 
-def _physics(rng, mu_max=0.6):
-    mu = 0.0 if rng.random() < 0.15 else rng.uniform(0.0, mu_max)
+def _physics(rng):
+    mu = 0.0 if rng.random() < MU_ZERO_SHARE else rng.uniform(0.0, MU_MAX)
     u = rng.random()
-    k = 0.0 if u < 0.1 else 1.0 if u < 0.2 else rng.uniform(0.0, 1.0)
+    k = 0.0 if u < K_EXACT_SHARE else 1.0 if u < 2 * K_EXACT_SHARE else rng.uniform(0.0, 1.0)
     return mu, k
 
 
@@ -189,13 +213,13 @@ def _generic(rng, track, note="generic"):
     else:
         left = right = None
     q0 = rng.uniform(left if left is not None else lo, right if right is not None else hi)
-    if rng.random() < 0.05 and left is not None:
+    if rng.random() < ON_LIMITER_SHARE and left is not None:
         q0 = left  # on a limiter
-    speed = 0.0 if rng.random() < 0.15 else rng.uniform(0.0, 2.0) * math.sqrt(_G * track.length)
+    speed = 0.0 if rng.random() < AT_REST_SHARE else rng.uniform(*SPEED_RANGE) * math.sqrt(_G * track.length)
     h = curve_frame(scene_from_dict(_base(track, mu, k, left, right, q0, 1.0, 1.0, 1)))(q0)[0]
     qdot0 = rng.choice((-1.0, 1.0)) * speed / h
     T = _time_scale(track)
-    scene = _base(track, mu, k, left, right, q0, qdot0, rng.uniform(3.0, 10.0) * T, 40)
+    scene = _base(track, mu, k, left, right, q0, qdot0, rng.uniform(*T_MAX_RANGE) * T, GENERIC_EVENTS)
     if rng.random() < UNILATERAL_SHARE:
         scene["physics"]["contact"] = "unilateral"
         note += ", unilateral contact"
@@ -232,7 +256,7 @@ def _bisect_speed(scene, passes, h, v_guess):
     for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if ok(mid) else (mid, hi)
-        if hi - lo <= 1e-15 * hi:
+        if hi - lo <= BISECT_RTOL * hi:
             break
     return hi
 
@@ -256,11 +280,11 @@ def _cone_exit(frame, top, direction, width, mu):
 
 
 def _near_stop(rng, track):
-    ratio = 10.0 ** rng.uniform(-10.0, -4.0)
-    mu = 0.0 if rng.random() < 0.3 else rng.uniform(0.0, 0.3)
+    ratio = 10.0 ** rng.uniform(*RATIO_RANGE)
+    mu = 0.0 if rng.random() < NEAR_STOP_MU_ZERO else rng.uniform(0.0, NEAR_STOP_MU_MAX)
     k = rng.uniform(0.0, 1.0)
     T = _time_scale(track)
-    t_max = (4.0 + 1.5 * math.log(1.0 / ratio)) * T
+    t_max = (NEAR_STOP_T_MAX[0] + NEAR_STOP_T_MAX[1] * math.log(1.0 / ratio)) * T
     lo, hi = track.span
     frame = curve_frame(scene_from_dict(_base(track, mu, k, None, None, 0.5 * (lo + hi), 1.0, 1.0, 1)))
     if track.humps:
@@ -268,9 +292,9 @@ def _near_stop(rng, track):
         exit_ = _cone_exit(frame, top, -side, width, mu)
         if exit_ is None:
             mu, exit_ = 0.0, top
-        q0 = top + side * rng.uniform(0.3, 0.9) * width
-        beyond = top - side * rng.uniform(0.2, 0.6) * width if rng.random() < 0.7 else None
-        behind = q0 + side * rng.uniform(0.1, 0.3) * width if rng.random() < 0.5 else None
+        q0 = top + side * rng.uniform(*CREST_START) * width
+        beyond = top - side * rng.uniform(*BEYOND_RANGE) * width if rng.random() < BEYOND_SHARE else None
+        behind = q0 + side * rng.uniform(*BEHIND_RANGE) * width if rng.random() < BEHIND_SHARE else None
         left, right = (beyond, behind) if side > 0 else (behind, beyond)
         scene = _base(track, mu, k, left, right, q0, -side, t_max, NEAR_STOP_EVENTS)
 
@@ -285,7 +309,7 @@ def _near_stop(rng, track):
         width = hi - lo
         for _ in range(TRIES):
             q0, direction = rng.uniform(lo, hi), float(rng.choice((-1.0, 1.0)))
-            lim = q0 + direction * rng.uniform(0.2, 0.6) * width
+            lim = q0 + direction * rng.uniform(*CLIMB_START) * width
             # Climb towards the limiter: z rises all the way to it (no crest on the way).
             if lo <= lim <= hi and all(direction * frame(q0 + (lim - q0) * j / CLIMB_GRID)[1] > 0
                                        for j in range(CLIMB_GRID + 1)):
@@ -293,7 +317,7 @@ def _near_stop(rng, track):
         else:
             return _generic(rng, track, "generic (no climb to a limiter found)")
         behind = q0 - direction * rng.uniform(0.0, 1.0) * (q0 - lo if direction > 0 else hi - q0)
-        behind = behind if track.bounded or rng.random() < 0.5 else None
+        behind = behind if track.bounded or rng.random() < BEHIND_SHARE else None
         left, right = (behind, lim) if direction > 0 else (lim, behind)
         scene = _base(track, mu, k, left, right, q0, direction, t_max, NEAR_STOP_EVENTS)
 
@@ -313,9 +337,9 @@ def _tan_root(frame, target, a, b):
     """``q`` in ``[a, b]`` where ``|tan alpha| = target`` (``|tan alpha|`` growing on it), to 40 digits."""
     import mpmath
 
-    with mpmath.workdps(40):
+    with mpmath.workdps(EDGE_DIGITS):
         a, b = mpmath.mpf(a), mpmath.mpf(b)
-        for _ in range(140):
+        for _ in range(EDGE_BISECTIONS):
             m = (a + b) / 2
             _, s, c, _ = frame(m)
             a, b = (m, b) if abs(s / c) < target else (a, m)
@@ -328,33 +352,33 @@ def _near_edge(rng, track):
     k = rng.uniform(0.0, 1.0)
     a, b = track.edge
     probe = _base(track, 0.0, k, None, None, a, 0.0, 1.0, 1)
-    frame = curve_frame(scene_from_dict(probe), 40)
-    with mpmath.workdps(40):
+    frame = curve_frame(scene_from_dict(probe), EDGE_DIGITS)
+    with mpmath.workdps(EDGE_DIGITS):
         tan_b = float(abs(frame(mpmath.mpf(b))[1] / frame(mpmath.mpf(b))[2]))
-    mu = rng.uniform(0.1, 0.8) * min(tan_b, 0.75)
-    delta = 10.0 ** rng.uniform(-9.0, -5.0)
+    mu = rng.uniform(*NEAR_EDGE_MU) * min(tan_b, NEAR_EDGE_MU_MAX)
+    delta = 10.0 ** rng.uniform(*DELTA_RANGE)
     q0 = _tan_root(frame, mpmath.mpf(mu) * (1 + mpmath.mpf(delta)), a, b)
     lo, hi = track.span
     left, right = (lo, hi) if track.bounded else (None, None)
     T = _time_scale(track)
-    return _base(track, mu, k, left, right, q0, 0.0, 12.0 * T, 10), \
+    return _base(track, mu, k, left, right, q0, 0.0, NEAR_EDGE_T_MAX * T, NEAR_EDGE_EVENTS), \
         f"near-edge: at rest, |tan alpha| / mu - 1 about {delta:.1e}"
 
 
 def _looping(rng, track):
-    mu = 0.0 if rng.random() < 0.2 else rng.uniform(0.0, 0.25)
+    mu = 0.0 if rng.random() < LOOP_MU_ZERO else rng.uniform(0.0, LOOP_MU_MAX)
     k = rng.uniform(0.0, 1.0)
-    q0 = rng.uniform(-0.5, 0.5)
+    q0 = rng.uniform(-LOOP_START, LOOP_START)
     h = curve_frame(scene_from_dict(_base(track, mu, k, None, None, q0, 1.0, 1.0, 1)))(q0)[0]
-    speed = math.sqrt(_G * track.length * rng.uniform(5.0, 14.0))
+    speed = math.sqrt(_G * track.length * rng.uniform(*LOOP_SPEED2))
     T = _time_scale(track)
-    return _base(track, mu, k, None, None, q0, rng.choice((-1.0, 1.0)) * speed / h, rng.uniform(3.0, 8.0) * T,
-                 40), "looping"
+    return _base(track, mu, k, None, None, q0, rng.choice((-1.0, 1.0)) * speed / h, rng.uniform(*LOOP_T_MAX) * T,
+                 LOOP_EVENTS), "looping"
 
 
 def _scaled(rng, track):
     scene, _ = _generic(rng, track)
-    lam = 10.0 ** rng.uniform(-6.0, 3.0)
+    lam = 10.0 ** rng.uniform(*SCALE_RANGE)
     scene["parameters"] = {k: v * lam for k, v in scene["parameters"].items()}
     qs = lam if track.q_length else 1.0
     scene["limiters"] = {k: v * qs for k, v in scene["limiters"].items()}
