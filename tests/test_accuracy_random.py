@@ -113,6 +113,15 @@ def test_runs_cut_by_t_max_compare_the_events_both_have(incline):
                    scene=scene).verdict == "silent_miss"
 
 
+def test_runs_that_both_reach_t_max_compare_where_they_are(incline):
+    scene = incline.replace(t_max=1.5)
+    ref = ReferenceRun("t_max", tuple(REF[:2]), "", "DOP853", (1.0, 1.0), 1.5, 0.3, -1.0)
+    for dq, verdict in ((0.0, "agree"), (1e-12, "agree"), (1e-6, "silent_miss")):
+        result = _result(scene, REF[:2], "t_max")
+        result.q_final, result.qdot_final = 0.3 + dq, -1.0
+        assert compare(result, ref, scene=scene).verdict == verdict, dq
+
+
 def test_a_failed_reference_decides_nothing(incline):
     run = ReferenceRun("failed", (), "budget", "GBS")
     assert compare(_result(incline, REF), run, scene=incline).verdict == "reference_failed"

@@ -90,8 +90,8 @@ class Reference:
     """The reference of a scene: the run, and what its double-precision pair said of itself.
 
     ``spread`` is the largest time difference of the two DOP853 runs over their common
-    events (``inf`` where their events differ), ``split_at`` the index of their first
-    differing event (None if none).
+    events and their final states at ``t_max`` (``inf`` where their events differ),
+    ``split_at`` the index of their first differing event (None if none).
     """
 
     run: object
@@ -130,6 +130,8 @@ def reference_for(scene_dict: dict) -> Reference:
         spread = max(spread, abs(x[1] - y[1]))
     if a.failed or b.failed:
         spread = math.inf
+    elif a.status == b.status == "t_max" and split_at is None and len(a.events) == len(b.events):
+        spread = max(spread, _final_dt(scene, b.q_final, a))
     run = a
     if not spread <= REF_TOL_FRACTION * time_tolerance(scene):
         run = reference_run(scene, "GBS", max_events=extra, budget=GBS_BUDGET)
@@ -186,6 +188,15 @@ def _zeno_remaining(scene, impact):
     return scene.k * abs(before) * h * (1 / a_up + 1 / math.sqrt(a_up * a_down)) / (1 - ratio)
 
 
+def _final_dt(scene, q, reference) -> float:
+    """The distance from ``q`` to the reference's final position at ``t_max``, as the time the
+    reference takes to cover it: ``ds / max(|v|, sqrt(g ds))`` (from rest, ``ds`` takes ``sqrt(2 ds / a)``)."""
+    h = curve_frame(scene)(reference.q_final)[0]
+    ds = h * abs(q - reference.q_final)
+    speed = h * abs(reference.qdot_final)
+    return 0.0 if ds == 0 else ds / max(speed, math.sqrt(scene.g * ds))
+
+
 def _ambiguous(i, sym, ref, reference, scene, split_at) -> str:
     """Why the first sequence difference (at ``i``) is defensible either way, or ``""``."""
     a = sym[i] if i < len(sym) else None
@@ -233,7 +244,9 @@ def compare(result, reference, *, scene=None, tol: float | None = None, split_at
     are compared, the reference must go on bouncing at that limiter, and the time of
     the rest is compared with the reference's time of the last simulated impact plus the
     series of physics.md ("Events", Zeno accumulation) from the reference's speed there.
-    Simultaneous events (within the tolerance) may come in either order.
+    Simultaneous events (within the tolerance) may come in either order.  Where both stop at
+    ``t_max`` after the same events, the final positions are compared too, as the time the
+    reference takes to go from one to the other.
     """
     scene = result.scene if scene is None else scene
     tol = time_tolerance(scene) if tol is None else tol
@@ -293,16 +306,19 @@ def compare(result, reference, *, scene=None, tol: float | None = None, split_at
             return mismatch(len(body), "the engine stopped first")
     elif result.status.value != reference.status and not {result.status.value, reference.status} & set(_TRUNCATED):
         return mismatch(n, "the statuses differ")
+    elif result.status.value == reference.status == "t_max":
+        # Both stopped at t_max after the same events: their final positions, as a time.
+        dts.append(_final_dt(scene, result.q_final, reference))
     max_dt = max(dts, default=math.nan)
     late = [j for j, dt in enumerate(dts) if not dt <= tol]
     if not late:
         return Verdict("agree", max_dt)
     j = late[0]
-    event = sym[j] if j < len(sym) else None
-    detail = f"event {j} ({event[0] if event else '?'}): |t - t_ref| = {dts[j]:.3g} s > {tol:.3g} s"
+    event = sym[j] if j < len(sym) else ("the state at t_max",)
+    detail = f"event {j} ({event[0]}): |t - t_ref| = {dts[j]:.3g} s > {tol:.3g} s"
     if bad:
         return Verdict("flagged", max_dt, j, f"engine status {result.status.value}; " + detail)
-    if all(sym[m][5] is not None and dts[m] <= sym[m][5] + FLAG_SLACK for m in late):
+    if all(m < len(sym) and sym[m][5] is not None and dts[m] <= sym[m][5] + FLAG_SLACK for m in late):
         return Verdict("flagged", max_dt, j, "within the events' t_err; " + detail)
     return Verdict("silent_miss", max_dt, j, detail)
 
