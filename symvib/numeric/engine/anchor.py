@@ -85,8 +85,9 @@ def root_anchored(qa, Ga, b, Gb, x, s, S, K, cp, R, roots, count):
     bracket by bisection (as :func:`symvib.numeric.engine.roots.root_G`).
 
     Returns ``(root, G there)``: the double where Newton's step or ``G`` itself is below rounding,
-    or the end of the closed bracket where ``G >= 0``, and (about) ``G`` there.  The caller takes the root as on that double (``G = 0``): a turning point displaced by
-    its quantization is a consistent motion, whose time differs from the true one to first order by
+    or the end of the closed bracket where ``G >= 0``, and (about) ``G`` there.  The caller takes
+    the root as on that double (``G = 0``): a turning point displaced by its quantization is a
+    consistent motion, whose time differs from the true one to first order by
     ``T ulp / (2 L)`` (``L`` the distance travelled), and next to the cone edge, where short intervals
     occur, only to second order (the motion about the edge is harmonic: its half period does not
     depend on the amplitude).  ``G`` itself there would miss the time of the last ulp, which next to

@@ -87,7 +87,7 @@ class Region(enum.IntEnum):
     """Entries of the scanned region (a float array, mutated in place): its ends, ``z' +- mu x'``
     at the ends, the part where ``N > 0`` surely (``kappa >= 0`` and ``x' > 0``) and whether that
     part is still open at each end, the tangent's turning rate over the last step at each end, the
-    domain pulled :data:`EDGE_RTOL` inside its ends, and the tangent angle at the ends."""
+    domain pulled :data:`EDGE_RTOL` inside its ends, and ``x'`` at the ends."""
 
     x_lo = 0
     x_hi = 1
@@ -103,15 +103,15 @@ class Region(enum.IntEnum):
     turn_hi = 11
     lo_in = 12
     hi_in = 13
-    alpha_lo = 14
-    alpha_hi = 15
+    dx_lo = 14
+    dx_hi = 15
 
 
 #: Entries of the region array.
 REGION_SIZE = len(Region)
 #: The entries' indices as plain ints (numpy indexes faster with an int than with an IntEnum).
 (X_LO, X_HI, FP_LO, FM_LO, FP_HI, FM_HI, SAFE_LO, SAFE_HI, SAFE_LO_OPEN, SAFE_HI_OPEN, TURN_LO, TURN_HI, LO_IN,
- HI_IN, ALPHA_LO, ALPHA_HI) = (int(r) for r in Region)
+ HI_IN, DX_LO, DX_HI) = (int(r) for r in Region)
 
 
 def crit_f(x, p):
@@ -209,7 +209,7 @@ def map_new(q0, lo, hi, mu, K, cp, step):
     if not safe:
         region[SAFE_LO] = region[SAFE_HI] = q0
     region[TURN_LO] = region[TURN_HI] = 0.0
-    region[ALPHA_LO] = region[ALPHA_HI] = K.alpha(x0, *cp)
+    region[DX_LO] = region[DX_HI] = xp
     region[LO_IN] = lo_in
     region[HI_IN] = hi_in
     roots = np.empty((ROOT_ROWS, ROOTS_CAPACITY))
@@ -257,30 +257,31 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
     """Scan up (``up = 1``) or down (``up = -1``) until target is covered (or the domain ends), in
     steps over which the tangent turns by at most about :data:`CRIT_TURN` (:func:`scan_step`, the
     rate of the step before; a step that turned more than twice that is taken again, shorter).
-    A jump of the kernels' ``alpha`` by more than ``pi`` is its branch cut (:func:`branch_cut`)."""
+
+    The turn of a step is the angle between the tangents ``(x', z')`` at its ends; where the
+    tangent passes through ``-x`` the kernels' ``alpha`` may jump (:func:`branch_cut`)."""
     if up > 0.0:
-        ix, ifp, ifm, isafe, iopen, iturn, iedge, ial = X_HI, FP_HI, FM_HI, SAFE_HI, SAFE_HI_OPEN, TURN_HI, HI_IN, \
-            ALPHA_HI
+        ix, ifp, ifm, isafe, iopen, iturn, iedge, idx = X_HI, FP_HI, FM_HI, SAFE_HI, SAFE_HI_OPEN, TURN_HI, HI_IN, \
+            DX_HI
     else:
-        ix, ifp, ifm, isafe, iopen, iturn, iedge, ial = X_LO, FP_LO, FM_LO, SAFE_LO, SAFE_LO_OPEN, TURN_LO, LO_IN, \
-            ALPHA_LO
-    x_old, edge, al_old = region[ix], region[iedge], region[ial]
+        ix, ifp, ifm, isafe, iopen, iturn, iedge, idx = X_LO, FP_LO, FM_LO, SAFE_LO, SAFE_LO_OPEN, TURN_LO, LO_IN, \
+            DX_LO
+    x_old, edge, xp_old = region[ix], region[iedge], region[idx]
     fp_old, fm_old, turn, safe_open = region[ifp], region[ifm], region[iturn], region[iopen] != 0.0
+    zp_old = 0.5 * (fp_old + fm_old)
     while (target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0:
         h = scan_step(turn, step)
         while True:
             x = x_old + up * h
             if (x - edge) * up > 0.0:
                 x = edge
-            al = K.alpha(x, *cp)
-            turned = abs(al - al_old)
-            jump = turned > math.pi
+            zp, xp = K.dz(x, *cp), K.dx(x, *cp)
+            turned = abs(math.atan2(xp_old * zp - zp_old * xp, xp_old * xp + zp_old * zp))
             dx = abs(x - x_old)
-            turn = 0.0 if jump or not math.isfinite(turned) else turned / dx
-            if jump or turned <= 2.0 * CRIT_TURN or dx <= EDGE_RTOL * max(1.0, abs(x)) or turn == 0.0:
+            turn = turned / dx if math.isfinite(turned) and dx > 0.0 else 0.0
+            if turned <= 2.0 * CRIT_TURN or dx <= EDGE_RTOL * max(1.0, abs(x)) or turn == 0.0:
                 break
             h = CRIT_TURN / turn
-        zp, xp = K.dz(x, *cp), K.dx(x, *cp)
         fp, fm = zp + mu * xp, zp - mu * xp
         if not (fp * fp_old > 0.0 and fm * fm_old > 0.0):
             # Both signs kept (the common case) records nothing: else a closer look.
@@ -288,15 +289,16 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
                 roots = crossing(roots, count, 0, x_old, x, fp_old, fp, mu, K, cp)
             if changes_sign(fm_old, fm):
                 roots = crossing(roots, count, 1, x_old, x, fm_old, fm, mu, K, cp)
-        if jump:
+        if xp < 0.0 and zp * zp_old <= 0.0:
+            # z' changed sign with the tangent along -x: where atan2's angle jumps, if it does.
             roots = branch_cut(roots, count, min(x_old, x), max(x_old, x), K, cp)
         if safe_open:
             if xp > 0.0 and K.kappa(x, *cp) >= 0.0:
                 region[isafe] = x
             else:
                 safe_open = False
-        x_old, fp_old, fm_old, al_old = x, fp, fm, al
-    region[ix], region[ifp], region[ifm], region[iturn], region[ial] = x_old, fp_old, fm_old, turn, al_old
+        x_old, fp_old, fm_old, xp_old, zp_old = x, fp, fm, xp, zp
+    region[ix], region[ifp], region[ifm], region[iturn], region[idx] = x_old, fp_old, fm_old, turn, xp_old
     region[iopen] = 1.0 if safe_open else 0.0
     return roots
 
