@@ -120,6 +120,7 @@ class DenseOutput:
         self._R = rules
         self._engine = None
         self._halves: dict = {}
+        self._tails: dict = {}
         #: Time span where the state is defined (as ``OdeSolution``'s ``t_min``, ``t_max``);
         #: ``t_max`` is infinite for a run that came to rest.
         self.t_min = 0.0
@@ -308,7 +309,16 @@ class DenseOutput:
                 root, delta = False, 0.0
                 r, G, tau = np.zeros(1), np.full(1, Ge), np.zeros(1)
             halves.append(_Half(e, d, s, root, delta, root and len(r) > 1 and r[0] == 0.0, r, G, tau))
+        # A turning point is stopped at on the last double before it, and the interval's time
+        # carries the stretch from there to the root (timing.tail_time): what the panels miss.
+        self._tails[i] = max(float(self._ivs[i, IntervalColumn.T]) - halves[0].tau[-1] - halves[1].tau[-1], 0.0)
         return tuple(halves)
+
+    def _tail(self, i) -> np.ndarray:
+        """Per interval of ``i``: the time between its end anchor and its end (a turning point's last ulp)."""
+        for ii in set(i.tolist()):
+            self._half(ii, END)
+        return np.array([self._tails[ii] for ii in i.tolist()])
 
     def _gather(self, i, side, x, by):
         """Per-query arrays of the panel where each query lies: ``x`` is the time from the
@@ -342,7 +352,7 @@ class DenseOutput:
         first_time = np.array([self._half(ii, START).tau[-1] for ii in intervals.tolist()])[where]
         tau = t - self._t0[i]
         side = np.where(tau <= first_time, START, END)
-        target = np.where(side == START, tau, np.maximum(self._t1[i] - t, 0.0))
+        target = np.where(side == START, tau, np.maximum(self._t1[i] - self._tail(i) - t, 0.0))
         c, root, weighted, empty = self._gather(i, side, target, "tau")
         e, d, s, delta = c["e"], c["d"], c["s"], c["delta"]
         empty |= target <= 0.0
@@ -427,7 +437,7 @@ class DenseOutput:
             sel = np.flatnonzero(empty)
             xs = np.where(root[sel], r1[sel] ** 2 - delta[sel], r1[sel])
             _, h_end[sel], ex_end[sel] = self._node(s[sel], e[sel] + d[sel] * xs)
-        t = np.where(side == START, self._t0[i] + tau, self._t1[i] - tau)
+        t = np.where(side == START, self._t0[i] + tau, self._t1[i] - self._tail(i) - tau)
         sigma = np.where(side == START, d, -d)
         return t, self._qdot(sigma, G, h_end, ex_end)
 

@@ -489,13 +489,14 @@ def rules(nodes: int, rtol: float = RTOL, atol: float = ATOL) -> Rules:
 
     For panels that start on a root: nodes, weights and both integration
     matrices, transposed; for the others: nodes, weights and the matrix of the
-    :func:`plain_nodes` rule; for each rule the rows of :func:`tail_rows`.
+    :func:`plain_nodes` rule; for each rule the rows of :func:`tail_rows`, one after
+    the other in one array (row ``k`` at ``[k n : (k + 1) n]``).
     """
     r, p = rule(nodes), rule(plain_nodes(nodes))
     # Fresh C-contiguous copies: the compiled engine's signature takes writable arrays.
     arrays = (np.array(a, dtype=float, order="C") for a in (
         r.x, r.weights, r.cumulative.T, r.cumulative_weighted.T, p.x, p.weights, p.cumulative.T,
-        tail_rows(r.x, r.weights), tail_rows(p.x, p.weights)))
+        tail_rows(r.x, r.weights).ravel(), tail_rows(p.x, p.weights).ravel()))
     return Rules(*arrays, float(rtol), float(atol))
 
 

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, dF_edge, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, ROOT_RTOL
 
@@ -33,6 +35,8 @@ PANEL_Q = 1.0
 EPS = 2.220446049250313e-16
 #: :func:`root_anchored` stops where ``|G|`` is below this many rounding errors of the anchor's ``G``.
 ROOT_NOISE = 4.0
+#: Doubles :func:`root_anchored` steps back towards the anchor to stand where ``G >= 0``.
+ROOT_STEPS_BACK = 8
 
 
 def crit_near(roots, count, s, x, reach):
@@ -61,11 +65,11 @@ def dF_best(s, base, u, S, K, cp, roots, count):
     return dF
 
 
-def anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count):
+def anchored_G(x, qa, Ga, s, S, K, cp, X, Wt, roots, count):
     """``G(x) = G(qa) - 2 g Integral_qa^x F_s'``: ``G`` from a nearby anchor, by Gauss-Legendre panels
     of at most ``PANEL_Q`` q_scale, free of the cancellation of ``C - 2 g F_s(x)`` where ``G`` is
-    small next to ``F_s`` (physics.md, "Accuracy")."""
-    X, Wt = R.Xp, R.Wp
+    small next to ``F_s`` (physics.md, "Accuracy"); ``X, Wt``: the nodes and weights of a Gauss-Legendre
+    rule (``Rules.Xp, Rules.Wp``)."""
     L = x - qa
     if L == 0.0:
         return Ga
@@ -78,20 +82,18 @@ def anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count):
     return Ga - S.g * step * total
 
 
-def root_anchored(qa, Ga, b, Gb, x, s, S, K, cp, R, roots, count):
+def root_anchored(qa, Ga, b, Gb, x, s, S, K, cp, X, Wt, roots, count):
     """The root of :func:`anchored_G` (anchored at ``qa``, where ``G = Ga > 0``) between ``qa``
     and ``b`` (``G(b) = Gb < 0``): Newton's method on ``G' = -2 g F_s'`` (:func:`dF_best`) from
     ``x`` (the closed form's root: off by its rounding only, so a step or two), kept in the
-    bracket by bisection (as :func:`symvib.numeric.engine.roots.root_G`).
+    bracket by bisection (as :func:`symvib.numeric.engine.roots.root_G`); ``X, Wt`` as for
+    :func:`anchored_G`.
 
-    Returns ``(root, G there)``: the double where Newton's step or ``G`` itself is below rounding,
-    or the end of the closed bracket where ``G >= 0``, and (about) ``G`` there.  The caller takes
-    the root as on that double (``G = 0``): a turning point displaced by its quantization is a
-    consistent motion, whose time differs from the true one to first order by
-    ``T ulp / (2 L)`` (``L`` the distance travelled), and next to the cone edge, where short intervals
-    occur, only to second order (the motion about the edge is harmonic: its half period does not
-    depend on the amplitude).  ``G`` itself there would miss the time of the last ulp, which next to
-    the edge is ``2 sqrt(ulp / |G'|)``: a microsecond at 1e-10 from the edge.
+    Returns ``(root, G there)``: the last double before the root (where ``G >= 0``) and ``G`` there.
+    A double is a coarse place for a root where the motion is short (next to the cone edge, or a
+    bounce of 1e-13 at a limiter): the caller keeps ``G`` there, so that the interval ends on a
+    consistent state, and adds the time of the last stretch to the root,
+    :func:`symvib.numeric.engine.timing.tail_time` (a microsecond at 1e-10 from the edge).
     """
     g2 = 2.0 * S.g
     lo, hi = b, qa  # G(lo) < 0 < G(hi)
@@ -101,21 +103,29 @@ def root_anchored(qa, Ga, b, Gb, x, s, S, K, cp, R, roots, count):
         x = 0.5 * (qa + b)
     f_hi = Ga
     for _ in range(ROOT_MAXITER):
-        fx = anchored_G(x, qa, Ga, s, S, K, cp, R, roots, count)
+        fx = anchored_G(x, qa, Ga, s, S, K, cp, X, Wt, roots, count)
         if fx < 0.0:
             lo = x
         else:
             hi, f_hi = x, fx
         if abs(fx) <= ROOT_NOISE * EPS * Ga:
-            return x, fx  # G is 0 to the rounding of its integral from the anchor
+            break  # G is 0 to the rounding of its integral from the anchor
         dfx = -g2 * dF_best(s, x, 0.0, S, K, cp, roots, count)
         new = x - fx / dfx if dfx != 0.0 else math.nan
         if not (min(lo, hi) < new < max(lo, hi)):
             new = 0.5 * (lo + hi)
         if abs(new - x) <= ROOT_RTOL * abs(x):
-            return new, 0.0  # converged: G vanishes within a rounding error of the step
+            x = new  # converged: the root is within a rounding error of the step
+            fx = anchored_G(x, qa, Ga, s, S, K, cp, X, Wt, roots, count)
+            break
         if abs(hi - lo) <= ROOT_RTOL * abs(x):
+            x, fx = hi, f_hi
             break
         x = new
-    # The bracket has closed: its end where G >= 0.
-    return hi, f_hi
+    # The double on the near side of the root (where G >= 0), and G there: a step back if needed.
+    for _ in range(ROOT_STEPS_BACK):
+        if fx >= 0.0:
+            return x, fx
+        x = np.nextafter(x, qa)
+        fx = anchored_G(x, qa, Ga, s, S, K, cp, X, Wt, roots, count)
+    return x, max(fx, 0.0)

@@ -103,6 +103,9 @@ SWEEP_GRAIN = 16
 #: A thread takes this share of the scenes left per thread at a time (guided scheduling:
 #: large blocks first, small ones at the end, so the threads finish together).
 SWEEP_SHARE = 4
+#: Small engine functions of the hot loops that take arrays, inlined where they are called (numba
+#: counts a reference of every array an ordinary call passes: about a third of a sweep's time).
+HOT_INLINE = ("panel", "cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
 #: numba options of an engine function only compiled code calls: no Python or C wrapper
 #: to build (about 2.5 s of the parabola engine's compile).
 INNER = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
@@ -235,7 +238,7 @@ def _compiled_engine(ncp: int) -> dict:
     k_type = kernels_type(_signatures(ncp))
     cp_type = nt.Tuple([f64] * ncp)
     vec, mat = f64[::1], f64[:, ::1]
-    rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat, mat, mat, f64, f64], Rules)
+    rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat, vec, vec, f64, f64], Rules)
 
     options = {name: {"cache": True} for name in ENTRY_POINTS}
     options["sweep_block"] = {"cache": True, "nogil": True}
@@ -318,7 +321,7 @@ def _specialized_engine(module, ncp: int) -> dict:
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
     options["sweep_bound"] = {"cache": True, "nogil": True}
     options.update({name: {"inline": "always", **INNER}
-                    for name in ("simulate_scene", "sample_scene", "sweep_block", "panel")})
+                    for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE)})
     names = {"params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,

@@ -55,6 +55,7 @@ from symvib.numeric.engine.timing import (
     quad,
     root_time,
     samples,
+    tail_time,
 )
 from symvib.numeric.layout import (
     EVENT_COLUMNS,
@@ -226,19 +227,21 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
             break
         s = sigma * nsign
         Ga = w * math.exp(2.0 * s * mu * K.alpha(q, *cp))
-        end, qb, Gb, roots = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, R)
+        end, qb, Gb, roots = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, R.Xp, R.Wp)
         T, Wi, Te, flag, _, q_ok, G_ok, q_neg = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
                                                      roots, count)
         if flag == QUAD_NEGATIVE:
             # G < 0 inside: a turning point the search stepped over (a narrow dip of G).
-            G_neg = anchored_G(q_neg, q_ok, G_ok, s, S, K, cp, R, roots, count)
+            G_neg = anchored_G(q_neg, q_ok, G_ok, s, S, K, cp, R.Xp, R.Wp, roots, count)
             if G_neg < 0.0 < G_ok:
-                qb = root_anchored(q_ok, G_ok, q_neg, G_neg, math.nan, s, S, K, cp, R, roots, count)[0]
-                Gb, end = 0.0, End.TURN
+                qb, Gb = root_anchored(q_ok, G_ok, q_neg, G_neg, math.nan, s, S, K, cp, R.Xp, R.Wp, roots, count)
+                end = End.TURN
                 T, Wi, Te, flag, _, _, _, _ = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
                                                    roots, count)
             if flag == QUAD_NEGATIVE:
                 flag = QUAD_BUDGET
+        if end == End.TURN and Gb > 0.0:
+            T += tail_time(qb, Gb, s, S, K, cp, roots, count)  # to the root, past the double it stops on
         if flag == QUAD_BUDGET or not Te <= TOLERANCE_FACTOR * (R.rtol * (t + T) + R.atol):
             # The interval's time could not be brought within its tolerance: stop at its start.
             status = StatusCode.TOLERANCE_NOT_MET

@@ -386,7 +386,7 @@ def dip_below(pn, a, b):
             fd = normal_on(d, pn)
     return math.nan, 0.0
 
-def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, R):
+def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, Xa, Wa):
     """Walk from ``q`` towards ``bound`` over the pieces on which ``G`` is monotone: the first
     root of ``G`` (a turning point), else ``bound`` (of ``kind``).  Returns ``(qe, Ge, kind, roots)``.
 
@@ -416,15 +416,15 @@ def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, R):
         if b == a:
             b = bound  # the domain ends here: nothing left to scan
         if anchored:
-            Gb = anchored_G(b, a, Gq, s, S, K, cp, R, roots, count)
+            Gb = anchored_G(b, a, Gq, s, S, K, cp, Xa, Wa, roots, count)
         else:
             Fb = Fs(s, b, mu, K, cp)
             Gb = C - g2 * Fb
             if (Gb <= 0.0 or b == bound) and NOISE_ROUNDS * EPS * (abs(C) + g2 * abs(Fb)) > CANCEL_RTOL * max(Gq, Gb):
                 anchored = True
                 if a != q:
-                    Gq = anchored_G(a, q, Ga, s, S, K, cp, R, roots, count)
-                Gb = anchored_G(b, a, Gq, s, S, K, cp, R, roots, count)
+                    Gq = anchored_G(a, q, Ga, s, S, K, cp, Xa, Wa, roots, count)
+                Gb = anchored_G(b, a, Gq, s, S, K, cp, Xa, Wa, roots, count)
         if math.isnan(Gb):
             Gb = -math.inf
         if Gb <= 0.0:
@@ -438,24 +438,24 @@ def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, R):
             Fa = C - g2 * Fs(s, a, mu, K, cp)
             Fb = C - g2 * Fs(s, b, mu, K, cp)
             x = root_G(s, C, a, b, Fa, Fb, g2, mu, K, cp) if Fa > 0.0 >= Fb else math.nan
-            return root_anchored(a, Gq, b, Gb, x, s, S, K, cp, R, roots, count)[0], 0.0, End.TURN, roots
+            qe, Ge = root_anchored(a, Gq, b, Gb, x, s, S, K, cp, Xa, Wa, roots, count)
+            return qe, Ge, End.TURN, roots
         if b == bound:
             return bound, Gb, kind, roots
         a, Gq = b, Gb
 
-def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, R):
+def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, Xa, Wa):
     """The end of the motion interval that starts at ``q`` moving ``sigma`` on branch ``s``
     with ``G(q) = Ga``, for the scene constants ``S`` (:class:`~symvib.numeric.engine.state.Setup`).
 
     Returns ``(end, qe, Ge, roots)``: how it ends (:class:`End`), where, ``G`` there,
-    and the (possibly grown) array of critical points.  ``R`` are the rules
-    (:class:`~symvib.numeric.engine.state.Rules`): the normal force is scanned at the
-    nodes ``R.Xw`` where it may change sign, and ``G`` carried from the start with ``R.Xp``
-    where the closed form cancels (:data:`CANCEL_RTOL`).
+    and the (possibly grown) array of critical points.  The normal force is scanned at
+    the nodes ``X`` (``Rules.Xw``) where it may change sign, and ``G`` carried from the start
+    with the rule ``Xa, Wa`` (``Rules.Xp, Rules.Wp``) where the closed form cancels
+    (:data:`CANCEL_RTOL`).
     """
     g, mu, left, right, lo, hi, scale = S.g, S.mu, S.left, S.right, S.lo, S.hi, S.scale
     has_left, has_right = S.has_left, S.has_right
-    X = R.Xw
     g2 = 2.0 * g
     C = Ga + g2 * Fs(s, q, mu, K, cp)
     if sigma > 0 and has_right:
@@ -469,7 +469,7 @@ def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, R):
             bound, kind = edge, End.EDGE
         else:
             bound, kind = window, End.PASS
-    qe, Ge, kind_out, roots = walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, R)
+    qe, Ge, kind_out, roots = walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, Xa, Wa)
     # An earlier zero of N on [q, qe] ends the interval there instead.
     safe_lo = region[SAFE_LO]
     safe_hi = region[SAFE_HI]

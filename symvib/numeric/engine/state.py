@@ -100,8 +100,8 @@ class Rules(NamedTuple):
     ``Xw, Ww, Sw, SWw``: nodes, weights and the transposed cumulative and weighted
     cumulative matrices of the rule for panels that start on a root; ``Xp, Wp, Sp``:
     nodes, weights and transposed cumulative matrix of the rule for every other panel;
-    ``Tw, Tp``: the rows that give the four highest Legendre coefficients of an integrand
-    from its values at the nodes of each rule (the error estimate of a panel,
+    ``Tw, Tp``: the four rows (one after the other in one array) that give the four highest
+    Legendre coefficients of an integrand from its values at the nodes of each rule (the error estimate of a panel,
     :func:`symvib.numeric.engine.timing.tail_error`); ``rtol, atol``: the tolerance a
     motion interval's time aims at (relative to its duration; seconds).
     """

@@ -45,9 +45,9 @@ from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_u
 from symvib.numeric.engine.scan import ROOT_ROWS, scratch
 from symvib.numeric.layout import IntervalColumn
 
-__all__ = ["quad", "panel", "zero_ratio", "PanelColumn", "PANEL_COLUMNS", "NONE", "SAMPLES", "PANELS", "tail_error",
-           "cumulate", "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO", "WORK_ROWS",
-           "MAX_PANELS", "SampleColumn", "QUAD_OK", "QUAD_BUDGET", "QUAD_NEGATIVE"]
+__all__ = ["quad", "panel", "zero_ratio", "tail_time", "PanelColumn", "PANEL_COLUMNS", "NONE", "SAMPLES", "PANELS",
+           "tail_error", "cumulate", "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO",
+           "WORK_ROWS", "MAX_PANELS", "SampleColumn", "QUAD_OK", "QUAD_BUDGET", "QUAD_NEGATIVE"]
 
 #: A half-interval uses the root substitution when its anchor's (virtual) root is
 #: closer than ROOT_RATIO times the half's length.
@@ -78,8 +78,6 @@ ERROR_SAFETY = 2.0
 GEOM_SLACK = 1.25
 #: A node's G more negative than this many times its uncertainty is a root the search missed.
 NEGATIVE_MARGIN = 8.0
-#: Ulps of q within which a turning point sits on its double (the root finders' tolerance, doubled).
-ROOT_ULPS = 16.0
 #: What :func:`quad` writes to its ``out``: nothing, the samples at the nodes, or the panels it took.
 NONE, SAMPLES, PANELS = 0, 1, 2
 
@@ -200,15 +198,21 @@ def zero_ratio(x, G, G1, G2, c, hw):
     return 0.0
 
 
-def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out, o, roots, count):
+def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, rule, rows, mode, out, o, roots, count):
     """One panel ``[r1, r2]`` of a half-interval anchored at ``e`` (entered in direction ``d``),
     with ``G = Gstart`` at ``r1``: its nodes, ``G`` rebuilt at them, the integrals and their errors.
 
     ``r`` is the quadrature variable (``xi = r^2 - delta`` next to a root, ``xi = r``
-    otherwise; ``q = e + d xi``); a panel that starts on the root itself takes the
-    weighted rule.  In mode :data:`SAMPLES` the nodes' ``q, w, N`` go to ``out[o:]`` and the
-    time, path and friction-work integrands to the scratch rows 7-9.  Where ``F_s'`` at a node is
-    small next to its terms and a critical point of ``roots`` is near, it is taken from there
+    otherwise; ``q = e + d xi``); ``rule`` holds the nodes, weights, cumulative matrix and
+    flattened tail rows of the Gauss-Legendre rule (a panel that starts on the root itself
+    takes the weighted one), ``rows`` the scratch rows: per node the integrand of ``G``'s
+    cumulative integral, ``q``, ``h dq/dr``, ``exp(s mu alpha)``, ``kappa``, ``cos alpha``,
+    ``G``'s cumulative integral, and with samples the integrands of time, path and work.
+    :func:`quad` builds both tuples once per interval (the compiled engine counts a reference
+    of every array view it builds, a third of a sweep's time when that happened per panel).
+    In mode :data:`SAMPLES` the nodes' ``q, w, N`` go to ``out[o:]`` and the time, path and
+    friction-work integrands to the last three rows.  Where ``F_s'`` at a node is small next
+    to its terms and a critical point of ``roots`` is near, it is taken from there
     (:func:`~symvib.numeric.engine.laws.dF_edge`).
 
     Returns ``(dG, T, W, P, err_T, err_G, sens, round_G, G_min, q_min)``: the increment of
@@ -222,22 +226,15 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out
     g, mu = S.g, S.mu
     hw = 0.5 * (r2 - r1)
     weighted = root and r1 == 0.0
-    if weighted:
-        X, Wt, St2, Tl = R.Xw, R.Ww, R.SWw, R.Tw
-    else:
-        X, Wt, St2, Tl = R.Xp, R.Wp, R.Sp, R.Tp
-    n = len(X)
-    T0, T1, T2, T3 = Tl[0], Tl[1], Tl[2], Tl[3]
-    # Per node: the integrand of G's cumulative integral, q, h dq/dr, exp(s mu alpha), kappa,
-    # cos alpha, G's cumulative integral; with samples, the integrands of time, path and work.
-    cum, qn, hd, exn, kn, cn, acc = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
-    ft, fp, fw = work[7], work[8], work[9]
+    Xr, Wr, Sr, Tr = rule
+    cum, qn, hd, exn, kn, cn, acc, ft, fp, fw = rows
+    n = len(Xr)
     total = 0.0
     size = 0.0
     terms = 0.0
     a1, a2, a3, a4 = 0.0, 0.0, 0.0, 0.0
     for j in range(n):
-        r = r1 + hw * (X[j] + 1.0)
+        r = r1 + hw * (Xr[j] + 1.0)
         if root:
             xi = r * r - delta
             dq = 2.0 * r
@@ -258,14 +255,14 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out
                 noise = 8.0 * abs(dF)
         gj = gd * dF
         dG = gj * dq
-        wj = Wt[j]
+        wj = Wr[j]
         total += wj * dG
         size += wj * abs(dG)
         terms += wj * noise * dq
-        a1 += T0[j] * dG
-        a2 += T1[j] * dG
-        a3 += T2[j] * dG
-        a4 += T3[j] * dG
+        a1 += Tr[0 * n + j] * dG
+        a2 += Tr[1 * n + j] * dG
+        a3 += Tr[2 * n + j] * dG
+        a4 += Tr[3 * n + j] * dG
         # The integrand of G's cumulative integral: gamma with the weight r next to a root.
         cum[j] = gj if weighted else dG
         hd[j] = hh * dq
@@ -277,7 +274,7 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out
     err_G = hw * tail_error(a1, a2, a3, a4, n, False, -1.0, ROUND_TAIL * EPS * (size + 2.0 * g * terms))
     round_G = EPS * hw * (4.0 * size + 2.0 * g * terms)
     # G at the nodes: the anchor plus the cumulative integral of dG/dr.
-    acc = cumulate(St2, cum, n, acc)
+    acc = cumulate(Sr, cum, n, acc)
     scale_acc = 2.0 * hw * hw if weighted else hw
     T = 0.0
     W = 0.0
@@ -301,14 +298,14 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out
         f = hdj * ex * inv
         w = G / (ex * ex)
         N = kn[j] * w + g * cn[j]
-        wj = Wt[j]
+        wj = Wr[j]
         T += wj * f
         W += wj * mu * abs(N) * hdj
         sens += wj * f * inv * inv
-        b1 += T0[j] * f
-        b2 += T1[j] * f
-        b3 += T2[j] * f
-        b4 += T3[j] * f
+        b1 += Tr[0 * n + j] * f
+        b2 += Tr[1 * n + j] * f
+        b3 += Tr[2 * n + j] * f
+        b4 += Tr[3 * n + j] * f
         if mode == SAMPLES:
             ft[j] = f
             fp[j] = hdj
@@ -322,9 +319,9 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out
         # G's local model at its smallest node: value, slope and curvature in r (from the slopes
         # at the neighbouring nodes), for the zero that bounds the time integrand's analyticity.
         j0, j1 = max(j_min - 1, 0), min(j_min + 1, n - 1)
-        x0, x1 = r1 + hw * (X[j0] + 1.0), r1 + hw * (X[j1] + 1.0)
+        x0, x1 = r1 + hw * (Xr[j0] + 1.0), r1 + hw * (Xr[j1] + 1.0)
         curv = (cum[j1] - cum[j0]) / (x1 - x0) if x1 > x0 else 0.0
-        r_geom = zero_ratio(r1 + hw * (X[j_min] + 1.0), G_min, cum[j_min], curv, r1 + hw, hw)
+        r_geom = zero_ratio(r1 + hw * (Xr[j_min] + 1.0), G_min, cum[j_min], curv, r1 + hw, hw)
     err_T = hw * tail_error(b1, b2, b3, b4, n, weighted, r_geom, ROUND_TAIL * EPS * T)
     return total, hw * T, hw * W, hw * P, err_T, err_G, 0.5 * hw * sens, round_G, G_min, q_min
 
@@ -353,6 +350,9 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
     half = 0.5 * L
     maxq = PANEL_Q * scale
     ft, fp, fw, acc = work[7], work[8], work[9], work[6]
+    rows = (work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7], work[8], work[9])
+    rule_w = (R.Xw, R.Ww, R.SWw, R.Tw)
+    rule_p = (R.Xp, R.Wp, R.Sp, R.Tp)
     T = 0.0
     Wf = 0.0
     P = 0.0
@@ -402,15 +402,16 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                 r2 = r1 + width
                 if r2 >= seg_b or seg_b - r2 < 0.25 * width:
                     r2 = seg_b
-                dG, Tp, Wp, Pp, eT, eG, sens, rG, G_min, q_min = panel(
-                    r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R, work, mode, out, o, roots, count)
+                dG, Tq, Wq, Pq, eT, eG, sens, rG, G_min, q_min = panel(
+                    r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, rule_w if root and r1 == 0.0 else rule_p,
+                    rows, mode, out, o, roots, count)
                 tries += 1
                 share = atol * (r2 - r1) / (r_hi - r_lo) if r_hi > r_lo else atol
-                tol = rtol * Tp + share
+                tol = rtol * Tq + share
                 if root and r1 == 0.0:
                     # From the root itself G is rebuilt as a multiple of the increment, so its errors
                     # are relative: the time's is half of theirs (dT/T = -dG/(2G)).
-                    rel = 0.5 * Tp / abs(dG) if dG != 0.0 else 0.0
+                    rel = 0.5 * Tq / abs(dG) if dG != 0.0 else 0.0
                     fixable = eT + rel * eG
                     spread = rel * (eG + rG)
                 else:
@@ -437,7 +438,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                 sens_half += sens
                 if mode == PANELS:
                     out[o, 0], out[o, 1], out[o, 2], out[o, 3], out[o, 4] = kh, r1, r2, Gstart, Gstart + dG
-                    out[o, 5], out[o, 6], out[o, 7], out[o, 8] = tau0, tau0 + Tp, 1.0 if root else 0.0, delta
+                    out[o, 5], out[o, 6], out[o, 7], out[o, 8] = tau0, tau0 + Tq, 1.0 if root else 0.0, delta
                     o += 1
                 elif mode == SAMPLES:
                     # Time, path and friction work at every node: the same cumulative
@@ -456,12 +457,12 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                     for j in range(n):
                         out[o + j, 5] = work0 + hw * acc[j]
                     o += n
-                tau0 += Tp
-                path0 += Pp
-                work0 += Wp
-                T += Tp
-                Wf += Wp
-                P += Pp
+                tau0 += Tq
+                path0 += Pq
+                work0 += Wq
+                T += Tq
+                Wf += Wq
+                P += Pq
                 Gstart += dG
                 width = min(2.0 * (r2 - r1), step)
                 r1 = r2
@@ -478,9 +479,6 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
             # sqrt of G at the midpoint); elsewhere it is an offset of G over the half.
             miss = abs(Gstart - G_mid_a)
             if root:
-                # Less what placing a turning point on a double explains (anchor.root_anchored: a
-                # consistent motion, second order next to the cone edge where it is not negligible).
-                miss = max(0.0, miss - ROOT_ULPS * EPS * abs(qb) * abs(gamma))
                 G_mid = max(Gstart, G_mid_a)
                 err += 0.5 * (T - T_a) * miss / G_mid if G_mid > 0.0 else 0.0
             else:
@@ -492,6 +490,20 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
             out[j, 4] = P - out[j, 4]
             out[j, 5] = Wf - out[j, 5]
     return T, Wf, err, flag, o, q_ok, G_ok, q_neg
+
+
+def tail_time(q, G, s, S, K, cp, roots, count):
+    """The time from ``q``, where ``G > 0`` is tiny, to the turning point just beyond it: ``2 h exp(s mu
+    alpha) sqrt(G) / |G'|`` (``G`` linear over that stretch; ``G' = -2 g F_s'``).
+
+    A turning point is stopped at on the last double before it
+    (:func:`~symvib.numeric.engine.anchor.root_anchored`); where the motion is short (next to the
+    cone edge, a bounce of 1e-13 at a limiter) the time over that last fraction of an ulp,
+    ``2 sqrt(delta / |G'|)`` per unit of ``h exp(s mu alpha)``, is not negligible.
+    """
+    _, hh, ex, _, _ = node(s, q, S.mu, K, cp)
+    slope = 2.0 * S.g * abs(dF_best(s, q, 0.0, S, K, cp, roots, count))
+    return 2.0 * hh * ex * sqrt(G) / slope if slope > 0.0 else 0.0
 
 
 def time_excess(x, p):
