@@ -72,3 +72,47 @@ def test_bad_graph():
         cv.graph("x^2")
     with pytest.raises(ValueError, match="hint h"):
         cv.graph("x**2", domain=("-1", "1"), h="x")
+
+
+Q = sp.Symbol("q", real=True)
+A = sp.Symbol("a", real=True)
+
+
+@pytest.mark.parametrize("expr, want", [
+    (sp.Piecewise((4 * sp.sin(Q), sp.Eq(sp.cos(Q), 0)), (3 * sp.sin(Q), True)), 3 * sp.sin(Q)),
+    (sp.Piecewise((Q, sp.Ne(Q, 0)), (1, True)), Q),
+    (sp.Piecewise((1, sp.Eq(Q, 0) & (Q > 1)), (Q, True)), Q),
+    (sp.Piecewise((1, sp.Eq(Q, 0) | sp.Eq(A, 0)), (Q, True)), Q),
+    (sp.Piecewise((sp.exp(A * Q) / A, sp.Ne(A, 0)), (Q, True)), sp.exp(A * Q) / A),
+    (sp.Piecewise((2 * Q, sp.Eq(sp.sin(Q)**2 + sp.cos(Q)**2 - 1, 0, evaluate=False)), (Q, True)), 2 * Q),
+    (sp.cos(Q) + sp.Piecewise((0, sp.Eq(Q, 0)), (Q, True)) ** 2, sp.cos(Q) + Q**2),
+    (2 * sp.DiracDelta(Q) + Q, Q),
+    (sp.diff(sp.Abs(Q) ** 3, Q, 2), 6 * sp.Abs(Q)),
+])
+def test_generic_branch_drops_branches_on_sets_of_measure_zero(expr, want):
+    got = cv.generic_branch(expr)
+    assert not got.has(sp.Piecewise, sp.DiracDelta)
+    for q in (-1.3, -0.2, 0.7, 2.1):
+        values = {Q: q, A: 0.8}
+        assert float(got.subs(values)) == pytest.approx(float(want.subs(values)), rel=1e-14)
+
+
+@pytest.mark.parametrize("expr", [
+    sp.Piecewise((Q, Q > 0), (0, True)),
+    sp.Piecewise((1, sp.Eq(Q, 0)), (Q, Q < 1), (2, True)),
+    sp.Piecewise((1, sp.Eq(Q, 0) | (Q > 1)), (Q, True)),
+])
+def test_generic_branch_refuses_inequalities_naming_the_field(expr):
+    with pytest.raises(cv.CurveError, match=r"^kernel dh: .*Piecewise .*hint \(curve.h / curve.alpha\)"):
+        cv.generic_branch(expr, "kernel dh")
+
+
+def test_generic_branch_refuses_a_piecewise_defined_on_a_null_set_only():
+    with pytest.raises(cv.CurveError, match="measure zero"):
+        cv.generic_branch(sp.Piecewise((1, sp.Eq(Q, 0)), (2, sp.Eq(Q, 1))))
+
+
+def test_the_paper_parabola_in_expressions_has_a_geometry_without_piecewise():
+    c = cv.parametric("tan(phi)", "tan(phi)**2/2", q="phi")
+    for e in (c.hp, c.alphap, c.kappa):
+        assert not e.has(sp.Piecewise, sp.DiracDelta)

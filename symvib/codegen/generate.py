@@ -3,10 +3,16 @@
 :func:`module_text` turns a :class:`~symvib.symbolic.derive.Derivation` into the source
 of a Python module that needs only NumPy (and :mod:`math` for the scalar
 path): one function per kernel and per branch, common subexpressions
-eliminated (:func:`sympy.cse`), no ``Piecewise``, no ``select``, no
-``sign()``.  Functions broadcast over NumPy arrays of ``q``, the state and the
-parameters; every kernel also has a ``*_scalar`` twin built on :mod:`math`,
-which is several times faster for one float (root finding in the driver).
+eliminated (:func:`sympy.cse`), and no conditional: every ``Piecewise`` is
+replaced by its generic branch before cse
+(:func:`~symvib.symbolic.curve.generic_branch`: the branches SymPy adds on
+equalities such as ``Eq(cos(phi), 0)`` hold on a set of measure zero, a singular
+point or a removable value), ``sign(f)`` prints as ``math.copysign(1.0, f)`` /
+``numpy.sign(f)`` and ``Abs`` as ``abs`` / ``numpy.abs``; a condition that is an
+inequality is a :class:`~symvib.symbolic.curve.CurveError`.  Functions
+broadcast over NumPy arrays of ``q``, the state and the parameters; every
+kernel also has a ``*_scalar`` twin built on :mod:`math`, which is several
+times faster for one float (root finding in the driver).
 
 Kernels (argument order in each docstring and in ``SIGNATURES``); ``cp`` are
 the curve parameters in declaration order, ``_p``/``_m`` the branches
@@ -57,7 +63,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from symvib import provenance
 from symvib.codegen import gauss
 from symvib.numeric.kernels import DIGEST_PREFIX, verify_text
-from symvib.symbolic.curve import CurveError
+from symvib.symbolic.curve import CurveError, generic_branch
 from symvib.symbolic.derive import Derivation, derive
 from symvib.symbolic.symbols import C, g, mu
 
@@ -124,7 +130,23 @@ class _BigNumbers:
         return _float_literal(expr)
 
 
-class _NumPy(_BigNumbers, NumPyPrinter):
+class _NoConditionals:
+    """Printing that never writes a conditional: a kernel module holds no ``if`` and no comparison.
+
+    Every ``Piecewise`` is decided before printing (:func:`~symvib.symbolic.curve.generic_branch`);
+    what reaches a printer as a condition is a generator error, raised here with its name
+    rather than written as ``(a) if (c) else (b)`` for the whitelist to refuse later.
+    """
+
+    def _refuse(self, expr):
+        raise CurveError(f"{type(expr).__name__} {sp.sstr(expr)[:60]} would print as a conditional, which a "
+                         "kernel may not hold")
+
+    _print_Piecewise = _print_Relational = _print_ITE = _print_KroneckerDelta = _print_Heaviside = _refuse
+    _print_BooleanTrue = _print_BooleanFalse = _print_And = _print_Or = _print_Not = _refuse
+
+
+class _NumPy(_NoConditionals, _BigNumbers, NumPyPrinter):
     suffix = ""
 
     def __init__(self):
@@ -134,14 +156,29 @@ class _NumPy(_BigNumbers, NumPyPrinter):
         # The only undefined functions in a kernel are calls of F_p / F_m.
         return f"{expr.func.__name__}{self.suffix}(" + ", ".join(self.doprint(a) for a in expr.args) + ")"
 
+    def _print_Abs(self, expr):
+        return f"numpy.abs({self.doprint(expr.args[0])})"
 
-class _Math(_BigNumbers, PythonCodePrinter):
+    def _print_sign(self, expr):
+        return f"numpy.sign({self.doprint(expr.args[0])})"
+
+
+class _Math(_NoConditionals, _BigNumbers, PythonCodePrinter):
     suffix = "_scalar"
 
     def __init__(self):
         super().__init__({"fully_qualified_modules": True, "allow_unknown_functions": False})
 
     _print_AppliedUndef = _NumPy._print_AppliedUndef
+
+    def _print_Abs(self, expr):
+        return f"abs({self.doprint(expr.args[0])})"
+
+    def _print_sign(self, expr):
+        # sign(0) = 0 where copysign gives +-1: they differ on a set of measure zero only, where
+        # the kernel's value is its generic one (generic_branch); SymPy's own printer writes
+        # a conditional here.
+        return f"math.copysign(1.0, {self.doprint(expr.args[0])})"
 
 
 def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
@@ -159,14 +196,21 @@ def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
                                    order="canonical")
     pre_reduced, reduced = reduced[:len(pre)], reduced[len(pre):]
     lines = [f"def {name}({', '.join(args)}):", f'    """{doc}"""']
+
+    def text(e):
+        try:
+            return printer.doprint(e)
+        except CurveError as err:
+            raise CurveError(f"kernel {name}: {err}") from None
+
     for sym, sub in replacements:
-        lines.append(f"    {sym} = {printer.doprint(sub)}")
+        lines.append(f"    {sym} = {text(sub)}")
     for (sym, _), red in zip(pre, pre_reduced):
-        lines.append(f"    {sym} = {printer.doprint(red)}")
+        lines.append(f"    {sym} = {text(red)}")
     bodies = []
     placeholders = {str(sym) for sym, _ in pre}
     for part, red in zip(exprs, reduced):
-        body = printer.doprint(red)
+        body = text(red)
         used = {str(s) for s in part.free_symbols} | _called_args(part)
         for sym, value in pre:
             if str(sym) in used:
@@ -196,6 +240,15 @@ def _may_be_int(expr) -> bool:
     (True, True, False)
     """
     return not expr.free_symbols or expr.has(*_INT_VALUED)
+
+
+def _generic(expr, field: str):
+    """A kernel's expression (or its ``(placeholders, Tuple)`` form) with every ``Piecewise``
+    decided once, before cse (:func:`~symvib.symbolic.curve.generic_branch`)."""
+    if isinstance(expr, tuple):
+        pre, body = expr
+        return {k: generic_branch(v, field) for k, v in pre.items()}, generic_branch(body, field)
+    return generic_branch(expr, field)
 
 
 def _called_args(expr) -> set:
@@ -284,7 +337,7 @@ def _antiderivative(f, q, q_ref, args, width):
     q_ref = numpy.asarray(q_ref, dtype=float)
     length = q - q_ref
     width = numpy.asarray(width, dtype=float)
-    panels = int(max(1, numpy.ceil(numpy.max(numpy.abs(length) / width)))) if length.size else 1
+    panels = int(max(1.0, numpy.ceil(numpy.max(numpy.abs(length) / width, initial=0.0))))
     edges = numpy.arange(panels)[..., None] / panels
     t = (edges + (_GL_XA + 1.0) / (2.0 * panels))
     shape = numpy.broadcast(q, *[numpy.asarray(a) for a in args]).shape
@@ -326,6 +379,7 @@ def module_text(d: Derivation, source: dict) -> str:
     parts = []
     signatures = {}
     for name, args, expr, doc in kernels:
+        expr = _generic(expr, f"curve '{c.name}': kernel {name}")
         if not isinstance(expr, tuple):
             expr = expr.xreplace(F_sub)
         signatures[name] = args
