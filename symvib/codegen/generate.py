@@ -8,7 +8,9 @@ replaced by its generic branch before cse
 (:func:`~symvib.symbolic.curve.generic_branch`: the branches SymPy adds on
 equalities such as ``Eq(cos(phi), 0)`` hold on a set of measure zero, a singular
 point or a removable value), ``sign(f)`` prints as ``math.copysign(1.0, f)`` /
-``numpy.sign(f)`` and ``Abs`` as ``abs`` / ``numpy.abs``; a condition that is an
+``numpy.copysign(1.0, f)`` and ``Abs`` as ``abs`` / ``numpy.abs`` (a power of ``Abs(u)``
+in a denominator as one of ``u sign(u)``, so that a removable value such as ``q**2 /
+|q|`` at 0 is finite: :func:`~symvib.symbolic.curve.removable_form`); a condition that is an
 inequality is a :class:`~symvib.symbolic.curve.CurveError`.  Functions
 broadcast over NumPy arrays of ``q``, the state and the parameters; every
 kernel also has a ``*_scalar`` twin built on :mod:`math`, which is several
@@ -28,6 +30,11 @@ the curve parameters in declaration order, ``_p``/``_m`` the branches
 ``F_N P_mu Ek Ep E``          energy analysis (physics.md), state form ``(q, qdot, ...)``
 ``domain q_scale``            the regular interval of ``q`` and its scale, ``(*cp)``
 ============================  =========================================================
+
+The constant ``ALPHA_CUT`` (:attr:`~symvib.symbolic.curve.Curve.alpha_cut`) is ``True``
+when the kernel ``alpha`` is ``atan2(z', x')``, no continuous closed form having been
+found: it jumps by ``2 pi`` where ``x' < 0`` and ``z'`` changes sign, so the engine
+must not integrate across such a point as if ``alpha`` were continuous.
 
 On the numeric route ``F_s`` is a composite Gauss-Legendre quadrature of
 ``dF_s`` from ``Q_REF``, with panels no wider than ``PANEL * q_scale``.
@@ -63,7 +70,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from symvib import provenance
 from symvib.codegen import gauss
 from symvib.numeric.kernels import DIGEST_PREFIX, verify_text
-from symvib.symbolic.curve import CurveError, generic_branch
+from symvib.symbolic.curve import CurveError, generic_branch, removable_form
 from symvib.symbolic.derive import Derivation, derive
 from symvib.symbolic.symbols import C, g, mu
 
@@ -81,7 +88,7 @@ KERNEL_FUNCTIONS = frozenset({
                               for b in ("p", "m"))})
 #: Constants every kernel module defines.
 KERNEL_CONSTANTS = frozenset({"NAME", "COORDINATE", "PARAMS", "F_ROUTES", "Q_REF", "PANEL", "INPUT_HASH",
-                              "SYMPY_VERSION", "GENERATOR_VERSION", "SOURCE", "SIGNATURES"})
+                              "SYMPY_VERSION", "GENERATOR_VERSION", "SOURCE", "SIGNATURES", "ALPHA_CUT"})
 #: Names a curve parameter may not have in a kernel module: its arguments, modules and
 #: module-level names (a parameter is a Python argument of every kernel, so it would shadow them).
 KERNEL_RESERVED = frozenset({"q", "qdot", "w", "numpy", "math"} | KERNEL_FUNCTIONS
@@ -160,7 +167,9 @@ class _NumPy(_NoConditionals, _BigNumbers, NumPyPrinter):
         return f"numpy.abs({self.doprint(expr.args[0])})"
 
     def _print_sign(self, expr):
-        return f"numpy.sign({self.doprint(expr.args[0])})"
+        # copysign as in the scalar twin (_Math), not numpy.sign: sign(0) = 0 would make
+        # q / sign(q) (removable_form) infinite at 0, and the twins differ there.
+        return f"numpy.copysign(1.0, {self.doprint(expr.args[0])})"
 
 
 class _Math(_NoConditionals, _BigNumbers, PythonCodePrinter):
@@ -176,8 +185,8 @@ class _Math(_NoConditionals, _BigNumbers, PythonCodePrinter):
 
     def _print_sign(self, expr):
         # sign(0) = 0 where copysign gives +-1: they differ on a set of measure zero only, where
-        # the kernel's value is its generic one (generic_branch); SymPy's own printer writes
-        # a conditional here.
+        # the kernel's value is its generic one (generic_branch), finite (removable_form);
+        # SymPy's own printer writes a conditional here.
         return f"math.copysign(1.0, {self.doprint(expr.args[0])})"
 
 
@@ -247,8 +256,8 @@ def _generic(expr, field: str):
     decided once, before cse (:func:`~symvib.symbolic.curve.generic_branch`)."""
     if isinstance(expr, tuple):
         pre, body = expr
-        return {k: generic_branch(v, field) for k, v in pre.items()}, generic_branch(body, field)
-    return generic_branch(expr, field)
+        return {k: _generic(v, field) for k, v in pre.items()}, _generic(body, field)
+    return removable_form(generic_branch(expr, field))
 
 
 def _called_args(expr) -> set:
@@ -428,6 +437,7 @@ def module_text(d: Derivation, source: dict) -> str:
         f"F_ROUTES = {{1: {routes[1]!r}, -1: {routes[-1]!r}}}",
         f"Q_REF = {float(d.branches[1].F.q_ref.subs({p: 1 for p in c.params})) if needs_quad else 0.0!r}",
         f"PANEL = {PANEL!r}",
+        f"ALPHA_CUT = {bool(c.alpha_cut)!r}",
         f"INPUT_HASH = {provenance.input_hash(source)!r}",
         f"SYMPY_VERSION = {sp.__version__!r}",
         f"GENERATOR_VERSION = {provenance.GENERATOR_VERSION!r}",
@@ -518,6 +528,8 @@ def _header(d: Derivation, source: dict, routes: dict) -> str:
         f"Curve ({c.kind}): x = {c.x}, z = {c.z}, coordinate {c.q} (passed as q),",
         f"parameters {', '.join(p.name for p in c.params) or 'none'}, domain ({c.domain[0]}, {c.domain[1]}).",
         f"Geometry: h = {c.h}, alpha = {c.alpha}, kappa = {c.kappa}.",
+        ("ALPHA_CUT: alpha is atan2(z', x'), which jumps by 2 pi where x' < 0 and z' changes sign."
+         if c.alpha_cut else "ALPHA_CUT = False: alpha is continuous wherever the curve is regular."),
         "",
         "Phase trajectory (eq. 2), branch s = +1 (p) and -1 (m):",
         "    w(q; C) = exp(-2 s mu alpha) [C - 2 g F_s(q)],  qdot^2 = w / h^2.",
@@ -552,14 +564,18 @@ def module_name(name: str) -> str:
 
 
 def generate(curve, out_dir, *, name: str | None = None, source: dict | None = None,
-             seconds: float | None = None) -> Path:
+             seconds: float | None = None, routes=None) -> Path:
     """Derive ``curve`` and write its kernel module into ``out_dir``; returns the path.
 
     ``curve`` is a catalogue name, a :class:`~symvib.shapes.Shape` or a
     :class:`~symvib.symbolic.curve.Curve` (then give ``source``, its defining data).
+    ``seconds`` and ``routes`` are :func:`~symvib.symbolic.derive.derive`'s (default: every
+    route of :data:`~symvib.symbolic.integrals.ROUTES`, :data:`~symvib.symbolic.integrals.ROUTE_SECONDS`
+    each); ``routes=()`` takes the numeric route at once, as a curve with no closed-form
+    ``F_sigma`` ends up doing after the budgets of every route.
     """
     from symvib.shapes import Shape, shape
-    from symvib.symbolic.integrals import ROUTE_SECONDS
+    from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
     if isinstance(curve, str):
         curve = shape(curve)
@@ -571,7 +587,8 @@ def generate(curve, out_dir, *, name: str | None = None, source: dict | None = N
         raise ValueError("generate() needs the curve's defining data (source) to hash")
     check_param_names(p.name for p in curve.params)  # before the derivation: fail in milliseconds
     _py_literal(source)
-    d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds)
+    d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds,
+               routes=ROUTES if routes is None else routes)
     text = module_text(d, source)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
