@@ -29,18 +29,22 @@ from symvib.checks.corpus import CORPUS, entry
 from symvib.numeric.driver import backend_available
 from symvib.symbolic.integrals import ROUTE_SECONDS
 
-#: Seconds (curve, regular interval, derive + generate, a plain-Python run; one process, idle) under
-#: which an entry runs in the quick suite.
+#: Seconds (curve, regular interval, derive + generate, a plain-Python run; one warm process, idle)
+#: under which an entry may run in the quick suite.
 QUICK_SECONDS = 3.0
-#: Entries measured under QUICK_SECONDS (0.6-2.7 s each, 19 s in all); the others are slow.
+#: Entries measured under QUICK_SECONDS that the quick suite runs: every category but ``abs``, and
+#: shared antiderivatives (the parabolas, the circles in q) derived once per process.  The others,
+#: and the entries of the same kinds left out, are slow.
 QUICK = frozenset({
-    "parabola-hinted", "quartic", "double-well", "double-well-bare", "cubic", "pole-well", "hyperbola-graph",
-    "quadratic-quartic", "dome", "half-power", "parabola-micro", "parabola-huge", "bowl-micro", "circle-loop",
-    "circle-across-top", "cubic-parametric", "cycloid-micro", "circle-huge",
+    "parabola-hinted", "parabola-micro", "parabola-huge", "circle-loop", "circle-across-top", "cycloid-micro",
+    "quartic", "double-well-bare", "cubic", "pole-well", "hyperbola-graph", "half-power", "cubic-parametric",
 })
-#: Budget of each closed-form route in the tests (three times the default): a closed form that takes a
-#: few seconds on an idle machine must not fall to the numeric route on a loaded one.
-ROUTE_BUDGET = 3 * ROUTE_SECONDS
+#: Budget of each closed-form route in the tests (twice the default): a closed form that takes a few
+#: seconds on an idle machine must not fall to the numeric route on a loaded one.
+ROUTE_BUDGET = 2 * ROUTE_SECONDS
+#: The route that closes ``F_sigma`` where the default derivation reaches it only after the budgets of
+#: the routes before it (measured: 51 s and 26 s with every route, 6 s and 4 s with this one alone).
+ROUTES_OF = {"secant-sqrt": ("tangent-angle",), "tilted-parabola": ("tangent-angle",)}
 #: Largest relative residual of a run's energy budget (the driver's own BUDGET_RTOL).
 BUDGET_RTOL = 1e-9
 #: Agreement of the compiled engine's events with the plain engine's (times and positions).
@@ -93,7 +97,7 @@ def _kernels(name):
     source = shape.source()
     stem = f"{kernels.module_name(shape.module)}_{provenance.input_hash(source)[:16]}"
     if not (kernels.cache_dir() / f"{stem}.py").exists():
-        routes = () if "numeric" in e.tags else ROUTES
+        routes = () if "numeric" in e.tags else ROUTES_OF.get(name, ROUTES)
         codegen.generate(shape, kernels.cache_dir(), name=stem, source=source, routes=routes, seconds=ROUTE_BUDGET)
     mod = kernels.load(shape)
     text = Path(mod.__file__).read_text(encoding="utf-8")
@@ -137,22 +141,30 @@ def test_the_compiled_engine_gives_the_events_of_the_plain_one(count, cache, mon
     # simulate() on numba with the engine compiled once per number of parameters, not per curve.
     monkeypatch.setattr(driver, "bind", functools.partial(bind, shared=True))
     monkeypatch.setattr(driver, "_BOUND", {})
-    failures = {}
+    failures = []
     for e in (e for e in CORPUS if _parameter_count(e) == count):
         _kernels(e.name)
         scene = _scene(e.name)
         plain = driver.simulate(scene, backend="python", samples=False)
         compiled = driver.simulate(scene, backend="numba", samples=False)
-        try:
-            _check(compiled)
-            assert compiled.status is plain.status, (compiled.status, plain.status)
-            assert [x.kind for x in compiled.events] == [x.kind for x in plain.events]
-            for a, b in zip(plain.events, compiled.events):
-                assert abs(a.t - b.t) <= EVENT_TOL * max(1.0, abs(a.t)), (a, b)
-                assert abs(a.q - b.q) <= EVENT_TOL * max(1.0, abs(a.q)), (a, b)
-        except AssertionError as err:
-            failures[e.name] = str(err).splitlines()[0][:200]
-    assert not failures, failures
+        why = _difference(plain, compiled)
+        if not (compiled.success and compiled.energy_budget.relative_residual < BUDGET_RTOL):
+            why.append(f"numba ends {compiled.status.value} (residual {compiled.energy_budget.relative_residual:.2g}; "
+                       f"plain: {plain.status.value})")
+        failures += [f"{e.name}: {w}" for w in why]
+    assert not failures, "; ".join(failures)
+
+
+def _difference(plain, compiled) -> list:
+    """How the compiled run's events differ from the plain run's (empty when they agree)."""
+    if compiled.status is not plain.status or [x.kind for x in compiled.events] != [x.kind for x in plain.events]:
+        return [f"status/events {compiled.status.value} {len(compiled.events)} against {plain.status.value} "
+                f"{len(plain.events)}"]
+    for i, (a, b) in enumerate(zip(plain.events, compiled.events)):
+        dt, dq = abs(a.t - b.t), abs(a.q - b.q)
+        if dt > EVENT_TOL * max(1.0, abs(a.t)) or dq > EVENT_TOL * max(1.0, abs(a.q)):
+            return [f"event {i} ({a.kind.value} at t = {a.t:.6g}): t differs by {dt:.2g}, q by {dq:.2g}"]
+    return []
 
 
 #: A scene is on a short (long) length scale when the chord between its limiters is below (above) this.

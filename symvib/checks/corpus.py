@@ -117,9 +117,9 @@ CORPUS = (
        ("inflection", "numeric")),
     _g("sine-track", "a*(1 - cos(x/b))", {"a": 0.1, "b": 0.2}, {}, {"q": 0.0, "qdot": 2.3},
        ("inflection", "numeric"), run={"t_max": 2.0, "max_events": 200}),
-    _g("sine-track-short", "a*(1 - cos(x/b))", {"a": 0.002, "b": 0.004}, {"left": -0.004, "right": 0.005},
+    _g("sine-track-short", "a*(1 - cos(x/b))", {"a": 0.001, "b": 0.002}, {"left": -0.004, "right": 0.0045},
        {"q": 0.0, "qdot": 0.3}, ("inflection", "numeric", "short", "hint"), run={"t_max": 2.0, "max_events": 200},
-       curve={"q_scale": "b"}),  # q_scale 1 (the default) is 40 bumps: sampling and panels need b
+       curve={"q_scale": "b"}),  # q_scale 1 (the default) spans 80 bumps: sampling and panels need b
     _g("tilted-parabola", "x**2/(2*p) + c*x", {"p": 1.0, "c": 0.3}, {"left": -0.8, "right": 0.5},
        {"q": 0.0, "qdot": 2.0}, ()),
     _g("tan-wall", "a*tan(x/b)", {"a": 0.2, "b": 1.0}, {"left": -1.0, "right": 1.0}, {"q": 0.0, "qdot": 1.0},
