@@ -1,5 +1,6 @@
 """Curves: geometry of every catalogue shape against numeric differentiation; bad input."""
 import mpmath
+import numpy as np
 import pytest
 import sympy as sp
 
@@ -72,3 +73,113 @@ def test_bad_graph():
         cv.graph("x^2")
     with pytest.raises(ValueError, match="hint h"):
         cv.graph("x**2", domain=("-1", "1"), h="x")
+
+
+Q = sp.Symbol("q", real=True)
+A = sp.Symbol("a", real=True)
+
+
+@pytest.mark.parametrize("expr, want", [
+    (sp.Piecewise((4 * sp.sin(Q), sp.Eq(sp.cos(Q), 0)), (3 * sp.sin(Q), True)), 3 * sp.sin(Q)),
+    (sp.Piecewise((Q, sp.Ne(Q, 0)), (1, True)), Q),
+    (sp.Piecewise((1, sp.Eq(Q, 0) & (Q > 1)), (Q, True)), Q),
+    (sp.Piecewise((1, sp.Eq(Q, 0) | sp.Eq(A, 0)), (Q, True)), Q),
+    (sp.Piecewise((sp.exp(A * Q) / A, sp.Ne(A, 0)), (Q, True)), sp.exp(A * Q) / A),
+    (sp.Piecewise((2 * Q, sp.Eq(sp.sin(Q)**2 + sp.cos(Q)**2 - 1, 0, evaluate=False)), (Q, True)), 2 * Q),
+    (sp.cos(Q) + sp.Piecewise((0, sp.Eq(Q, 0)), (Q, True)) ** 2, sp.cos(Q) + Q**2),
+    (2 * sp.DiracDelta(Q) + Q, Q),
+    (sp.diff(sp.Abs(Q) ** 3, Q, 2), 6 * sp.Abs(Q)),
+])
+def test_generic_branch_drops_branches_on_sets_of_measure_zero(expr, want):
+    got = cv.generic_branch(expr)
+    assert not got.has(sp.Piecewise, sp.DiracDelta)
+    for q in (-1.3, -0.2, 0.7, 2.1):
+        values = {Q: q, A: 0.8}
+        assert float(got.subs(values)) == pytest.approx(float(want.subs(values)), rel=1e-14)
+
+
+@pytest.mark.parametrize("expr", [
+    sp.Piecewise((Q, Q > 0), (0, True)),
+    sp.Piecewise((1, sp.Eq(Q, 0)), (Q, Q < 1), (2, True)),
+    sp.Piecewise((1, sp.Eq(Q, 0) | (Q > 1)), (Q, True)),
+])
+def test_generic_branch_refuses_inequalities_naming_the_field(expr):
+    with pytest.raises(cv.CurveError, match=r"^kernel dh: .*Piecewise .*hint \(curve.h / curve.alpha\)"):
+        cv.generic_branch(expr, "kernel dh")
+
+
+def test_generic_branch_refuses_a_piecewise_defined_on_a_null_set_only():
+    with pytest.raises(cv.CurveError, match="measure zero"):
+        cv.generic_branch(sp.Piecewise((1, sp.Eq(Q, 0)), (2, sp.Eq(Q, 1))))
+
+
+def test_the_paper_parabola_in_expressions_has_a_geometry_without_piecewise():
+    c = cv.parametric("tan(phi)", "tan(phi)**2/2", q="phi")
+    for e in (c.hp, c.alphap, c.kappa):
+        assert not e.has(sp.Piecewise, sp.DiracDelta)
+
+
+# --- a continuous tangent angle (physics.md, "Geometry") ------------------------------------
+@pytest.mark.parametrize("x, z, q, domain, want", [
+    ("R*sin(q)", "R*(1 - cos(q))", "q", None, "q"),                       # alpha' = 1 integrated
+    ("R*sin(t)", "-R*cos(t)", "t", None, "t"),
+    ("R*(phi + sin(phi))", "R*(1 - cos(phi))", "phi", ("-pi", "pi"), "phi/2"),
+    ("p*tan(phi)", "p*tan(phi)**2/2", "phi", ("-pi/2", "pi/2"), "phi"),
+    ("sin(q)*sqrt(tan(q)**2 + 1)", "tan(q)**2/2", "q", ("-pi/2", "pi/2"), "q"),   # Abs(cos q) > 0 there
+])
+def test_a_parametric_curve_gets_its_continuous_tangent_angle(x, z, q, domain, want):
+    c = cv.parametric(x, z, q=q, domain=domain)
+    assert not c.alpha_cut
+    assert sp.simplify(c.alpha - sp.sympify(want, locals={q: c.q})) == 0
+
+
+def test_the_ellipse_gets_a_continuous_rotated_form_and_not_atan_of_tan():
+    c = cv.parametric("a*sin(q)", "b*(1 - cos(q))")
+    assert not c.alpha_cut and not c.alpha.has(sp.atan2)
+    f = sp.lambdify([c.q, *c.params], c.alpha)
+    qs = np.linspace(-10.0, 10.0, 20001)
+    values = f(qs, 0.5, 0.3)
+    assert np.max(np.abs(np.diff(values))) < 0.01          # continuous: no jump of pi or 2 pi
+    turned = np.unwrap(np.arctan2(0.3 * np.sin(qs), 0.5 * np.cos(qs)))   # the tangent, loop after loop
+    np.testing.assert_allclose(values - values[10000], turned - turned[10000], atol=1e-12)
+    a, b = c.params
+    assert cv.angle_jump(sp.atan(b * sp.tan(c.q) / a), c, c.default_values()) is not None   # off by pi
+    jump = cv.angle_jump(sp.atan2(b * sp.sin(c.q), a * sp.cos(c.q)), c, c.default_values())
+    assert np.cos(jump) == pytest.approx(-1.0, abs=1e-9)       # 2 pi where the tangent points along -x
+
+
+def test_a_curve_without_a_continuous_closed_form_keeps_atan2_and_says_so():
+    # A prolate trochoid: continuous forms exist for a > 1 and for a < 1, but not one for every a.
+    c = cv.parametric("q - a*sin(q)", "a*(1 - cos(q))")
+    assert c.alpha_cut and c.alpha.has(sp.atan2)
+    assert not cv.graph("x**2").alpha_cut and not cv.parametric("q**3 + q", "q**2").alpha_cut
+
+
+def test_a_hint_that_jumps_is_refused():
+    message = r"hint alpha = atan2\(sin\(q\), cos\(q\)\) jumps at q = -?[\d.]+ \(parameters = 1\), where"
+    with pytest.raises(cv.CurveError, match=message):
+        cv.parametric("R*sin(q)", "R*(1 - cos(q))", alpha="atan2(sin(q), cos(q))", h="R")
+
+
+def test_the_kernel_module_says_whether_alpha_has_a_branch_cut():
+    from symvib.codegen.generate import module_text
+    from symvib.symbolic.derive import derive
+
+    for x, z, cut in (("q - a*sin(q)", "a*(1 - cos(q))", True), ("R*sin(q)", "R*(1 - cos(q))", False)):
+        d = derive(cv.parametric(x, z), routes=())
+        assert f"\nALPHA_CUT = {cut}\n" in module_text(d, {"x": x, "z": z})
+
+
+def test_the_circle_across_its_top_is_not_arrested_at_pi():
+    # With atan2 the tangent angle jumped by 2 pi at q = pi, so exp(-2 s mu alpha) did: a spurious
+    # turning point and arrest there.  alpha = q now: it bounces between the limiters.
+    from symvib.numeric.driver import simulate
+    from symvib.numeric.scene import scene_from_dict
+
+    scene = scene_from_dict({"curve": {"x": "R*sin(q)", "z": "R*(1 - cos(q))"}, "parameters": {"R": 0.5},
+                             "physics": {"mu": 0.05, "restitution": 0.8}, "limiters": {"left": 2.8, "right": 3.5},
+                             "initial": {"q": 3.0, "qdot": 2.0}})
+    result = simulate(scene, backend="python", samples=False)
+    assert result.success and result.status.value == "resting_on_limiter"
+    assert [e.kind.value for e in result.events[:3]] == ["impact", "impact", "reversal"]
+    assert all(e.kind.value != "arrest" or abs(e.q - np.pi) > 0.1 for e in result.events)

@@ -171,6 +171,12 @@ HOSTILE_MODULES = {
     "global_for": ("for i in range(3):\n    pass", "module-level For"),
     "try": ("def f():\n    try:\n        return 1\n    except Exception:\n        return 2", "Try"),
     "second_string": ('"""doc"""\n"""another"""', "expression statement"),
+    "ifexp": ("def f(q):\n    return (1.0) if (q == 0) else (q)", "IfExp"),
+    "compare": ("def f(q):\n    return q == 0", "Compare"),
+    "if_statement": ("def f(q):\n    if q:\n        return 1.0\n    return q", "If node"),
+    "lambda_in_kernel": ("def f(q):\n    return (lambda: q)()", "Lambda"),
+    "numpy_select": ("def f(q):\n    return numpy.select([numpy.equal(q, 0), True], [1, q])", "attribute 'select'"),
+    "numpy_where": ("def f(q):\n    return numpy.where(numpy.equal(q, 0), 1, q)", "attribute 'where'"),
     "syntax": ("def f(:\n", "not valid Python"),
     "nul": ("X = 1\x00", "not valid Python"),
 }
@@ -414,3 +420,101 @@ def test_a_module_without_the_engine_interface_is_refused(edit, message, tmp_pat
     assert edited != text
     with pytest.raises(kernels.KernelError, match=message):
         kernels.verify_text(edited, tmp_path / "circle.py")
+
+
+def test_whitelist_refuses_a_conditional_edited_into_a_real_kernel():
+    # The scalar kernel as SymPy's own printer would write the paper parabola's h' in expressions.
+    text = (GENERATED / "parabola.py").read_text(encoding="utf-8")
+    edited = text + "\n\ndef dh_if(q, p):\n    return (4*p) if (math.cos(q) == 0) else (3*p)\n"
+    with pytest.raises(kernels.KernelError, match="IfExp"):
+        kernels.verify_text(edited, GENERATED / "parabola.py")
+
+
+#: The paper's three curves and others whose derivation holds Abs, sign or an Eq-Piecewise, as a
+#: user writes them (symvib run used to exit 2 on the first: "a Compare node is not allowed").
+EXPRESSION_CURVES = {
+    "paper-parabola": {"kind": "parametric", "x": "tan(phi)", "z": "tan(phi)**2/2", "q": "phi"},
+    "secant-sqrt": {"kind": "parametric", "x": "sin(q)*sqrt(tan(q)**2 + 1)", "z": "tan(q)**2/2", "q": "q",
+                    "domain": ["-pi/2", "pi/2"]},
+    "hyperbola-cosh": {"kind": "parametric", "x": "sinh(q)", "z": "cosh(q)", "q": "q"},
+    "abs-cubed": {"kind": "graph", "z": "abs(x)**3/3", "q": "x"},
+    "x-abs-x": {"kind": "graph", "z": "x*abs(x)", "q": "x"},
+}
+
+
+@pytest.mark.slow  # a derivation each (the numeric routes of secant-sqrt: about 40 s)
+@pytest.mark.parametrize("label", sorted(EXPRESSION_CURVES))
+def test_curves_with_abs_and_sign_generate_no_conditional(label, cache):
+    source = {"name": label, **EXPRESSION_CURVES[label]}
+    mod = kernels.load(source)
+    text = Path(mod.__file__).read_text(encoding="utf-8")
+    assert " if " not in text and "==" not in text and "select" not in text
+    # The scalar twins agree with the array kernels, finite at 0 too (removable values, sign(0)).
+    q = np.array([-0.7, -0.3, 0.0, 0.2, 0.6])
+    for name in ("x", "z", "h", "alpha", "kappa", "dx", "dz", "dh", "dalpha"):
+        arr = getattr(mod, name)(q)
+        one = [getattr(mod, f"{name}_scalar")(float(v)) for v in q]
+        assert np.all(np.isfinite(arr)), name
+        np.testing.assert_allclose(one, arr, rtol=1e-14, atol=1e-15, err_msg=name)
+
+
+def _module_namespace(d, source, tmp_path):
+    """The kernels of derivation ``d`` as a namespace (the text checked by the whitelist first)."""
+    text = codegen.module_text(d, source)
+    kernels.verify_text(text, tmp_path / "m.py")
+    namespace = {}
+    exec(compile(text, str(tmp_path / "m.py"), "exec"), namespace)  # noqa: S102 - verified above
+    return namespace
+
+
+@pytest.mark.parametrize("z, at_zero", [("x*abs(x)/2 + x**2/2", 2.0), ("abs(x)**3/3", 0.0)])
+def test_a_removable_value_is_finite_in_both_twins(z, at_zero, tmp_path):
+    # kappa = (x + |x|) / (x (...)) and 2 x**2 / ((1 + x**4)**(3/2) |x|): 0/0 at x = 0, where a
+    # kernel may be evaluated (a grid point, the middle of two limiters); written with
+    # |x| = x sign(x) and copysign(1, 0) = 1 they are finite, the limit from the right.
+    from symvib.symbolic.curve import graph
+    from symvib.symbolic.derive import derive
+
+    k = _module_namespace(derive(graph(z), routes=()), {"z": z}, tmp_path)
+    assert k["kappa_scalar"](0.0) == pytest.approx(at_zero, abs=1e-15)
+    assert k["kappa"](np.array([0.0]))[0] == pytest.approx(at_zero, abs=1e-15)
+    for q in (-0.3, 0.4):
+        assert k["kappa_scalar"](q) == pytest.approx(k["kappa"](np.array([q]))[0], rel=1e-14)
+
+
+@pytest.mark.slow  # derives the curve twice: as given, and on its regular interval (about 15 s)
+def test_the_paper_parabola_in_expressions_runs():
+    # The reproduction of the report: derive, print, whitelist (no Compare node any more).
+    from symvib.numeric.driver import simulate
+    from symvib.numeric.scene import scene_from_dict
+
+    scene = scene_from_dict({"curve": {"x": "tan(phi)", "z": "tan(phi)**2/2", "q": "phi"},
+                             "physics": {"mu": 0.05, "restitution": 0.8},
+                             "limiters": {"left": -0.5, "right": 0.7}, "initial": {"q": 0.0, "qdot": 3.0}})
+    result = simulate(scene, backend="python", samples=False)
+    assert result.success and result.events[0].kind.value == "impact"
+    assert result.energy_budget.relative_residual < 1e-9
+
+
+@pytest.mark.parametrize("expr, numpy_text, math_text", [
+    ("sign(q)", "numpy.copysign(1.0, q)", "math.copysign(1.0, q)"),
+    ("Abs(q - 1)", "numpy.abs(q - 1)", "abs(q - 1)"),
+    ("q*sign(cos(q))", "q*numpy.copysign(1.0, numpy.cos(q))", "q*math.copysign(1.0, math.cos(q))"),
+])
+def test_sign_and_abs_print_without_a_conditional(expr, numpy_text, math_text):
+    import sympy as sp
+
+    e = sp.sympify(expr, locals={"q": sp.Symbol("q", real=True)})
+    assert codegen._NumPy().doprint(e) == numpy_text
+    assert codegen._Math().doprint(e) == math_text
+
+
+@pytest.mark.parametrize("expr", ["Piecewise((1, Eq(q, 0)), (q, True))", "Eq(q, 0)", "q > 0",
+                                  "KroneckerDelta(q, 1)", "Heaviside(q)"])
+def test_printers_refuse_what_would_print_as_a_conditional(expr):
+    import sympy as sp
+
+    e = sp.sympify(expr, locals={"q": sp.Symbol("q", real=True)})
+    for printer in (codegen._NumPy(), codegen._Math()):
+        with pytest.raises(CurveError, match="conditional"):
+            printer.doprint(e)

@@ -71,6 +71,49 @@ def test_regular_interval_of_hostile_curves(z, params, q0, want):
         assert r.hi_reason
 
 
+#: (z, parameters, q0, regular interval, reason of the finite end): an Abs or sign whose argument
+#: changes sign is a corner where the slope jumps, and a regular point where only a higher
+#: derivative does.
+CORNERS = [
+    ("abs(x)", {}, 0.5, (0.0, INF), "z' is discontinuous (a corner)"),
+    ("abs(x)", {}, -0.5, (-INF, 0.0), "z' is discontinuous (a corner)"),
+    ("sqrt(x**2)", {}, 0.5, (0.0, INF), "z' is discontinuous (a corner)"),      # SymPy: Abs(x)
+    ("abs(x - a) + x**2", {"a": 0.3}, 0.5, (0.3, INF), "z' is discontinuous (a corner)"),
+    ("abs(sin(x))", {}, 1.0, (0.0, math.pi), "z' is discontinuous (a corner)"),
+    ("abs(x)**3", {}, 0.5, (-INF, INF), ""),                                   # z'' jumps only
+    ("x*abs(x)", {}, 0.5, (-INF, INF), ""),                                    # slope continuous
+    ("abs(x)*x**2 + abs(x - 1)**3", {}, 0.5, (-INF, INF), ""),
+    ("x**2 + abs(x)**3", {}, -0.5, (-INF, INF), ""),
+]
+
+
+@pytest.mark.parametrize("z, params, q0, want, reason", CORNERS, ids=[f"{c[0]}@{c[2]}" for c in CORNERS])
+def test_corners_bound_the_interval_and_smooth_abs_does_not(z, params, q0, want, reason):
+    c = graph(z, params=list(params) or None)
+    r = regular_interval(c, params, q0, (-INF, INF))
+    assert _close(r.lo, want[0]) and _close(r.hi, want[1]), r
+    assert want[0] <= r.lo and r.hi <= want[1]
+    assert reason in (r.lo_reason, r.hi_reason)
+
+
+@pytest.mark.parametrize("x, z, want, reason", [
+    ("q + abs(q)", "q", (0.0, INF), "x' is discontinuous (a corner)"),   # the speed h jumps
+    ("q", "abs(q)", (0.0, INF), "z' is discontinuous (a corner)"),
+    ("q**3 + abs(q)**3", "q", (-INF, INF), ""),                           # x' continuous (0) at 0
+])
+def test_corners_of_parametric_curves(x, z, want, reason):
+    r = regular_interval(parametric(x, z), {}, 0.5, (-INF, INF))
+    assert _close(r.lo, want[0]) and _close(r.hi, want[1]), r
+    assert reason in (r.lo_reason, r.hi_reason)
+
+
+def test_a_corner_is_a_singular_initial_position_and_bounds_the_limiters():
+    with pytest.raises(SceneError, match="initial.q.*z' is discontinuous"):
+        regular_shape(_scene("abs(x)", 0.0))
+    with pytest.raises(SceneError, match="limiters.left.*beyond a singular point"):
+        regular_shape(_scene("abs(x) + x**2", 0.5, limiters={"left": -0.2}))
+
+
 @pytest.mark.parametrize("x, z, q0, want", [
     ("phi + sin(phi)", "1 - cos(phi)", 0.5, (-math.pi, math.pi)),          # cycloid: cusps at +-pi
     ("cos(q)**3", "sin(q)**3", 0.5, (0.0, math.pi / 2)),                   # astroid: cusps at k pi/2

@@ -3,10 +3,18 @@
 :func:`module_text` turns a :class:`~symvib.symbolic.derive.Derivation` into the source
 of a Python module that needs only NumPy (and :mod:`math` for the scalar
 path): one function per kernel and per branch, common subexpressions
-eliminated (:func:`sympy.cse`), no ``Piecewise``, no ``select``, no
-``sign()``.  Functions broadcast over NumPy arrays of ``q``, the state and the
-parameters; every kernel also has a ``*_scalar`` twin built on :mod:`math`,
-which is several times faster for one float (root finding in the driver).
+eliminated (:func:`sympy.cse`), and no conditional: every ``Piecewise`` is
+replaced by its generic branch before cse
+(:func:`~symvib.symbolic.curve.generic_branch`: the branches SymPy adds on
+equalities such as ``Eq(cos(phi), 0)`` hold on a set of measure zero, a singular
+point or a removable value), ``sign(f)`` prints as ``math.copysign(1.0, f)`` /
+``numpy.copysign(1.0, f)`` and ``Abs`` as ``abs`` / ``numpy.abs`` (a power of ``Abs(u)``
+in a denominator as one of ``u sign(u)``, so that a removable value such as ``q**2 /
+|q|`` at 0 is finite: :func:`~symvib.symbolic.curve.removable_form`); a condition that is an
+inequality is a :class:`~symvib.symbolic.curve.CurveError`.  Functions
+broadcast over NumPy arrays of ``q``, the state and the parameters; every
+kernel also has a ``*_scalar`` twin built on :mod:`math`, which is several
+times faster for one float (root finding in the driver).
 
 Kernels (argument order in each docstring and in ``SIGNATURES``); ``cp`` are
 the curve parameters in declaration order, ``_p``/``_m`` the branches
@@ -22,6 +30,11 @@ the curve parameters in declaration order, ``_p``/``_m`` the branches
 ``F_N P_mu Ek Ep E``          energy analysis (physics.md), state form ``(q, qdot, ...)``
 ``domain q_scale``            the regular interval of ``q`` and its scale, ``(*cp)``
 ============================  =========================================================
+
+The constant ``ALPHA_CUT`` (:attr:`~symvib.symbolic.curve.Curve.alpha_cut`) is ``True``
+when the kernel ``alpha`` is ``atan2(z', x')``, no continuous closed form having been
+found: it jumps by ``2 pi`` where ``x' < 0`` and ``z'`` changes sign, so the engine
+must not integrate across such a point as if ``alpha`` were continuous.
 
 On the numeric route ``F_s`` is a composite Gauss-Legendre quadrature of
 ``dF_s`` from ``Q_REF``, with panels no wider than ``PANEL * q_scale``.
@@ -57,7 +70,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from symvib import provenance
 from symvib.codegen import gauss
 from symvib.numeric.kernels import DIGEST_PREFIX, verify_text
-from symvib.symbolic.curve import CurveError
+from symvib.symbolic.curve import CurveError, generic_branch, removable_form
 from symvib.symbolic.derive import Derivation, derive
 from symvib.symbolic.symbols import C, g, mu
 
@@ -75,7 +88,7 @@ KERNEL_FUNCTIONS = frozenset({
                               for b in ("p", "m"))})
 #: Constants every kernel module defines.
 KERNEL_CONSTANTS = frozenset({"NAME", "COORDINATE", "PARAMS", "F_ROUTES", "Q_REF", "PANEL", "INPUT_HASH",
-                              "SYMPY_VERSION", "GENERATOR_VERSION", "SOURCE", "SIGNATURES"})
+                              "SYMPY_VERSION", "GENERATOR_VERSION", "SOURCE", "SIGNATURES", "ALPHA_CUT"})
 #: Names a curve parameter may not have in a kernel module: its arguments, modules and
 #: module-level names (a parameter is a Python argument of every kernel, so it would shadow them).
 KERNEL_RESERVED = frozenset({"q", "qdot", "w", "numpy", "math"} | KERNEL_FUNCTIONS
@@ -124,7 +137,23 @@ class _BigNumbers:
         return _float_literal(expr)
 
 
-class _NumPy(_BigNumbers, NumPyPrinter):
+class _NoConditionals:
+    """Printing that never writes a conditional: a kernel module holds no ``if`` and no comparison.
+
+    Every ``Piecewise`` is decided before printing (:func:`~symvib.symbolic.curve.generic_branch`);
+    what reaches a printer as a condition is a generator error, raised here with its name
+    rather than written as ``(a) if (c) else (b)`` for the whitelist to refuse later.
+    """
+
+    def _refuse(self, expr):
+        raise CurveError(f"{type(expr).__name__} {sp.sstr(expr)[:60]} would print as a conditional, which a "
+                         "kernel may not hold")
+
+    _print_Piecewise = _print_Relational = _print_ITE = _print_KroneckerDelta = _print_Heaviside = _refuse
+    _print_BooleanTrue = _print_BooleanFalse = _print_And = _print_Or = _print_Not = _refuse
+
+
+class _NumPy(_NoConditionals, _BigNumbers, NumPyPrinter):
     suffix = ""
 
     def __init__(self):
@@ -134,14 +163,31 @@ class _NumPy(_BigNumbers, NumPyPrinter):
         # The only undefined functions in a kernel are calls of F_p / F_m.
         return f"{expr.func.__name__}{self.suffix}(" + ", ".join(self.doprint(a) for a in expr.args) + ")"
 
+    def _print_Abs(self, expr):
+        return f"numpy.abs({self.doprint(expr.args[0])})"
 
-class _Math(_BigNumbers, PythonCodePrinter):
+    def _print_sign(self, expr):
+        # copysign as in the scalar twin (_Math), not numpy.sign: sign(0) = 0 would make
+        # q / sign(q) (removable_form) infinite at 0, and the twins differ there.
+        return f"numpy.copysign(1.0, {self.doprint(expr.args[0])})"
+
+
+class _Math(_NoConditionals, _BigNumbers, PythonCodePrinter):
     suffix = "_scalar"
 
     def __init__(self):
         super().__init__({"fully_qualified_modules": True, "allow_unknown_functions": False})
 
     _print_AppliedUndef = _NumPy._print_AppliedUndef
+
+    def _print_Abs(self, expr):
+        return f"abs({self.doprint(expr.args[0])})"
+
+    def _print_sign(self, expr):
+        # sign(0) = 0 where copysign gives +-1: they differ on a set of measure zero only, where
+        # the kernel's value is its generic one (generic_branch), finite (removable_form);
+        # SymPy's own printer writes a conditional here.
+        return f"math.copysign(1.0, {self.doprint(expr.args[0])})"
 
 
 def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
@@ -159,14 +205,21 @@ def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
                                    order="canonical")
     pre_reduced, reduced = reduced[:len(pre)], reduced[len(pre):]
     lines = [f"def {name}({', '.join(args)}):", f'    """{doc}"""']
+
+    def text(e):
+        try:
+            return printer.doprint(e)
+        except CurveError as err:
+            raise CurveError(f"kernel {name}: {err}") from None
+
     for sym, sub in replacements:
-        lines.append(f"    {sym} = {printer.doprint(sub)}")
+        lines.append(f"    {sym} = {text(sub)}")
     for (sym, _), red in zip(pre, pre_reduced):
-        lines.append(f"    {sym} = {printer.doprint(red)}")
+        lines.append(f"    {sym} = {text(red)}")
     bodies = []
     placeholders = {str(sym) for sym, _ in pre}
     for part, red in zip(exprs, reduced):
-        body = printer.doprint(red)
+        body = text(red)
         used = {str(s) for s in part.free_symbols} | _called_args(part)
         for sym, value in pre:
             if str(sym) in used:
@@ -196,6 +249,15 @@ def _may_be_int(expr) -> bool:
     (True, True, False)
     """
     return not expr.free_symbols or expr.has(*_INT_VALUED)
+
+
+def _generic(expr, field: str):
+    """A kernel's expression (or its ``(placeholders, Tuple)`` form) with every ``Piecewise``
+    decided once, before cse (:func:`~symvib.symbolic.curve.generic_branch`)."""
+    if isinstance(expr, tuple):
+        pre, body = expr
+        return {k: _generic(v, field) for k, v in pre.items()}, _generic(body, field)
+    return removable_form(generic_branch(expr, field))
 
 
 def _called_args(expr) -> set:
@@ -284,7 +346,7 @@ def _antiderivative(f, q, q_ref, args, width):
     q_ref = numpy.asarray(q_ref, dtype=float)
     length = q - q_ref
     width = numpy.asarray(width, dtype=float)
-    panels = int(max(1, numpy.ceil(numpy.max(numpy.abs(length) / width)))) if length.size else 1
+    panels = int(max(1.0, numpy.ceil(numpy.max(numpy.abs(length) / width, initial=0.0))))
     edges = numpy.arange(panels)[..., None] / panels
     t = (edges + (_GL_XA + 1.0) / (2.0 * panels))
     shape = numpy.broadcast(q, *[numpy.asarray(a) for a in args]).shape
@@ -326,6 +388,7 @@ def module_text(d: Derivation, source: dict) -> str:
     parts = []
     signatures = {}
     for name, args, expr, doc in kernels:
+        expr = _generic(expr, f"curve '{c.name}': kernel {name}")
         if not isinstance(expr, tuple):
             expr = expr.xreplace(F_sub)
         signatures[name] = args
@@ -374,6 +437,7 @@ def module_text(d: Derivation, source: dict) -> str:
         f"F_ROUTES = {{1: {routes[1]!r}, -1: {routes[-1]!r}}}",
         f"Q_REF = {float(d.branches[1].F.q_ref.subs({p: 1 for p in c.params})) if needs_quad else 0.0!r}",
         f"PANEL = {PANEL!r}",
+        f"ALPHA_CUT = {bool(c.alpha_cut)!r}",
         f"INPUT_HASH = {provenance.input_hash(source)!r}",
         f"SYMPY_VERSION = {sp.__version__!r}",
         f"GENERATOR_VERSION = {provenance.GENERATOR_VERSION!r}",
@@ -464,6 +528,8 @@ def _header(d: Derivation, source: dict, routes: dict) -> str:
         f"Curve ({c.kind}): x = {c.x}, z = {c.z}, coordinate {c.q} (passed as q),",
         f"parameters {', '.join(p.name for p in c.params) or 'none'}, domain ({c.domain[0]}, {c.domain[1]}).",
         f"Geometry: h = {c.h}, alpha = {c.alpha}, kappa = {c.kappa}.",
+        ("ALPHA_CUT: alpha is atan2(z', x'), which jumps by 2 pi where x' < 0 and z' changes sign."
+         if c.alpha_cut else "ALPHA_CUT = False: alpha is continuous wherever the curve is regular."),
         "",
         "Phase trajectory (eq. 2), branch s = +1 (p) and -1 (m):",
         "    w(q; C) = exp(-2 s mu alpha) [C - 2 g F_s(q)],  qdot^2 = w / h^2.",
@@ -498,14 +564,18 @@ def module_name(name: str) -> str:
 
 
 def generate(curve, out_dir, *, name: str | None = None, source: dict | None = None,
-             seconds: float | None = None) -> Path:
+             seconds: float | None = None, routes=None) -> Path:
     """Derive ``curve`` and write its kernel module into ``out_dir``; returns the path.
 
     ``curve`` is a catalogue name, a :class:`~symvib.shapes.Shape` or a
     :class:`~symvib.symbolic.curve.Curve` (then give ``source``, its defining data).
+    ``seconds`` and ``routes`` are :func:`~symvib.symbolic.derive.derive`'s (default: every
+    route of :data:`~symvib.symbolic.integrals.ROUTES`, :data:`~symvib.symbolic.integrals.ROUTE_SECONDS`
+    each); ``routes=()`` takes the numeric route at once, as a curve with no closed-form
+    ``F_sigma`` ends up doing after the budgets of every route.
     """
     from symvib.shapes import Shape, shape
-    from symvib.symbolic.integrals import ROUTE_SECONDS
+    from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
     if isinstance(curve, str):
         curve = shape(curve)
@@ -517,7 +587,8 @@ def generate(curve, out_dir, *, name: str | None = None, source: dict | None = N
         raise ValueError("generate() needs the curve's defining data (source) to hash")
     check_param_names(p.name for p in curve.params)  # before the derivation: fail in milliseconds
     _py_literal(source)
-    d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds)
+    d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds,
+               routes=ROUTES if routes is None else routes)
     text = module_text(d, source)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -56,11 +56,13 @@ DIGEST_PREFIX = "# symvib generated kernel module; body sha256: "
 _DIGEST_LINE = re.compile(r"# symvib generated [^\n]*; body sha256: ([0-9a-f]{64})")
 _INPUT_HASH_LINE = re.compile(r"^INPUT_HASH = '([0-9a-f]{64})'$", re.M)
 
-#: Statement and expression nodes a generated module may contain (:func:`verify_text`).
+#: Statement and expression nodes a generated module may contain (:func:`verify_text`).  No
+#: conditional (``IfExp``, ``If``) and no comparison (``Compare``): the generator decides every
+#: ``Piecewise`` symbolically (:func:`symvib.symbolic.curve.generic_branch`) and writes none.
 ALLOWED_NODES = frozenset({
     "Module", "FunctionDef", "arguments", "arg", "Return", "Assign", "AugAssign", "For", "Expr", "Import",
     "alias", "BinOp", "UnaryOp", "Add", "Sub", "Mult", "Div", "Pow", "USub", "UAdd", "Call", "keyword",
-    "Name", "Constant", "Tuple", "List", "Dict", "Subscript", "Slice", "Starred", "IfExp", "ListComp",
+    "Name", "Constant", "Tuple", "List", "Dict", "Subscript", "Slice", "Starred", "ListComp",
     "comprehension", "Attribute", "Load", "Store",
 })
 #: Statements allowed at module level (the others only run when a kernel is called).
@@ -72,7 +74,7 @@ SAFE_BUILTINS = frozenset({"float", "int", "abs", "max", "min", "range", "zip", 
 #: NumPy attributes besides its ufuncs (which do arithmetic only) a generated module may use.
 NUMPY_ATTRIBUTES = frozenset({
     "pi", "e", "inf", "nan", "arange", "array", "asarray", "broadcast", "broadcast_to", "max", "min", "ones",
-    "zeros", "sum", "select", "where", "amax", "amin", "float64",
+    "zeros", "sum", "amax", "amin", "float64",
 })
 #: Attributes of values (arrays) a generated module may read.
 VALUE_ATTRIBUTES = frozenset({"shape", "size"})

@@ -23,17 +23,20 @@ atan(x/p)
 from __future__ import annotations
 
 import keyword
+import math
 import random
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import mpmath
+import numpy as np
 import sympy as sp
 
 from symvib import expr as _expr
 from symvib.symbolic.symbols import RESERVED
 
-__all__ = ["Curve", "CurveError", "graph", "parametric", "to_sympy", "sample_points"]
+__all__ = ["Curve", "CurveError", "graph", "parametric", "to_sympy", "sample_points", "generic_branch",
+           "tangent_angle", "angle_jump", "removable_form"]
 
 #: Parameter assumptions a curve may declare.
 ASSUMPTIONS = {
@@ -69,6 +72,150 @@ _BINARY = {
 
 class CurveError(ValueError):
     """A curve definition was rejected; the message says what to fix."""
+
+
+#: Random points at which the two sides of an ``Eq`` condition are compared to tell a
+#: measure-zero condition from one that holds identically (:func:`generic_branch`).
+NULL_CHECK_POINTS = 3
+#: ``|lhs - rhs|`` below this at every point (30 digits): the ``Eq`` holds identically.
+NULL_CHECK_TOLERANCE = mpmath.mpf("1e-20")
+#: What :func:`generic_branch` decides about a condition.
+_GENERIC, _NULL = "generic", "null"
+
+
+def generic_branch(expr: sp.Expr, field: str = "expression") -> sp.Expr:
+    """``expr`` with every ``Piecewise`` replaced by its generic branch and every ``DiracDelta`` by 0.
+
+    SymPy writes ``Piecewise((a, Eq(cos(phi), 0)), (b, True))`` when it simplifies
+    the derivative of ``Abs(cos(phi))/cos(phi)**4``, and ``DiracDelta`` when it
+    differentiates ``sign``.  A kernel module holds no conditional (the whitelist of
+    :mod:`symvib.numeric.kernels` refuses ``if``/``==``), so each ``Piecewise`` is
+    decided here, once, symbolically: a branch whose condition is an equality (``Eq``,
+    or a conjunction with one, a set of measure zero on the real line) is dropped, and
+    the first branch whose condition holds almost everywhere (``True``, ``Ne``, or a
+    disjunction with one) is the value.
+
+    Why this is sound: the kernels are evaluated on the open regular domain of the
+    curve (:mod:`symvib.symbolic.singular`), and a point where an equality holds is
+    there either a singular point, which bounds the domain and is never evaluated
+    (``cos(phi) = 0`` on the parabola in its tangent angle), or a removable value of a
+    function that is continuous through it, where the generic branch has the same
+    limit (the derivative of ``x*Abs(x)`` at 0).  In both cases the generic branch is
+    the function on the domain up to a set of measure zero, which quadratures and root
+    finders never see.  An ``Eq`` that holds identically is no such set: it is checked
+    at :data:`NULL_CHECK_POINTS` random points and refused.  ``DiracDelta`` vanishes
+    off such a set: it is 0.  An equality in the parameters only (``Eq(a, 0)`` for a
+    real parameter) holds for one value of ``a``: there the generic branch is not
+    finite and a run ends ``non_finite``, never silently wrong.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    field : str
+        What ``expr`` is (named in the error).
+
+    Returns
+    -------
+    sympy.Expr
+        Without ``Piecewise`` or ``DiracDelta``.
+
+    Raises
+    ------
+    CurveError
+        When a condition is an inequality (``q > 0``): which branch applies depends
+        on where the run is, so the kernels would need a conditional.
+
+    Examples
+    --------
+    >>> phi = sp.Symbol("phi", real=True)
+    >>> generic_branch(sp.Piecewise((4 * sp.sin(phi), sp.Eq(sp.cos(phi), 0)), (3 * sp.sin(phi), True)))
+    3*sin(phi)
+    >>> generic_branch(sp.diff(sp.sign(phi), phi) + 1)
+    1
+    """
+    if not isinstance(expr, sp.Basic) or not expr.has(sp.Piecewise, sp.DiracDelta):
+        return expr
+    expr = expr.replace(lambda e: isinstance(e, sp.DiracDelta), lambda e: sp.Integer(0))
+
+    def decide(pw):
+        for value, cond in pw.args:
+            kind = _condition_kind(cond, field)
+            if kind == _GENERIC:
+                return value
+            if kind != _NULL:
+                raise CurveError(f"{field}: SymPy gives a Piecewise on the condition {cond}, which depends on "
+                                 "where the particle is, and a kernel holds no conditional; give a simpler "
+                                 "verified form as a hint (curve.h / curve.alpha) or write the curve without it")
+        raise CurveError(f"{field}: every branch of {sp.sstr(pw)[:80]} holds only on a set of measure zero")
+
+    return expr.replace(lambda e: isinstance(e, sp.Piecewise), decide)
+
+
+def removable_form(expr: sp.Expr) -> sp.Expr:
+    """``expr`` with ``Abs(u) = u sign(u)`` where an ``Abs`` stands in a denominator, common factors taken out.
+
+    The generic branch of a derivative often divides by something that vanishes
+    with ``|u|`` where the function has a removable value: ``kappa = 2 q**2 / ((1 +
+    q**4)**(3/2) |q|)`` for ``z = |q|**3/3`` is ``0/0`` at ``q = 0``, a point a kernel
+    may well be evaluated at (a grid point, the middle of two limiters).  Written with
+    ``|q| = q sign(q)`` and its common factors taken out (:func:`sympy.factor_terms`),
+    SymPy cancels it to ``2 q / ((1 + q**4)**(3/2) sign(q))``, which the kernels
+    evaluate with ``sign(0)`` printed as ``copysign(1, 0) = 1``: finite, and the limit
+    from the right where the function jumps (``z = x abs(x)``: ``z'' = 2 sign(x)``).
+    An expression with ``Abs`` in numerators only is left as it is.
+
+    Examples
+    --------
+    >>> q = sp.Symbol("q", real=True)
+    >>> removable_form(q**2 / sp.Abs(q)), removable_form(sp.Abs(q) / sp.cos(q))
+    (q/sign(q), Abs(q)/cos(q))
+    >>> removable_form((q + sp.Abs(q)) / (q * (1 + q * sp.Abs(q))))
+    (sign(q) + 1)/(q**2*sign(q) + 1)
+    """
+    if not isinstance(expr, sp.Basic) or not expr.has(sp.Abs):
+        return expr
+    if not any(p.exp.is_negative and p.base.has(sp.Abs) for p in expr.atoms(sp.Pow)):
+        return expr
+    rewritten = expr.replace(lambda e: isinstance(e, sp.Abs), lambda e: e.args[0] * sp.sign(e.args[0]))
+    try:
+        return sp.factor_terms(rewritten)
+    except Exception:  # noqa: BLE001 - factoring is optional; the rewritten form is equal
+        return rewritten
+
+
+def _condition_kind(cond, field: str) -> str | None:
+    """``_GENERIC`` (holds almost everywhere), ``_NULL`` (a set of measure zero) or ``None`` (neither)."""
+    if cond is sp.true:
+        return _GENERIC
+    if cond is sp.false:
+        return _NULL
+    if isinstance(cond, sp.Eq):
+        return _NULL if not _holds_identically(cond.lhs - cond.rhs) else _GENERIC
+    if isinstance(cond, sp.Ne):
+        return _GENERIC if not _holds_identically(cond.lhs - cond.rhs) else _NULL
+    if isinstance(cond, sp.Not):
+        inner = _condition_kind(cond.args[0], field)
+        return {_GENERIC: _NULL, _NULL: _GENERIC}.get(inner)
+    if isinstance(cond, (sp.And, sp.Or)):
+        kinds = [_condition_kind(a, field) for a in cond.args]
+        strong, weak = (_NULL, _GENERIC) if isinstance(cond, sp.And) else (_GENERIC, _NULL)
+        if strong in kinds:
+            return strong
+        return weak if all(k == weak for k in kinds) else None
+    return None
+
+
+def _holds_identically(difference) -> bool:
+    """Whether ``difference`` is zero at :data:`NULL_CHECK_POINTS` random real points (30 digits)."""
+    rng = random.Random(5)
+    symbols = sorted(difference.free_symbols, key=lambda s: s.name)
+    with mpmath.workdps(CHECK_DIGITS):
+        for _ in range(NULL_CHECK_POINTS):
+            subs = {s: sp.Float(0.5 + 1.5 * rng.random(), CHECK_DIGITS) for s in symbols}
+            value = sp.N(difference.subs(subs), CHECK_DIGITS)
+            if not (value.is_number and abs(value) < NULL_CHECK_TOLERANCE):
+                return False
+    return True
 
 
 def to_sympy(parsed: _expr.Parsed, symbols: dict) -> sp.Expr:
@@ -116,11 +263,17 @@ class Curve:
     domain : tuple of sympy.Expr
         Open interval of ``q`` on which the parametrization is regular (``h > 0``).
     h, alpha : sympy.Expr
-        Metric and continuous tangent angle.
+        Metric and tangent angle (:func:`tangent_angle`).
     q_scale : sympy.Expr
         A characteristic length of ``q`` (sampling windows, quadrature panels).
     source : tuple of (str, str)
         The defining texts, for generated-file headers and hashing.
+    alpha_cut : bool
+        ``True`` when ``alpha`` is ``atan2(z', x')``, no continuous closed form having
+        been found: it jumps by ``2 pi`` where the tangent crosses the negative ``x``
+        direction (``x' < 0`` and ``z'`` changing sign), and a run must not integrate
+        across such a point as if it were continuous.  ``False`` when ``alpha`` is
+        continuous wherever the curve is regular.
     """
 
     name: str
@@ -134,6 +287,7 @@ class Curve:
     alpha: sp.Expr
     q_scale: sp.Expr
     source: tuple = field(default=(), compare=False)
+    alpha_cut: bool = False
 
     # --- derived geometry (physics.md, "Geometry") ---------------------------------
     @cached_property
@@ -148,18 +302,19 @@ class Curve:
 
     @cached_property
     def hp(self) -> sp.Expr:
-        """``h'(q)``."""
-        return sp.simplify(sp.diff(self.h, self.q))
+        """``h'(q)`` (its generic branch: :func:`generic_branch`)."""
+        return removable_form(generic_branch(sp.simplify(sp.diff(self.h, self.q)), f"curve '{self.name}': h'"))
 
     @cached_property
     def alphap(self) -> sp.Expr:
-        """``alpha'(q) = (x' z'' - z' x'') / h**2``."""
-        return sp.simplify(sp.diff(self.alpha, self.q))
+        """``alpha'(q) = (x' z'' - z' x'') / h**2`` (its generic branch)."""
+        return removable_form(generic_branch(sp.simplify(sp.diff(self.alpha, self.q)),
+                                             f"curve '{self.name}': alpha'"))
 
     @cached_property
     def kappa(self) -> sp.Expr:
-        """Curvature ``kappa = alpha' / h``."""
-        return sp.simplify(self.alphap / self.h)
+        """Curvature ``kappa = alpha' / h`` (its generic branch)."""
+        return removable_form(generic_branch(sp.simplify(self.alphap / self.h), f"curve '{self.name}': kappa"))
 
     @property
     def coordinate(self) -> str:
@@ -252,11 +407,265 @@ def numeric_zero(expr: sp.Expr, curve: Curve, *, extra=None, points: int = IDENT
                 subs[p] = sp.Float(0.5 + 1.5 * rng.random(), CHECK_DIGITS)
             for sym, (a, b) in extra.items():
                 subs[sym] = sp.Float(a + (b - a) * rng.random(), CHECK_DIGITS)
-            value = sp.N(expr.subs(subs), CHECK_DIGITS)
-            size = max([abs(sp.N(t.subs(subs), CHECK_DIGITS)) for t in terms] + [sp.Integer(1)])
-            if not value.is_number or value.has(sp.nan, sp.zoo) or abs(value) > CHECK_TOLERANCE * size:
+            try:
+                value = sp.N(expr.subs(subs), CHECK_DIGITS)
+                size = max([abs(sp.N(t.subs(subs), CHECK_DIGITS)) for t in terms] + [sp.Integer(1)])
+                if not value.is_number or value.has(sp.nan, sp.zoo) or abs(value) > CHECK_TOLERANCE * size:
+                    return False
+            except TypeError:  # a NaN or an interval (AccumBounds) where a number belongs: not zero
                 return False
     return True
+
+
+# --- a continuous tangent angle ------------------------------------------------------
+#: Budget (seconds, wall clock, a child process each) of the symbolic integration of ``alpha'``,
+#: and of the rotated forms, in :func:`tangent_angle`.
+ALPHA_SECONDS = 2.0
+ROTATION_SECONDS = 2.0
+#: Reference angles ``beta`` of the rotated forms ``alpha = beta + atan(...)`` (:func:`_rotation_job`).
+ROTATIONS = ("0", "q", "-q", "q/2", "-q/2", "pi - q", "pi + q")
+#: Points of the dense check of a candidate tangent angle, and the half width (in ``q_scale``)
+#: of its window where the domain is infinite.
+ANGLE_POINTS = 8193
+ANGLE_HALF_WIDTH = 64.0
+#: Parameter sets of the dense check besides all ones: random values in (0.5, 2), like the identity checks.
+ANGLE_RANDOM_SETS = 2
+#: Agreement of a candidate with ``atan2(z', x')`` modulo ``2 pi`` at the grid points (absolute, radians).
+ANGLE_TOL = 1e-8
+#: Bisection steps that tell a jump of a candidate from a fast turn of the tangent between grid points.
+ANGLE_BISECT = 60
+#: ``h`` at a bracket below this fraction of ``h`` at the grid points around it: a cusp, where every
+#: tangent angle jumps (the run's interval ends there, :mod:`symvib.symbolic.singular`).
+ANGLE_CUSP_RTOL = 1e-6
+
+#: Tangent angles already found, by the curve's defining expressions and domain.
+_ANGLES: dict = {}
+
+
+def tangent_angle(curve: Curve):
+    """A closed form of the tangent angle of ``curve`` continuous on its domain, or ``None``.
+
+    ``atan2(z', x')`` is the tangent angle only up to ``2 pi``: it jumps where the
+    tangent points along ``-x``, while the phase trajectory's factor ``exp(-2 s mu
+    alpha)`` needs the continuous angle (physics.md, "Geometry").  Candidates:
+
+    1. ``alpha' = (x' z'' - z' x'') / h**2`` integrated symbolically (in a child process
+       under :data:`ALPHA_SECONDS`; an ``Abs``/``sign`` takes its sign at the reference
+       point, which the checks below confirm or refute); ``alpha = q`` on a circle
+       ``x = R sin q``, ``z = R (1 - cos q)``;
+    2. the tangent rotated by a reference angle ``beta`` (:data:`ROTATIONS`):
+       ``alpha = beta + atan(Q/P)`` with ``P = x' cos(beta) + z' sin(beta)``, ``Q = z'
+       cos(beta) - x' sin(beta)``, continuous where ``P > 0`` (under
+       :data:`ROTATION_SECONDS`): ``q + atan((b - a) sin q cos q / (a cos**2 q + b sin**2 q))``
+       on an ellipse ``x = a sin q``, ``z = b (1 - cos q)``.
+
+    Each is shifted by a constant so that it equals ``atan2(z', x')`` at a reference point
+    (exactly, symbolically), and accepted only if (a) ``h sin(alpha) = z'`` and ``h
+    cos(alpha) = x'`` hold identically (:func:`identity_holds`, 30 digits at random
+    points and parameters), and (b) it jumps nowhere the curve is regular
+    (:func:`angle_jump`, with every parameter 1 and at :data:`ANGLE_RANDOM_SETS` random
+    sets).  ``atan(b tan(q) / a)``, the integral SymPy may give for the ellipse, fails (b).
+
+    Returns
+    -------
+    sympy.Expr or None
+        ``None`` when no candidate passes; the caller keeps ``atan2`` and sets
+        :attr:`Curve.alpha_cut`.
+    """
+    from symvib.symbolic import budget
+
+    key = tuple(sp.srepr(e) for e in (curve.x, curve.z, curve.h, curve.domain, curve.q_scale))
+    if key in _ANGLES:
+        return _ANGLES[key]
+    q0 = _reference_point(curve)
+    args = (sp.srepr(curve.xp), sp.srepr(curve.zp), curve.q.name, sp.srepr(q0))
+    found = None
+    for job, seconds in ((_integration_job, ALPHA_SECONDS), (_rotation_job, ROTATION_SECONDS)):
+        outcome = budget.run(job, args, seconds=seconds)
+        if outcome.status != "ok":
+            continue
+        for candidate in (outcome.value if isinstance(outcome.value, sp.Tuple) else ()):
+            try:
+                found = _accepted(candidate, curve, q0)
+            except Exception:  # noqa: BLE001 - a candidate that cannot be checked is not taken
+                found = None
+            if found is not None:
+                break
+        if found is not None:
+            break
+    _ANGLES[key] = found
+    return found
+
+
+def _reference_point(curve: Curve) -> sp.Expr:
+    """0 when it is inside the domain, else the middle, or one ``q_scale`` inside a finite end."""
+    lo, hi = curve.domain
+    if (lo.is_infinite or (lo < 0) == sp.true) and (hi.is_infinite or (hi > 0) == sp.true):
+        return sp.Integer(0)
+    if hi.is_infinite:
+        return lo + curve.q_scale
+    if lo.is_infinite:
+        return hi - curve.q_scale
+    return (lo + hi) / 2
+
+
+def _signs_at(expr: sp.Expr, q: sp.Symbol, q0: sp.Expr) -> sp.Expr:
+    """``expr`` with each ``Abs(w)``/``sign(w)`` whose sign at ``q0`` SymPy can tell written without it."""
+    def fixed(e):
+        w = e.args[0]
+        at = sp.simplify(w.subs(q, q0))
+        sgn = 1 if at.is_positive else -1 if at.is_negative else None
+        if sgn is None:
+            return e
+        return sgn * w if isinstance(e, sp.Abs) else sp.Integer(sgn)
+
+    return expr.replace(lambda e: isinstance(e, (sp.Abs, sp.sign)), fixed)
+
+
+def _integration_job(xp: str, zp: str, qname: str, q0: str):
+    """Child job: ``alpha'`` integrated, as a one-element ``Tuple`` (empty when SymPy finds no closed form)."""
+    xp_e, zp_e, q0_e = sp.sympify(xp), sp.sympify(zp), sp.sympify(q0)
+    q = next((s for s in (xp_e + zp_e).free_symbols if s.name == qname), sp.Symbol(qname, real=True))
+    rate = (xp_e * sp.diff(zp_e, q) - zp_e * sp.diff(xp_e, q)) / (xp_e**2 + zp_e**2)
+    rate = _signs_at(generic_branch(sp.simplify(rate)), q, q0_e)
+    found = sp.integrate(rate, q)
+    if found.has(sp.Integral):
+        return sp.Tuple()
+    try:
+        found = generic_branch(found)
+    except CurveError:  # a Piecewise on an inequality: no single closed form
+        return sp.Tuple()
+    return sp.Tuple(found)
+
+
+def _rotation_job(xp: str, zp: str, qname: str, q0: str):
+    """Child job: the rotated forms ``beta + atan(Q/P)`` of :data:`ROTATIONS` (a ``Tuple``)."""
+    xp_e, zp_e = sp.sympify(xp), sp.sympify(zp)
+    q = next((s for s in (xp_e + zp_e).free_symbols if s.name == qname), sp.Symbol(qname, real=True))
+    out = []
+    for text in ROTATIONS:
+        beta = sp.sympify(text, locals={"q": q})
+        P = sp.expand(sp.expand_trig(xp_e * sp.cos(beta) + zp_e * sp.sin(beta)))
+        Q = sp.expand(sp.expand_trig(zp_e * sp.cos(beta) - xp_e * sp.sin(beta)))
+        out.append(beta + sp.atan(sp.factor_terms(sp.cancel(Q / P))))
+    return sp.Tuple(*out)
+
+
+def _accepted(candidate: sp.Expr, curve: Curve, q0: sp.Expr):
+    """``candidate`` shifted to equal ``atan2(z', x')`` at ``q0``, if it passes the checks (a), (b)."""
+    unwanted = (sp.I, sp.nan, sp.zoo, sp.oo, sp.Integral, sp.Piecewise, sp.AccumBounds)
+    if not isinstance(candidate, sp.Expr) or candidate.has(*unwanted):
+        return None
+    q = curve.q
+    at = sp.atan2(curve.zp.subs(q, q0), curve.xp.subs(q, q0)) - candidate.subs(q, q0)
+    try:
+        shift = sp.simplify(at)
+    except Exception:  # noqa: BLE001 - an odd form: the checks decide on the unsimplified one
+        shift = at
+    if shift.has(*unwanted) or shift.free_symbols - set(curve.params):
+        return None
+    alpha = candidate + shift if shift != 0 else candidate
+    # The dense check in double precision first (milliseconds), then the identities at 30 digits.
+    if angle_jump(alpha, curve, curve.default_values()) is not None:
+        return None
+    for lhs, rhs in ((curve.h * sp.sin(alpha), curve.zp), (curve.h * sp.cos(alpha), curve.xp)):
+        if identity_holds(lhs - rhs, curve, simplify=False) is None:
+            return None
+    rng = random.Random(13)
+    for _ in range(ANGLE_RANDOM_SETS if curve.params else 0):
+        if angle_jump(alpha, curve, {p: sp.Float(0.5 + 1.5 * rng.random()) for p in curve.params}) is not None:
+            return None
+    return alpha
+
+
+def angle_jump(alpha: sp.Expr, curve: Curve, values: dict):
+    """Where ``alpha`` jumps at a regular point of ``curve`` with parameter ``values``, or ``None``.
+
+    ``alpha`` is sampled at :data:`ANGLE_POINTS` points of the domain (its infinite
+    ends cut at :data:`ANGLE_HALF_WIDTH` ``q_scale``) with ``atan2(z', x')``: it must
+    agree with it modulo ``2 pi`` (within :data:`ANGLE_TOL`) wherever the curve is
+    regular, and between neighbours change by what ``atan2`` turns (wrapped to ``(-pi,
+    pi]``).  Where it changes by another multiple of ``2 pi``, or by ``pi``, the cell is
+    bisected (:data:`ANGLE_BISECT` steps): a fast turn of the tangent resolves, a jump
+    stays; a jump at a cusp (``h`` vanishing) or a pole is allowed, since no run crosses
+    it.  Double precision, NumPy.
+    """
+    q = curve.q
+    subs = {p: values[p] for p in curve.params}
+    fns = [sp.lambdify([q], e.subs(subs), "numpy") for e in (alpha, curve.xp, curve.zp)]
+    scale = float(curve.q_scale.subs(subs))
+    lo, hi = (float(e.subs(subs)) if e.is_finite is not False else float(e) for e in curve.domain)
+    center = 0.0 if not (math.isfinite(lo) or math.isfinite(hi)) else lo if math.isfinite(lo) else hi
+    lo = lo if math.isfinite(lo) else min(center, hi) - ANGLE_HALF_WIDTH * scale
+    hi = hi if math.isfinite(hi) else max(center, lo) + ANGLE_HALF_WIDTH * scale
+    pad = (hi - lo) * 1e-9
+    grid = np.linspace(lo + pad, hi - pad, ANGLE_POINTS)
+    a, turn, h, regular = _angle_samples(fns, grid)
+    with np.errstate(all="ignore"):
+        agrees = np.abs(_wrap(a - turn)) <= ANGLE_TOL * (1.0 + np.abs(a))
+        step = np.diff(a) - _wrap(np.diff(turn))
+    bad = np.flatnonzero(regular & ~agrees)
+    if bad.size:
+        return float(grid[bad[0]])
+    both = regular[:-1] & regular[1:]
+    for j in np.flatnonzero(both & ~(np.abs(step) <= 1.0)):
+        where = _bisect_jump(fns, grid[j], grid[j + 1], max(h[j], h[j + 1]))
+        if where is not None:
+            return where
+    return None
+
+
+def _wrap(v):
+    return (v + np.pi) % (2 * np.pi) - np.pi
+
+
+def _angle_samples(fns, grid):
+    """``alpha``, ``atan2(z', x')``, ``h`` and where the curve is regular (finite, ``h > 0``) at ``grid``."""
+    import warnings
+
+    out = []
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        for fn in fns:
+            try:
+                v = np.broadcast_to(np.asarray(fn(grid), dtype=float), grid.shape).astype(float)
+            except Exception:  # noqa: BLE001 - evaluated in complex below
+                v = np.full(grid.shape, np.nan)
+            if not np.all(np.isfinite(v)):
+                try:
+                    c = np.broadcast_to(np.asarray(fn(grid.astype(complex)), dtype=complex), grid.shape)
+                    real = np.abs(c.imag) <= 1e-9 * (1.0 + np.abs(c.real))
+                    v = np.where(np.isfinite(v), v, np.where(real, c.real, np.nan))
+                except Exception:  # noqa: BLE001 - the NaN stays: not regular, or a jump
+                    pass
+            out.append(v)
+    a, xp, zp = out
+    h = np.hypot(xp, zp)
+    regular = np.isfinite(xp) & np.isfinite(zp) & (h > 0)
+    a = np.where(regular & ~np.isfinite(a), np.inf, a)  # a non-finite angle where the curve is regular
+    return a, np.arctan2(zp, xp), h, regular
+
+
+def _bisect_jump(fns, a: float, b: float, h_around: float):
+    """The point of a jump of the angle in ``[a, b]`` (``None`` if the change resolves or is at a cusp)."""
+    for _ in range(ANGLE_BISECT):
+        mid = 0.5 * (a + b)
+        if mid in (a, b):
+            break
+        pts = np.array([a, mid, b])
+        ang, turn, h, regular = _angle_samples(fns, pts)
+        if not regular[1] or h[1] <= ANGLE_CUSP_RTOL * h_around:
+            return None  # a cusp or a pole: the run's interval ends there
+        with np.errstate(all="ignore"):
+            left = abs(ang[1] - ang[0] - _wrap(turn[1] - turn[0]))
+            right = abs(ang[2] - ang[1] - _wrap(turn[2] - turn[1]))
+        if left <= 1.0 and right <= 1.0:
+            return None  # a fast turn of the tangent, resolved
+        a, b = (a, mid) if left > 1.0 else (mid, b)
+    ends = _angle_samples(fns, np.array([a, b]))
+    if not np.all(ends[3]) or np.min(ends[2]) <= ANGLE_CUSP_RTOL * h_around:
+        return None
+    return 0.5 * (a + b)
 
 
 # --- construction -------------------------------------------------------------------
@@ -384,6 +793,10 @@ def _finish(name, kind, q, params, x, z, domain, h_hint, alpha_hint, q_scale, so
     scale = sp.Integer(1) if q_scale is None else q_scale
     curve = Curve(name=name, kind=kind, q=q, x=x, z=z, params=params, domain=(lo, hi), h=h,
                   alpha=alpha, q_scale=scale, source=source)
+    if alpha_hint is None and alpha.has(sp.atan2):
+        # atan2 jumps by 2 pi where the tangent points along -x: look for a continuous form.
+        found = tangent_angle(curve)
+        curve = replace(curve, alpha=found if found is not None else alpha, alpha_cut=found is None)
     if h_hint is not None and identity_holds(h_hint**2 - h2, curve) is None:
         raise CurveError(f"curve '{name}': hint h = {h_hint} does not satisfy h^2 = x'^2 + z'^2 = {h2}")
     if alpha_hint is not None:
@@ -391,6 +804,10 @@ def _finish(name, kind, q, params, x, z, domain, h_hint, alpha_hint, q_scale, so
             if identity_holds(lhs - rhs, curve) is None:
                 raise CurveError(f"curve '{name}': hint alpha = {alpha} does not satisfy "
                                  f"h {label}(alpha) = {'z' if label == 'sin' else 'x'}'")
+        jump = angle_jump(alpha, curve, curve.default_values())
+        if jump is not None:
+            raise CurveError(f"curve '{name}': hint alpha = {alpha} jumps at {q} = {jump:.6g} (parameters = 1), "
+                             "where the curve is regular; give a continuous form of the tangent angle")
     # h must be positive inside the domain (checked at sample points).  A point where h
     # is not finite or not real is a singular point (a pole, the far side of a sqrt's
     # branch point): the run's regular interval ends before it (symvib.symbolic.singular).

@@ -54,6 +54,16 @@ SCAN_POINTS = 4097
 BISECT_STEPS = 60
 #: What a piece of a singular set is (its reason in messages).
 NOT_FINITE, NOT_REAL, CUSP = "not finite", "not finite and real", "zero (a cusp)"
+#: A corner: the argument of an ``Abs`` or ``sign`` in the first-order geometry changes sign and
+#: ``x', z', h`` or ``alpha`` jumps there.
+CORNER = "discontinuous (a corner)"
+#: The first-order geometry, where an ``Abs``/``sign`` whose argument changes sign may make a corner.
+FIRST_ORDER_LABELS = ("x'", "z'", "h", "alpha")
+#: One-sided values of a first-order function that differ by more than this (relative to ``h``,
+#: and to ``1 + |alpha|`` for ``alpha``) make a corner; evaluated in double precision at the point.
+CORNER_RTOL = 1e-8
+#: A corner within this distance (relative to ``max(1, |q|)``) of a piece found otherwise is that piece.
+MERGE_RTOL = 1e-9
 #: Distance, relative to q_scale (and to |q| beyond 1), kept between a run's domain end and a
 #: singular point, so that the kernels are finite at the end.
 EDGE_RTOL = 1e-12
@@ -67,6 +77,11 @@ POLE_RATIO = 1e6
 #: A local minimum of h below this fraction of h at the grid points around it is a cusp (h
 #: computed as sqrt of a difference has a floor near sqrt(eps) there, not 0).
 CUSP_RTOL = 1e-6
+#: A grid point is searched for a cusp only where h there is at most this fraction of h at the
+#: larger of its neighbours: near a cusp ``h ~ c |q - q*|**p`` dips to at most ``3**-p`` of it
+#: (0.58 for ``p = 1/2``), while a constant ``h`` (a line, a circle: every point a local minimum
+#: within rounding) is not searched 4000 times.
+CUSP_DIP = 0.9
 #: Functions of the geometry searched symbolically (the others only numerically: SymPy is slow on them).
 SYMBOLIC_LABELS = ("x", "z", "x'", "z'")
 
@@ -237,7 +252,8 @@ def _poles(labels, fns, grid, flags) -> list:
 def _cusps(fn, grid, v, ok) -> list:
     """Points where ``h`` has a local minimum that reaches 0 (cusps), by golden-section search."""
     out = []
-    inside = ok[:-2] & ok[1:-1] & ok[2:] & (v[1:-1] <= v[:-2]) & (v[1:-1] <= v[2:])
+    inside = (ok[:-2] & ok[1:-1] & ok[2:] & (v[1:-1] <= v[:-2]) & (v[1:-1] <= v[2:])
+              & (v[1:-1] <= CUSP_DIP * np.maximum(v[:-2], v[2:])))
     ratio = (math.sqrt(5.0) - 1.0) / 2.0
     for j in np.flatnonzero(inside) + 1:
         a, b = grid[j - 1], grid[j + 1]
@@ -271,6 +287,92 @@ def _cusps(fn, grid, v, ok) -> list:
     return out
 
 
+def _corners(items, qsym, labels, fns, lo: float, hi: float) -> list:
+    """Corners: points where the argument of an ``Abs``/``sign`` of the first-order geometry changes
+    sign (between regular points of the scan) and a first-order function is discontinuous.
+
+    At such a point ``q*`` each side is an analytic expression: every ``Abs(w)`` is ``+-w`` and
+    every ``sign(w)`` is ``+-1`` with the sign ``w`` has just left or right of ``q*``.  Both are
+    evaluated at ``q*``: where ``x', z', h`` and ``alpha`` agree (``z = abs(x)**3``, ``z =
+    x*abs(x)``: the slope is continuous, only a higher derivative jumps) the point is regular;
+    where one differs by more than :data:`CORNER_RTOL` the tangent or the speed jumps (``z =
+    abs(x)``), which the model (physics.md, "Assumptions", regular curve) does not cover, so it
+    bounds the run's interval like a cusp.
+    """
+    first = [(label, e) for label, e in items if label in FIRST_ORDER_LABELS]
+    atoms = sorted({a for _, e in first for a in e.atoms(sp.Abs, sp.sign)}, key=sp.default_sort_key)
+    if not atoms:
+        return []
+    grid = np.linspace(lo, hi, SCAN_POINTS)
+    ok = _bad(fns, grid) == 0
+    args = sorted({a.args[0] for a in atoms}, key=sp.default_sort_key)
+    arg_fns = [sp.lambdify([qsym], w, "numpy") for w in args]
+    out = []
+    for fn in arg_fns:
+        v = _real(fn, grid)
+        sign = np.sign(v)
+        idx = np.flatnonzero(ok & np.isfinite(v) & (sign != 0))
+        for i, k in zip(idx[:-1], idx[1:]):
+            if sign[i] == sign[k] or not ok[i:k + 1].all():
+                continue
+            a, b = (grid[i + 1], grid[k - 1]) if k > i + 1 else _sign_change(fn, grid[i], grid[k], v[i])
+            jump = _jump(first, atoms, args, arg_fns, qsym, 0.5 * (a + b), 0.5 * (grid[i] + a),
+                         0.5 * (b + grid[k]))
+            if jump:
+                out.append((float(a), float(b), jump, CORNER))
+    return out
+
+
+def _value(fn, point: float) -> float:
+    """``fn(point)`` in real arithmetic (``atan2`` takes no complex argument), else the real part of
+    its complex value; NaN when neither can be computed."""
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        try:
+            value = float(np.asarray(fn(np.float64(point)), dtype=float))
+        except Exception:  # noqa: BLE001 - e.g. a real sqrt of a negative: try complex below
+            value = math.nan
+    return value if math.isfinite(value) else float(_real(fn, np.array([point]))[0])
+
+
+def _sign_change(fn, a: float, b: float, fa: float) -> tuple:
+    """The bracket ``(a, b)`` of adjacent doubles around a sign change of ``fn`` (bisection)."""
+    for _ in range(BISECT_STEPS * 2):
+        mid = 0.5 * (a + b)
+        if mid in (a, b):
+            break
+        fm = _real(fn, np.array([mid]))[0]
+        if fm == 0.0 or not np.isfinite(fm):
+            return mid, mid
+        if (fm < 0.0) == (fa < 0.0):
+            a, fa = mid, fm
+        else:
+            b = mid
+    return a, b
+
+
+def _jump(first, atoms, args, arg_fns, qsym, at: float, left: float, right: float) -> str:
+    """The label of the first first-order function whose one-sided values at ``at`` differ ("" if none)."""
+    sides = []
+    for point in (left, right):
+        signs = {w: (1 if s >= 0 else -1) for w, s in
+                 zip(args, (_real(fn, np.array([point]))[0] for fn in arg_fns))}
+        rep = {a: signs[a.args[0]] * (a.args[0] if isinstance(a, sp.Abs) else 1) for a in atoms}
+        values = {}
+        for label, e in first:
+            values[label] = _value(sp.lambdify([qsym], e.xreplace(rep), "numpy"), at)
+        sides.append(values)
+    lhs, rhs = sides
+    scale = max(abs(lhs.get("h", 0.0)), abs(rhs.get("h", 0.0)))
+    if not (np.isfinite(scale) and scale > 0.0):
+        return "h"
+    for label, _ in first:
+        size = 1.0 + abs(lhs[label]) if label == "alpha" else scale
+        if not abs(lhs[label] - rhs[label]) <= CORNER_RTOL * size:  # a NaN counts as a jump
+            return label
+    return ""
+
+
 @lru_cache(maxsize=64)
 def singular_pieces(curve, values: tuple, lo: float, hi: float) -> tuple:
     """Sorted pieces ``(a, b, label, kind)`` of ``[lo, hi]`` where the curve is not regular.
@@ -278,8 +380,8 @@ def singular_pieces(curve, values: tuple, lo: float, hi: float) -> tuple:
     ``values`` is a tuple of ``(name, value)`` of the parameters.  A piece is
     a closed interval holding the singular set: a pole or a cusp (``kind =
     NOT_FINITE``, ``[a, b]`` the bracket of adjacent doubles around it, or
-    ``a == b`` when exact), or a region where a function is not real
-    (``NOT_REAL``).  ``label`` names the function (``"z"``, ``"h"``, ``"kappa"``).
+    ``a == b`` when exact), a corner (``CORNER``, :func:`_corners`), or a region
+    where a function is not real (``NOT_REAL``).  ``label`` names the function (``"z"``, ``"h"``, ``"kappa"``).
     """
     items = _substituted(curve, dict(values))
     labels = [label for label, _ in items]
@@ -287,6 +389,10 @@ def singular_pieces(curve, values: tuple, lo: float, hi: float) -> tuple:
                          curve.q.name, lo, hi)
     fns = [sp.lambdify([curve.q], e, "numpy") for _, e in items]
     pieces = symbolic + _numeric(labels, fns, lo, hi)
+    for corner in _corners(items, curve.q, labels, fns, lo, hi):
+        near = MERGE_RTOL * max(1.0, abs(corner[0]))
+        if not any(a - near <= corner[0] and corner[1] <= b + near for a, b, _, _ in pieces):
+            pieces.append(corner)
     order = {label: i for i, label in enumerate(labels)}
     return tuple(sorted(pieces, key=lambda p: (p[0], p[1], order[p[2]], p[3])))
 
