@@ -2,18 +2,26 @@
 
 Run from the project folder (needs SciPy)::
 
-    python benchmarks/accuracy_random.py [--seed 0] [--n 200] [--curves circle,parabola,...]
+    python benchmarks/accuracy_random.py [--fresh] [--seed S] [--n N] [--curves circle,parabola,...]
                                          [--csv verdicts.csv] [--worst 5] [--workers 2]
 
-It draws ``--n`` scenes (:func:`symvib.checks.accuracy.random_scenes`: generic,
-near-stop, near-edge, looping and rescaled scenes on the curves of
-:data:`~symvib.checks.accuracy.TRACKS`), runs ``symvib.simulate(scene)`` with its
-defaults and the reference on each, and prints the verdicts per category, the
-distribution of the largest event-time difference per scene, and the worst silent
-misses as scene dicts (JSON, ready for ``symvib.simulate``) with both event lists.
-``--csv`` writes one row per scene.  The near-stop scenes bisect their start speed
-against the reference, and the ill-conditioned ones take the 30-digit reference:
-expect a few seconds per scene.
+By default it takes the scenes of ``tests/test_accuracy_random.py`` and their
+references as stored in ``symvib/checks/data/accuracy_reference.json``
+(:func:`symvib.checks.accuracy.stored_references`: seed 20261125, 200 scenes;
+``--curves`` keeps those on the curves named) and only runs
+``symvib.simulate(scene)`` with its defaults on each: a few seconds.  ``--fresh``
+draws ``--n`` scenes of ``--seed`` instead
+(:func:`symvib.checks.accuracy.random_scenes`: generic, near-stop, near-edge,
+looping and rescaled scenes on the curves of :data:`~symvib.checks.accuracy.TRACKS`)
+and computes their references: the near-stop scenes bisect their start speed
+against the reference, and the ill-conditioned ones take the 30-digit reference,
+so expect a few seconds per scene (about ten minutes for 200 on two cores).
+Another seed or count needs ``--fresh``.  ``symvib bench accuracy-reference
+--write --out symvib/checks/data`` regenerates the stored file.
+
+It prints the verdicts per category, the distribution of the largest event-time
+difference per scene, and the worst silent misses as scene dicts (JSON, ready for
+``symvib.simulate``) with both event lists.  ``--csv`` writes one row per scene.
 """
 from __future__ import annotations
 
@@ -27,34 +35,44 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from symvib.checks.accuracy import TRACKS, check_scenes, random_scenes  # noqa: E402
+from symvib.checks.accuracy import (  # noqa: E402
+    TRACKS,
+    check_scenes,
+    random_scenes,
+    stale,
+    stored_references,
+)
 
-#: Digits of event times in the printed event lists.
-DIGITS = 17
+#: Seed and number of scenes of ``--fresh`` by default.
+FRESH_SEED, FRESH_SCENES = 0, 200
 
 
-def _events(events) -> str:
-    return "\n".join(f"      {e[0]:<19} t = {e[1]:.{DIGITS}g}  q = {e[2]:.{DIGITS}g}  qdot_before = {e[3]:.6g}"
-                     for e in events) or "      (none)"
-
-
-def _worst(report, verdict, n):
-    lines = []
-    for r in report.worst(verdict, n):
-        v = r.verdict
-        shown = r.reference_events[:len(r.engine_events) + 2]
-        lines += [f"- scene {r.scene.index} ({r.scene.category}, {r.scene.curve}; {r.scene.note})",
-                  f"  max |t - t_ref| = {v.max_dt:.3g} s; {v.detail}",
-                  f"  scene = {json.dumps(r.scene.scene)}",
-                  f"  engine ({r.engine_status}):", _events(r.engine_events),
-                  f"  reference {r.reference_method} ({r.reference_status}):", _events(shown)]
-    return lines
+def _scenes(args):
+    """``(scenes, references, time scales, what)``: the stored ones, or fresh ones (references None)."""
+    curves = [c.strip() for c in args.curves.split(",") if c.strip()] or None
+    if args.fresh:
+        seed = FRESH_SEED if args.seed is None else args.seed
+        n = FRESH_SCENES if args.n is None else args.n
+        return random_scenes(seed, n, curves, workers=args.workers), None, None, f"seed {seed}, fresh references"
+    stored = stored_references()
+    seed, n = stored.header["seed"], stored.header["count"]
+    if (args.seed, args.n) != (None, None) and (args.seed, args.n) != (seed, n):
+        raise SystemExit(f"accuracy_random: the stored references are of seed {seed}, {n} scenes; "
+                         f"another seed or count needs --fresh (it computes the references: minutes)")
+    for why in stale(stored):
+        print(f"warning: the stored references are stale ({why}); regenerate them: "
+              f"{stored.header['regenerate']}", file=sys.stderr)
+    keep = [i for i, s in enumerate(stored.scenes) if curves is None or s.curve in curves]
+    pick = lambda xs: [xs[i] for i in keep]  # noqa: E731
+    return pick(stored.scenes), pick(stored.references), pick(stored.time_scales), f"seed {seed}, stored references"
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--n", type=int, default=200)
+    ap.add_argument("--fresh", action="store_true",
+                    help="draw the scenes and compute their references (default: the stored ones)")
+    ap.add_argument("--seed", type=int, default=None, help=f"seed (--fresh; default {FRESH_SEED})")
+    ap.add_argument("--n", type=int, default=None, help=f"scenes (--fresh; default {FRESH_SCENES})")
     ap.add_argument("--curves", default="", help=f"comma-separated, of: {', '.join(TRACKS)} "
                     "(default: every curve not tagged numeric)")
     ap.add_argument("--csv", default="", help="write one row per scene here")
@@ -62,9 +80,8 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=1, help="processes checking scenes")
     ap.add_argument("--quiet", action="store_true", help="no line per scene")
     args = ap.parse_args(argv)
-    curves = [c.strip() for c in args.curves.split(",") if c.strip()] or None
     start = time.perf_counter()
-    scenes = random_scenes(args.seed, args.n, curves, workers=args.workers)
+    scenes, references, time_scales, what = _scenes(args)
     drawn = time.perf_counter() - start
 
     def progress(r):
@@ -72,16 +89,16 @@ def main(argv=None) -> int:
             print(f"{r.scene.index:>4} {r.scene.category:<10} {r.scene.curve:<18} {r.verdict.verdict:<16} "
                   f"{r.verdict.max_dt:10.3g} {r.reference_method:<6} {r.seconds:6.1f} s", flush=True)
 
-    report = check_scenes(scenes, progress=progress, workers=args.workers)
-    print(f"\nsymvib.simulate against the reference: seed {args.seed}, {len(scenes)} scenes on "
-          f"{len({s.curve for s in scenes})} curves (drawn in {drawn:.0f} s, checked in "
+    report = check_scenes(scenes, progress=progress, workers=args.workers, references=references,
+                          time_scales=time_scales)
+    print(f"\nsymvib.simulate against the reference: {what}, {len(scenes)} scenes on "
+          f"{len({s.curve for s in scenes})} curves (drawn or read in {drawn:.0f} s, checked in "
           f"{time.perf_counter() - start - drawn:.0f} s wall)\n")
     print(report.table())
-    worst = _worst(report, "silent_miss", args.worst)
-    if worst:
-        print(f"\nworst silent misses ({min(args.worst, report.counts()['silent_miss'])} of "
-              f"{report.counts()['silent_miss']}):")
-        print("\n".join(worst))
+    misses = report.counts()["silent_miss"]
+    if misses:
+        print(f"\nworst silent misses ({min(args.worst, misses)} of {misses}):")
+        print(report.describe("silent_miss", args.worst))
     if args.csv:
         with open(args.csv, "w", newline="") as f:
             w = csv.writer(f)

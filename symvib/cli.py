@@ -5,7 +5,7 @@
 ``symvib run SCENE.toml`` simulate a scene: event table, ``--json PATH``, ``--plot DIR``, ``--animate FILE``
 ``symvib generate``       write the kernel modules of the catalogue into generated/ (``--check``)
 ``symvib audit``          the paper's printed equations against the derivation (errata)
-``symvib bench ...``      work-precision and stability (options: ``symvib bench --help``)
+``symvib bench ...``      work-precision, stability, references (options: ``symvib bench --help``)
 ``symvib sweep ...``      parameter sweeps (options: ``symvib sweep --help``; :func:`sweep_main`)
 
 Every error the user can cause (an unknown shape, a malformed expression, a
@@ -232,6 +232,7 @@ BENCH_OUT = "symvib-bench"
 
 def build_bench_parser() -> argparse.ArgumentParser:
     """The options of ``symvib bench`` (jobs in :mod:`symvib.checks.bench`)."""
+    from symvib.checks.accuracy import ACCURACY_REFERENCE_NAME
     from symvib.checks.bench import PEER_BUDGET, RANDOM_SCENES, REFERENCE_NAME
 
     parser = _BenchParser(prog="symvib bench", description="work-precision charts and the stability suite")
@@ -251,6 +252,13 @@ def build_bench_parser() -> argparse.ArgumentParser:
     p.add_argument("--write", action="store_true", help=f"store them in OUT/{REFERENCE_NAME}")
     p.add_argument("--out", default=BENCH_OUT,
                    help=f"folder of --write (default: {BENCH_OUT}; symvib/checks/data updates the shipped file)")
+    p = sub.add_parser("accuracy-reference",
+                       help="recompute the random scenes of the accuracy test and their references (minutes), "
+                            "and compare them with the shipped ones")
+    p.add_argument("--write", action="store_true", help=f"store them in OUT/{ACCURACY_REFERENCE_NAME}")
+    p.add_argument("--out", default=BENCH_OUT,
+                   help=f"folder of --write (default: {BENCH_OUT}; symvib/checks/data updates the shipped file)")
+    p.add_argument("--workers", type=int, default=1, help="processes (default 1)")
     return parser
 
 
@@ -271,13 +279,18 @@ def bench_main(argv) -> int:
     if getattr(args, "budget", 1.0) <= 0 or (getattr(args, "random", None) or 0) < 0:
         print("symvib bench: error: --budget and --random must be positive", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if args.job != "reference" or args.write:
+    if args.job not in ("reference", "accuracy-reference") or args.write:
         check_output_dir(args.out, "--out folder")
     if args.job == "work-precision":
         bench.work_precision(Path(args.out), quick=args.quick, n_random=args.random, workers=args.workers,
                              budget=args.budget)
     elif args.job == "stability":
         bench.stability(Path(args.out), quick=args.quick, workers=args.workers, budget=args.budget)
+    elif args.job == "accuracy-reference":
+        from symvib.checks.accuracy import regenerate
+
+        differs = regenerate(Path(args.out) if args.write else None, workers=args.workers)
+        return 1 if differs and not args.write else 0
     else:
         bench.references(Path(args.out) if args.write else None)
     return 0

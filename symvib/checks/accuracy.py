@@ -21,6 +21,19 @@ stop, the cone edge), or DOP853 failed, the 30-digit GBS run replaces it.  It
 runs :data:`ZENO_EXTRA_EVENTS` events beyond the scene's ``max_events``, so that
 it keeps bouncing where the engine summed a Zeno series.
 
+**Stored references.** The references of the scenes of
+``tests/test_accuracy_random.py`` (seed :data:`STORED_SEED`,
+:data:`STORED_SCENES` scenes) take about ten minutes on two cores (the
+near-stop speeds are bisected against the reference); they ship in
+``symvib/checks/data/accuracy_reference.json`` (:data:`ACCURACY_REFERENCE_NAME`),
+one scene per line with its reference and time scale, under a header that
+identifies them: the seed and count, fingerprints of the generating and the
+reference code (:func:`generator_hash`, :func:`reference_hash`) and the
+reference's settings (:func:`reference_settings`).  :func:`stored_references`
+reads them, :func:`stale` says what no longer matches the code, and
+:func:`compute_references` / :func:`write_references` regenerate them
+(``symvib bench accuracy-reference --write --out symvib/checks/data``).
+
 Examples
 --------
 >>> from symvib.numeric.scene import scene_from_dict
@@ -34,19 +47,30 @@ Examples
 """
 from __future__ import annotations
 
+import ast
+import hashlib
+import inspect
 import json
 import math
+import textwrap
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
-from symvib.checks.arclength import CONE_RTOL, curve_frame, reference_run, scene_scales
+from symvib.checks import arclength, randomscenes
+from symvib.checks.arclength import CONE_RTOL, ReferenceRun, curve_frame, reference_run, scene_scales
 from symvib.checks.randomscenes import CATEGORIES, QUOTAS, TRACKS, RandomScene, random_scenes
 from symvib.numeric.scene import scene_from_dict
 
 __all__ = ["Verdict", "Reference", "Record", "Report", "VERDICTS", "DT_BINS", "TIME_TOL", "reference_for",
            "compare", "check_scene", "check_scenes", "time_tolerance",
+           # the stored references
+           "StoredReferences", "ACCURACY_REFERENCE_NAME", "STORED_SEED", "STORED_SCENES", "STORE_FORMAT",
+           "code_hash", "generator_hash", "reference_hash", "reference_settings", "compute_references",
+           "write_references", "read_references", "stored_references", "stale", "reference_differences",
+           "stored_differences", "regenerate", "STORED_TOL",
            # the random scenes, for convenience (symvib.checks.randomscenes)
            "CATEGORIES", "QUOTAS", "TRACKS", "RandomScene", "random_scenes"]
 
@@ -69,8 +93,8 @@ CONE_BAND = 1e-10
 FLAG_SLACK = 1e-12
 #: Events the reference runs beyond ``max_events`` (it keeps bouncing where the engine sums a Zeno series).
 ZENO_EXTRA_EVENTS = 4
-#: Ulps by which the reference's second run moves the start.
-PERTURB_ULPS = 4
+#: Ulps by which the reference's second run moves the start, and that run's relative tolerance.
+PERTURB_ULPS, PERTURBED_RTOL = 4, 1e-12
 #: CPU seconds of a DOP853 reference run, and of a GBS run.
 DOP853_BUDGET, GBS_BUDGET = 60.0, 300.0
 #: Upper bounds of the bins of ``max_dt`` in the summary (the last bin is ``>= 1e-3``).
@@ -121,7 +145,7 @@ def reference_for(scene_dict: dict) -> Reference:
     scene = scene_from_dict(scene_dict)
     extra = scene.max_events + ZENO_EXTRA_EVENTS
     a = reference_run(scene, max_events=extra, budget=DOP853_BUDGET)
-    b = reference_run(_perturbed(scene), rtol=1e-12, max_events=extra, budget=DOP853_BUDGET)
+    b = reference_run(_perturbed(scene), rtol=PERTURBED_RTOL, max_events=extra, budget=DOP853_BUDGET)
     split_at, spread = None, 0.0
     for i, (x, y) in enumerate(zip(a.events, b.events)):
         if not _same(x, y):
@@ -324,6 +348,15 @@ def compare(result, reference, *, scene=None, tol: float | None = None, split_at
 
 
 # --- running scenes -------------------------------------------------------------------------------
+#: Digits of event times in :meth:`Report.describe`, and the reference events it shows beyond the engine's.
+EVENT_DIGITS, SHOWN_EXTRA_EVENTS = 17, 2
+
+
+def _event_lines(events) -> str:
+    return "\n".join(f"      {e[0]:<19} t = {e[1]:.{EVENT_DIGITS}g}  q = {e[2]:.{EVENT_DIGITS}g}  "
+                     f"qdot_before = {e[3]:.6g}" for e in events) or "      (none)"
+
+
 @dataclass(frozen=True)
 class Record:
     """One checked scene: the scene, the verdict, both event lists and the reference's method."""
@@ -338,20 +371,35 @@ class Record:
     seconds: float = field(default=0.0, compare=False)
 
 
-def check_scene(rs: RandomScene, simulate=None) -> Record:
-    """Run one scene on the engine (``symvib.simulate`` by default) and judge it against the reference."""
+def check_scene(rs: RandomScene, simulate=None, reference: Reference | None = None,
+                time_scale: float | None = None) -> Record:
+    """Run one scene on the engine and judge it against the reference.
+
+    Parameters
+    ----------
+    rs : RandomScene
+    simulate : callable, optional
+        ``simulate(scene) -> Result`` (default ``symvib.simulate`` with its defaults).
+    reference : Reference, optional
+        The scene's reference (default :func:`reference_for`, computed; a stored one:
+        :func:`stored_references`).
+    time_scale : float, optional
+        The scene's ``T`` (:func:`~symvib.checks.arclength.scene_scales`), which sets the
+        tolerance (:func:`time_tolerance`; default: computed).
+    """
     if simulate is None:
         from symvib import simulate
     start = time.process_time()
     scene = scene_from_dict(rs.scene)
-    ref = reference_for(rs.scene)
+    ref = reference_for(rs.scene) if reference is None else reference
+    tol = None if time_scale is None else TIME_TOL * max(1.0, time_scale)
     try:
         result = simulate(scene)
     except Exception as exc:  # noqa: BLE001 - an engine that raises has said it cannot
         verdict = Verdict("flagged", math.nan, 0, f"the engine raised {type(exc).__name__}: {exc}")
         return Record(rs, verdict, (), "raised", ref.run.events, ref.run.status, ref.run.method,
                       time.process_time() - start)
-    verdict = compare(result, ref.run, scene=scene, split_at=ref.split_at)
+    verdict = compare(result, ref.run, scene=scene, tol=tol, split_at=ref.split_at)
     events = tuple((e.kind.value, e.t, e.q, e.qdot_before, e.qdot_after) for e in result.events)
     return Record(rs, verdict, events, result.status.value, ref.run.events, ref.run.status, ref.run.method,
                   time.process_time() - start)
@@ -392,6 +440,20 @@ class Report:
         rs = [r for r in self.records if r.verdict.verdict == verdict]
         return sorted(rs, key=lambda r: (not r.verdict.sequence_differs, -np.nan_to_num(r.verdict.max_dt)))[:n]
 
+    def describe(self, verdict: str = "silent_miss", n: int = 5) -> str:
+        """The worst ``n`` records of ``verdict`` (:meth:`worst`) in full: the scene as JSON (ready for
+        ``symvib.simulate``), the verdict's detail and both event lists ("" when there are none)."""
+        lines = []
+        for r in self.worst(verdict, n):
+            v = r.verdict
+            shown = r.reference_events[:len(r.engine_events) + SHOWN_EXTRA_EVENTS]
+            lines += [f"- scene {r.scene.index} ({r.scene.category}, {r.scene.curve}; {r.scene.note})",
+                      f"  max |t - t_ref| = {v.max_dt:.3g} s; {v.detail}",
+                      f"  scene = {json.dumps(r.scene.scene)}",
+                      f"  engine ({r.engine_status}):", _event_lines(r.engine_events),
+                      f"  reference {r.reference_method} ({r.reference_status}):", _event_lines(shown)]
+        return "\n".join(lines)
+
     def table(self) -> str:
         """The summary as text: verdicts per category, and the distribution of ``max_dt``."""
         cats = self.by_category()
@@ -411,27 +473,338 @@ class Report:
         return "\n".join(lines)
 
 
-def check_scenes(scenes, simulate=None, progress=None, workers: int = 1) -> Report:
+def check_scenes(scenes, simulate=None, progress=None, workers: int = 1, references=None,
+                 time_scales=None) -> Report:
     """Check every scene (:func:`check_scene`) and return the :class:`Report`.
 
     ``progress(record)`` is called after each scene; ``workers > 1`` checks them in that
     many spawned processes (``simulate`` must then pickle: a module-level function or None).
+    ``references`` and ``time_scales`` (sequences as long as ``scenes``, e.g. of
+    :func:`stored_references`) replace computing them.
     """
+    n = len(scenes)
+    tasks = list(zip(scenes, [simulate] * n, references or [None] * n, time_scales or [None] * n))
+    records = []
     if workers > 1:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        records = []
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            for record in pool.map(check_scene, scenes, [simulate] * len(scenes)):
+            for record in pool.map(check_scene, *zip(*tasks)):
                 records.append(record)
                 if progress is not None:
                     progress(record)
         return Report(tuple(records))
-    records = []
-    for rs in scenes:
-        record = check_scene(rs, simulate)
+    for task in tasks:
+        record = check_scene(*task)
         records.append(record)
         if progress is not None:
             progress(record)
     return Report(tuple(records))
+
+
+# --- stored references ----------------------------------------------------------------------------
+#: The stored references (package data, ``symvib/checks/data``), the version of their layout, and the
+#: seed and number of the scenes they hold (those of ``tests/test_accuracy_random.py``).
+ACCURACY_REFERENCE_NAME = "accuracy_reference.json"
+STORE_FORMAT = 1
+STORED_SEED, STORED_SCENES = 20261125, 200
+#: The command that regenerates the shipped file (from a checkout).
+REGENERATE = f"symvib bench accuracy-reference --write --out symvib/checks/data  # writes {ACCURACY_REFERENCE_NAME}"
+#: Hex digits of the code fingerprints.
+HASH_DIGITS = 16
+#: A recomputed reference agrees with the stored one within this: event times in s (relative to
+#: ``T`` where ``T > 1 s``), positions relative to the run's largest ``|q|``.
+STORED_TOL = 1e-12
+
+
+def code_hash(*objects) -> str:
+    """A fingerprint of the code of modules, classes or functions.
+
+    The source of each (:func:`inspect.getsource`) without its docstrings, comment lines
+    and blank lines, so that documenting the code does not change it; anything else does.
+
+    Examples
+    --------
+    >>> from symvib.checks import randomscenes
+    >>> code_hash(randomscenes) == generator_hash(), len(code_hash(randomscenes))
+    (True, 16)
+    """
+    digest = hashlib.sha256()
+    for obj in objects:
+        source = textwrap.dedent(inspect.getsource(obj))
+        docstrings = set()
+        for node in ast.walk(ast.parse(source)):
+            body = getattr(node, "body", None)
+            if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and body \
+                    and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
+                    and isinstance(body[0].value.value, str):
+                docstrings.update(range(body[0].lineno, body[0].end_lineno + 1))
+        for number, line in enumerate(source.splitlines(), 1):
+            text = line.rstrip()
+            if number not in docstrings and text.strip() and not text.lstrip().startswith("#"):
+                digest.update(text.encode() + b"\n")
+    return digest.hexdigest()[:HASH_DIGITS]
+
+
+def generator_hash() -> str:
+    """The fingerprint (:func:`code_hash`) of the code that draws the scenes (:mod:`symvib.checks.randomscenes`)."""
+    return code_hash(randomscenes)
+
+
+def reference_hash() -> str:
+    """The fingerprint (:func:`code_hash`) of the code of the references: :mod:`symvib.checks.arclength`
+    (it also bisects the near-stop speeds) and :func:`reference_for` with its helpers."""
+    return code_hash(arclength, reference_for, _perturbed, _same, _final_dt)
+
+
+def reference_settings() -> dict:
+    """The settings of :func:`reference_for` (and of :func:`~symvib.checks.arclength.reference_run`)."""
+    return {"rtol": arclength.RTOL, "perturbed_rtol": PERTURBED_RTOL, "perturb_ulps": PERTURB_ULPS,
+            "ref_tol_fraction": REF_TOL_FRACTION, "time_tol": TIME_TOL, "zeno_extra_events": ZENO_EXTRA_EVENTS,
+            "gbs_digits": arclength.GBS_DIGITS, "gbs_guard_digits": arclength.GBS_GUARD_DIGITS,
+            "cone_rtol": arclength.CONE_RTOL, "cone_atol": arclength.CONE_ATOL,
+            "dop853_budget": DOP853_BUDGET, "gbs_budget": GBS_BUDGET}
+
+
+@dataclass(frozen=True)
+class StoredReferences:
+    """Scenes with their references, as :func:`read_references` reads them.
+
+    Attributes
+    ----------
+    header : dict
+        What identifies them: ``format``, ``seed``, ``count``, ``curves``, ``generator_hash``,
+        ``reference_hash``, ``reference_settings`` (and, for information, ``made_with``).
+    scenes : tuple of RandomScene
+    references : tuple of Reference
+    time_scales : tuple of float
+        Each scene's ``T`` (:func:`~symvib.checks.arclength.scene_scales`).
+    """
+
+    header: dict
+    scenes: tuple
+    references: tuple
+    time_scales: tuple
+
+
+def _num(x) -> float:
+    """A stored number: a float, or the string of a non-finite one (JSON has none)."""
+    return float(x)
+
+
+def _plain(x):
+    """``x`` with non-finite floats as their strings (``"inf"``, ``"nan"``), for strict JSON."""
+    if isinstance(x, float) and not math.isfinite(x):
+        return repr(x)
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    return x
+
+
+def _entry(rs: RandomScene) -> dict:
+    """One stored scene: the scene, its time scale and its reference (computed)."""
+    ref = reference_for(rs.scene)
+    run = ref.run
+    return _plain({"index": rs.index, "category": rs.category, "curve": rs.curve, "note": rs.note,
+                   "T": scene_scales(scene_from_dict(rs.scene))[2], "scene": rs.scene,
+                   "reference": {"method": run.method, "status": run.status, "message": run.message,
+                                 "spread": ref.spread, "split_at": ref.split_at, "t_final": run.t_final,
+                                 "q_final": run.q_final, "qdot_final": run.qdot_final, "rhs_calls": run.rhs_calls,
+                                 "v_start": list(run.v_start), "events": [list(e) for e in run.events]}})
+
+
+def _decode(entry: dict) -> tuple:
+    """``(RandomScene, Reference, T)`` of a stored scene."""
+    r = entry["reference"]
+    events = tuple((e[0], *(_num(x) for x in e[1:])) for e in r["events"])
+    run = ReferenceRun(r["status"], events, r["message"], r["method"], tuple(_num(v) for v in r["v_start"]),
+                       _num(r["t_final"]), _num(r["q_final"]), _num(r["qdot_final"]), int(r["rhs_calls"]))
+    rs = RandomScene(entry["index"], entry["category"], entry["curve"], entry["scene"], entry["note"])
+    return rs, Reference(run, _num(r["spread"]), r["split_at"]), _num(entry["T"])
+
+
+def _made_with() -> dict:
+    import platform
+
+    import mpmath
+    import scipy
+
+    return {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
+            "mpmath": mpmath.__version__}
+
+
+def compute_references(seed: int = STORED_SEED, n: int = STORED_SCENES, curves=None, workers: int = 1,
+                       log=None) -> dict:
+    """Draw ``n`` scenes of ``seed`` (:func:`random_scenes`) and compute their references.
+
+    Parameters
+    ----------
+    seed, n : int
+    curves : sequence of str, optional
+        As :func:`random_scenes` (default: every curve not tagged ``numeric``).
+    workers : int
+        Processes (spawned) drawing the scenes and computing the references.
+    log : callable, optional
+        ``log(str)`` after each scene.
+
+    Returns
+    -------
+    dict
+        The content of the stored file (:func:`write_references`): a header and ``scenes``.
+    """
+    names = list(curves) if curves else [t.name for t in TRACKS.values() if not t.numeric]
+    # The fingerprints first: the source is read from the files when they are taken.
+    header = {"format": STORE_FORMAT, "seed": seed, "count": n, "curves": names,
+              "generator_hash": generator_hash(), "reference_hash": reference_hash(),
+              "reference_settings": reference_settings(), "made_with": _made_with(), "regenerate": REGENERATE}
+    scenes = random_scenes(seed, n, names, workers=workers)
+    entries = []
+    if workers > 1:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            entries = list(pool.map(_entry, scenes))
+    else:
+        entries = [_entry(rs) for rs in scenes]
+    if log is not None:
+        for e in entries:
+            r = e["reference"]
+            log(f"{e['index']:>4} {e['category']:<10} {e['curve']:<18} {r['method']:<6} {r['status']:<18} "
+                f"{len(r['events']):>3} events")
+    return {**header, "scenes": entries}
+
+
+def write_references(path, data: dict) -> Path:
+    """Write :func:`compute_references`'s ``data`` to ``path`` (a file, or a folder that receives
+    :data:`ACCURACY_REFERENCE_NAME`): the header, then one scene per line (floats as ``repr``)."""
+    path = Path(path)
+    if path.is_dir() or not path.suffix:
+        path = path / ACCURACY_REFERENCE_NAME
+    header = {k: v for k, v in data.items() if k != "scenes"}
+    lines = [f" {json.dumps(k)}: {json.dumps(v, allow_nan=False)}," for k, v in header.items()]
+    scenes = ",\n".join("  " + json.dumps(e, allow_nan=False, separators=(",", ":")) for e in data["scenes"])
+    text = "{\n" + "\n".join(lines) + '\n "scenes": [\n' + scenes + "\n ]\n}\n"
+    assert json.loads(text) == json.loads(json.dumps(data)), "the stored text must read back as the data"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def read_references(data: dict | str | Path) -> StoredReferences:
+    """The :class:`StoredReferences` of a file's content (a dict) or of a file."""
+    if not isinstance(data, dict):
+        data = json.loads(Path(data).read_text(encoding="utf-8"))
+    decoded = [_decode(e) for e in data["scenes"]]
+    header = {k: v for k, v in data.items() if k != "scenes"}
+    return StoredReferences(header, *(tuple(x) for x in zip(*decoded))) if decoded else \
+        StoredReferences(header, (), (), ())
+
+
+def stored_references() -> StoredReferences:
+    """The shipped references (``symvib/checks/data/accuracy_reference.json``, package data)."""
+    from symvib.checks.bench import shipped
+
+    return read_references(shipped(ACCURACY_REFERENCE_NAME))
+
+
+def stale(stored: StoredReferences) -> list:
+    """What no longer matches the code in ``stored``'s header (the format, the fingerprints of the generating
+    and the reference code, the reference's settings), one string each; ``[]`` when it is current."""
+    h = stored.header
+    now = {"format": STORE_FORMAT, "generator_hash": generator_hash(), "reference_hash": reference_hash(),
+           "reference_settings": reference_settings()}
+    return [f"{k}: stored {h.get(k)!r}, now {v!r}" for k, v in now.items() if h.get(k) != v]
+
+
+def reference_differences(a: Reference, b: Reference, tol: float) -> str:
+    """How two references of a scene differ, or ``""`` where they agree.
+
+    They agree in method, status, where their double-precision pair split, the kinds of their
+    events, every event time within ``tol`` (s) and every event position (and the final one)
+    within ``tol`` relative to the largest ``|q|`` of ``a``'s run.
+    """
+    x, y = a.run, b.run
+    for what in ("method", "status"):
+        if getattr(x, what) != getattr(y, what):
+            return f"{what}: {getattr(x, what)} against {getattr(y, what)}"
+    if a.split_at != b.split_at:
+        return f"split_at: {a.split_at} against {b.split_at}"
+    if [e[0] for e in x.events] != [e[0] for e in y.events]:
+        return f"event kinds: {[e[0] for e in x.events]} against {[e[0] for e in y.events]}"
+    q_scale = max([abs(e[2]) for e in x.events] + [abs(x.q_final), math.ulp(1.0)])
+    for i, (e, f) in enumerate(zip(x.events, y.events)):
+        if not (abs(e[1] - f[1]) <= tol and abs(e[2] - f[2]) <= tol * q_scale):
+            return f"event {i} ({e[0]}): t {e[1]!r} against {f[1]!r}, q {e[2]!r} against {f[2]!r}"
+    if x.status == "t_max" and not abs(x.q_final - y.q_final) <= tol * q_scale:
+        return f"final q at t_max: {x.q_final!r} against {y.q_final!r}"
+    return ""
+
+
+def stored_differences(fresh: StoredReferences, stored: StoredReferences, indices=None) -> list:
+    """Where ``fresh`` (recomputed) and ``stored`` references differ, one string each (``[]``: none).
+
+    Compares the scenes (as dicts), their time scales and their references
+    (:func:`reference_differences`, to :data:`STORED_TOL`) of the scenes ``indices`` of
+    ``stored`` (default all), which ``fresh`` holds in that order.
+    """
+    indices = range(len(stored.scenes)) if indices is None else list(indices)
+    if len(fresh.scenes) != len(indices):
+        return [f"{len(fresh.scenes)} scenes recomputed, {len(indices)} to compare"]
+    out = []
+    for j, i in enumerate(indices):
+        rs, ref, T = stored.scenes[i], stored.references[i], stored.time_scales[i]
+        where = f"scene {rs.index} ({rs.category}, {rs.curve})"
+        if fresh.scenes[j].scene != rs.scene:
+            out.append(f"{where}: the scene differs")
+            continue
+        if fresh.time_scales[j] != T:
+            out.append(f"{where}: T {fresh.time_scales[j]!r} against {T!r}")
+        why = reference_differences(ref, fresh.references[j], STORED_TOL * max(1.0, T))
+        if why:
+            out.append(f"{where}: {why}")
+    return out
+
+
+def regenerate(out=None, *, seed: int = STORED_SEED, n: int = STORED_SCENES, workers: int = 1, log=print) -> list:
+    """``symvib bench accuracy-reference``: recompute the stored scenes and references, compare them.
+
+    Parameters
+    ----------
+    out : pathlib.Path, optional
+        A folder whose :data:`ACCURACY_REFERENCE_NAME` receives them (``symvib/checks/data`` in a
+        checkout updates the shipped file); None stores nothing.
+    seed, n : int
+        The scenes (default: those of the shipped file, :data:`STORED_SEED`, :data:`STORED_SCENES`).
+    workers : int
+        Processes.
+    log : callable
+
+    Returns
+    -------
+    list of str
+        Where they differ from the shipped ones: what is :func:`stale` in the shipped file's
+        header, then the seed and count if they differ, else :func:`stored_differences`.
+    """
+    start = time.perf_counter()
+    data = compute_references(seed, n, workers=workers, log=log)
+    log(f"{len(data['scenes'])} scenes of seed {seed} in {time.perf_counter() - start:.0f} s wall")
+    try:
+        shipped = stored_references()
+    except FileNotFoundError as exc:
+        diffs = [str(exc)]
+    else:
+        diffs = stale(shipped)
+        was = (shipped.header.get("seed"), shipped.header.get("count"))
+        if was != (seed, n):
+            diffs.append(f"the shipped references are of seed {was[0]}, {was[1]} scenes; these of seed {seed}, "
+                         f"{n} scenes")
+        else:
+            diffs += stored_differences(read_references(data), shipped)
+    log("\n".join(diffs) if diffs else "the same as the shipped references")
+    if out is not None:
+        log(f"wrote {write_references(out, data)}")
+    return diffs
