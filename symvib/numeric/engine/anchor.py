@@ -15,7 +15,7 @@ Examples
 --------
 >>> import numpy as np
 >>> roots = np.array([[0.5, 2.0], [0.0, 0.0]]); count = np.array([2, 0])
->>> crit_near(roots, count, 1, 0.6, 0.2), crit_near(roots, count, 1, 1.0, 0.2)
+>>> float(crit_near(roots, count, 1, 0.6, 0.2)), float(crit_near(roots, count, 1, 1.0, 0.2))
 (0.5, nan)
 """
 from __future__ import annotations

@@ -45,8 +45,13 @@ def kernels_type(signatures: dict) -> KernelsType:
 def _maker(signatures_key: tuple):
     signatures = dict(signatures_key)
 
-    def make(F_p, F_m, dF_p, dF_m, node_p, node_m, z, h, dx, dz, alpha, kappa, N_w, q_scale, domain):
-        return KernelsBox(F_p, F_m, dF_p, dF_m, node_p, node_m, z, h, dx, dz, alpha, kappa, N_w, q_scale, domain)
+    def make(F_p, F_m, dF_p, dF_m, ddF_p, ddF_m, node_p, node_m, z, h, dx, dz, alpha, kappa, N_w, q_scale, domain):
+        return KernelsBox(F_p, F_m, dF_p, dF_m, ddF_p, ddF_m, node_p, node_m, z, h, dx, dz, alpha, kappa, N_w,
+                          q_scale, domain)
+
+    # The maker names the fields of the interface, in their order (a new kernel is added here too).
+    if make.__code__.co_varnames[:make.__code__.co_argcount] != Kernels._fields:
+        raise RuntimeError(f"compiled.make takes {make.__code__.co_varnames}, the interface is {Kernels._fields}")
 
     argtypes = tuple(nt.FunctionType(signatures[name]) for name in Kernels._fields)
     return numba.njit(argtypes, cache=True)(make)
