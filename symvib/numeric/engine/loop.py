@@ -69,7 +69,7 @@ from symvib.numeric.layout import (
     Summary,
 )
 
-__all__ = ["run", "params_of", "setup_of", "simulate_scene", "sample_scene", "sweep_scenes", "sweep_block",
+__all__ = ["run", "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene", "sample_scene", "sweep_scenes", "sweep_block",
            "sweep_arrays"]
 
 #: Rows the event log starts with (it doubles when full).
@@ -326,12 +326,37 @@ def params_of(row, n):
 def setup_of(row, K, cp):
     """The scene constants (:class:`~symvib.numeric.engine.state.Setup`) of a scene row, with the
     length scale of the run taken from the curve (:func:`~symvib.numeric.engine.scan.curve_scale`)."""
+    return setup_scaled(row, K, cp, run_scale(row, K, cp))
+
+
+def run_scale(row, K, cp):
+    """The length scale of the run of a scene row (:func:`~symvib.numeric.engine.scan.curve_scale`)."""
     lo, hi = K.domain(*cp)
-    has_left, left = row[SceneRow.has_left] != 0.0, row[SceneRow.left]
-    has_right, right = row[SceneRow.has_right] != 0.0, row[SceneRow.right]
-    scale = curve_scale(K, cp, row[SceneRow.q0], lo, hi, has_left, left, has_right, right, K.q_scale(*cp))
-    return Setup(row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k], has_left, left, has_right,
-                 right, lo, hi, scale, row[SceneRow.unilateral] != 0.0)
+    return curve_scale(K, cp, row[SceneRow.q0], lo, hi, row[SceneRow.has_left] != 0.0, row[SceneRow.left],
+                       row[SceneRow.has_right] != 0.0, row[SceneRow.right], K.q_scale(*cp))
+
+
+def setup_scaled(row, K, cp, scale):
+    """:func:`setup_of` with the run's length scale given."""
+    lo, hi = K.domain(*cp)
+    return Setup(row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k], row[SceneRow.has_left] != 0.0,
+                 row[SceneRow.left], row[SceneRow.has_right] != 0.0, row[SceneRow.right], lo, hi, scale,
+                 row[SceneRow.unilateral] != 0.0)
+
+
+def same_scale(rows, cp_rows, i):
+    """Whether scene ``i`` of a sweep has the length scale of scene ``i - 1``: the same curve
+    parameters and limiters (and start, where a limiter is missing: :func:`run_scale`)."""
+    a, b = rows[i], rows[i - 1]
+    for c in (SceneRow.has_left, SceneRow.left, SceneRow.has_right, SceneRow.right):
+        if a[c] != b[c]:
+            return False
+    if (a[SceneRow.has_left] == 0.0 or a[SceneRow.has_right] == 0.0) and a[SceneRow.q0] != b[SceneRow.q0]:
+        return False
+    for c in range(cp_rows.shape[1]):
+        if cp_rows[i, c] != cp_rows[i - 1, c]:
+            return False
+    return True
 
 
 def simulate_scene(K, cp, row, R, keep):
@@ -369,9 +394,13 @@ def sweep_arrays(n, max_log):
 def sweep_block(K, rows, cp_rows, R, max_log, out, logs, start, stop):
     """Entry point: scenes ``start`` to ``stop - 1`` of a sweep, their summaries into ``out``
     and their first ``max_log`` events into ``logs`` (see :func:`sweep_scenes`)."""
+    scale = 0.0
     for i in range(start, stop):
         cp = params_of(cp_rows[i], cp_rows.shape[1])
-        S = setup_of(rows[i], K, cp)
+        # The curve's length scale is sampled once for a run of scenes that share it.
+        if i == start or not same_scale(rows, cp_rows, i):
+            scale = run_scale(rows[i], K, cp)
+        S = setup_scaled(rows[i], K, cp, scale)
         o = run(S, K, cp, R, rows[i, SceneRow.q0], rows[i, SceneRow.qdot0], rows[i, SceneRow.t_max],
                 int(rows[i, SceneRow.max_events]), False)
         impacts = 0

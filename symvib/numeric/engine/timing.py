@@ -7,7 +7,7 @@ rebuilt from the anchor by integrating ``G' = -2 g F_s'`` with a cumulative
 Gauss-Legendre matrix, so it keeps full relative accuracy where it is small;
 near a (real or virtual) root at distance ``delta`` behind the anchor the
 variable ``r = sqrt(xi)``, ``xi`` the distance from that root, removes the
-inverse square root, with panels graded geometrically from ``sqrt(delta)``.
+inverse square root, with panels graded geometrically from ``sqrt(delta)`` (grazing roots).
 
 Error control (physics.md, "Accuracy"): every panel estimates the truncation error
 of its time and of its increment of ``G`` from the four highest Legendre
@@ -52,6 +52,11 @@ __all__ = ["quad", "panel", "zero_ratio", "tail_time", "PanelColumn", "PANEL_COL
 #: A half-interval uses the root substitution when its anchor's (virtual) root is
 #: closer than ROOT_RATIO times the half's length.
 ROOT_RATIO = 1.0
+#: Panels are graded geometrically from ``r = sqrt(delta)`` only where that is at least this
+#: fraction of the half's ``r`` span: a root closer than that is real and simple (a turning point
+#: stopped on the double before it, ``G`` of rounding size), and the integrand is analytic in ``r``
+#: far around it; error control refines whatever else needs it.
+ROOT_GRADE = 1e-3
 #: Smallest positive double, used to keep 1/sqrt(G) finite at a node on a root.
 TINY = np.finfo(float).tiny
 #: Unit roundoff of a double.
@@ -389,7 +394,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
             r_hi = half
         seg_a = r_lo
         while True:
-            if (not root) or r_lo == 0.0 or 2.0 * seg_a >= r_hi:
+            if (not root) or r_lo < ROOT_GRADE * r_hi or 2.0 * seg_a >= r_hi:
                 seg_b = r_hi
             else:
                 seg_b = 2.0 * seg_a
