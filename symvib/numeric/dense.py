@@ -164,7 +164,11 @@ class DenseOutput:
         inside = flat < float(self.result.t_final)
         i = np.searchsorted(self._t0, flat, side="right") - 1
         zeno = inside & ((i < 0) | (flat > self._t1[np.maximum(i, 0)]))
-        qdot[zeno] = 0.0  # the summed bounces at the limiter (q_final)
+        # Between intervals: at rest where the last one ended (the summed bounces at the limiter,
+        # or the fraction of an ulp between a turning point and the double the next starts on).
+        qdot[zeno] = 0.0
+        gap = zeno & (i >= 0)
+        q[gap] = self._ivs[i[gap], IntervalColumn.qb]
         run = np.flatnonzero(inside & ~zeno)
         if run.size:
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):

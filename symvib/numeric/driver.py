@@ -199,7 +199,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         seconds (physics.md, "Accuracy"): the quadrature refines its panels until its
         error estimate is below ``rtol T + atol``; each event carries the sum of the
         estimates before it (``Event.t_err``).  An interval whose estimate stays above
-        1000 times its tolerance (:data:`symvib.numeric.engine.loop.TOLERANCE_FACTOR`)
+        100 times its tolerance (:data:`symvib.numeric.engine.loop.TOLERANCE_FACTOR`)
         ends the run with status ``tolerance_not_met`` (``success`` is False).
 
     Returns

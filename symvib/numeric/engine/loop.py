@@ -56,6 +56,7 @@ from symvib.numeric.engine.timing import (
     root_time,
     samples,
     tail_time,
+    turn_departure,
 )
 from symvib.numeric.layout import (
     EVENT_COLUMNS,
@@ -69,8 +70,8 @@ from symvib.numeric.layout import (
     Summary,
 )
 
-__all__ = ["run", "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene", "sample_scene", "sweep_scenes", "sweep_block",
-           "sweep_arrays"]
+__all__ = ["run", "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene",
+           "sample_scene", "sweep_scenes", "sweep_block", "sweep_arrays"]
 
 #: Rows the event log starts with (it doubles when full).
 EVENT_LOG_START = 64
@@ -84,7 +85,7 @@ EVENT_WIDTH, INTERVAL_WIDTH, SUMMARY_WIDTH = len(EVENT_COLUMNS), len(INTERVAL_CO
 #: end (``rtol (t + T) + atol``: the event times' promise) ends the run ``tolerance_not_met``: the
 #: quadrature aims at the tolerance, and a miss this large is not rounding of the estimate but an
 #: integral it could not resolve, or ``G`` lost to cancellation (physics.md, "Accuracy").
-TOLERANCE_FACTOR = 1000.0
+TOLERANCE_FACTOR = 100.0
 #: Column indices as plain ints (numpy indexes faster with an int than with an IntEnum).
 E_KIND, E_T, E_Q, E_BEFORE, E_AFTER, E_ENERGY, E_TERR = (int(c) for c in EventColumn)
 I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W, I_TERR = (int(c) for c in IntervalColumn)
@@ -143,6 +144,8 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
     Wimp = 0.0
     t_err = 0.0
     q_bad = math.nan
+    # The time from a turning point to the double before it that the next interval starts on.
+    tail_next = 0.0
     zeno = Zeno(0.0, 0.0, 0.0, 0.0)
     status = StatusCode.RUNNING
     q = q0
@@ -226,6 +229,10 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
             status = StatusCode.LEFT_CURVE
             break
         s = sigma * nsign
+        if tail_next > 0.0:
+            t = min(t + tail_next, t_max)  # from the turning point, past the double it was stopped on, to q
+            t_err += 4.0 * EPS * tail_next
+            tail_next = 0.0
         Ga = w * math.exp(2.0 * s * mu * K.alpha(q, *cp))
         end, qb, Gb, roots = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, R.Xp, R.Wp)
         T, Wi, Te, flag, _, q_ok, G_ok, q_neg = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
@@ -280,6 +287,13 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
                 code, status = rest_outcome(what)
             else:
                 sigma = direction
+                if Gb > 0.0:
+                    # The turning point lies a fraction of an ulp beyond qb: the particle passes qb
+                    # again, with the G of its new branch over that stretch, after tail_next.
+                    s_out = sigma * nsign_of(qb, 0.0, g, K, cp)
+                    G_out = turn_departure(qb, Gb, s, s_out, S, K, cp, roots, count)
+                    w = G_out * math.exp(-2.0 * s_out * mu * K.alpha(qb, *cp))
+                    tail_next = tail_time(qb, G_out, s_out, S, K, cp, roots, count)
             events, ne = put_event(events, ne, code, t, qb, 0.0, 0.0, energy(qb, 0.0, m, g, K, cp), t_err)
         elif end == End.LIMIT:
             q, w = qb, wb

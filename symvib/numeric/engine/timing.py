@@ -45,7 +45,8 @@ from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_u
 from symvib.numeric.engine.scan import ROOT_ROWS, scratch
 from symvib.numeric.layout import IntervalColumn
 
-__all__ = ["quad", "panel", "zero_ratio", "tail_time", "PanelColumn", "PANEL_COLUMNS", "NONE", "SAMPLES", "PANELS",
+__all__ = ["quad", "panel", "zero_ratio", "tail_time", "turn_departure", "PanelColumn", "PANEL_COLUMNS", "NONE",
+           "SAMPLES", "PANELS",
            "tail_error", "cumulate", "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO",
            "WORK_ROWS", "MAX_PANELS", "SampleColumn", "QUAD_OK", "QUAD_BUDGET", "QUAD_NEGATIVE"]
 
@@ -509,6 +510,16 @@ def tail_time(q, G, s, S, K, cp, roots, count):
     _, hh, ex, _, _ = node(s, q, S.mu, K, cp)
     slope = 2.0 * S.g * abs(dF_best(s, q, 0.0, S, K, cp, roots, count))
     return 2.0 * hh * ex * sqrt(G) / slope if slope > 0.0 else 0.0
+
+
+def turn_departure(q, G, s, s_out, S, K, cp, roots, count):
+    """``G`` of the branch ``s_out`` at ``q`` after a turning point a fraction of an ulp beyond it,
+    where the branch ``s`` that arrived had ``G`` (both linear over that stretch): the particle
+    passes ``q`` again with ``G_out = |G'_out| delta``, ``delta = G / |G'|`` (physics.md,
+    "Accuracy").  The time from the turning point back to ``q`` is :func:`tail_time` of ``G_out``."""
+    slope_in = abs(dF_best(s, q, 0.0, S, K, cp, roots, count))
+    slope_out = abs(dF_best(s_out, q, 0.0, S, K, cp, roots, count))
+    return G * slope_out / slope_in if slope_in > 0.0 else 0.0
 
 
 def time_excess(x, p):
