@@ -162,3 +162,36 @@ def test_missing_friction_is_an_error_naming_the_field():
     frictionless = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
                                     "physics": {"mu": 0, "restitution": 0.8}, "initial": {"q": 0.0, "qdot": 1.0}})
     assert frictionless.mu == 0.0
+
+
+def _events_of(data, backend="python"):
+    result = simulate(scene_from_dict(data), backend=backend)
+    assert result.success, result.message
+    return result
+
+
+def test_the_papers_parabola_as_expressions_runs_as_the_catalogue_parabola():
+    """x = tan(phi), z = tan(phi)**2/2 once stopped generate with a conditional ('_t1 == 0' refused):
+    written as expressions it runs, and its events are the catalogue parabola's (p = 1)."""
+    rest = {"physics": {"mu": 0.05, "restitution": 0.8}, "limiters": {"left": "-pi/6", "right": "pi/4"},
+            "initial": {"q": 0.0, "qdot": 7.0}}
+    user = _events_of({"curve": {"x": "tan(phi)", "z": "tan(phi)**2/2", "q": "phi"}, **rest})
+    catalogue = _events_of({"curve": {"shape": "parabola"}, "parameters": {"p": 1.0}, **rest})
+    assert [e.kind for e in user.events] == [e.kind for e in catalogue.events] and len(user.events) >= 10
+    for a, b in zip(user.events, catalogue.events):
+        assert abs(a.t - b.t) < TIME_TOL and abs(a.q - b.q) < TIME_TOL
+
+
+@pytest.mark.slow  # the derivation of sinh/cosh takes about a minute
+def test_a_hyperbola_in_sinh_cosh_runs_and_meets_an_independent_integration():
+    """x = sinh(q), z = cosh(q) (h = cosh q, the sqrt of a square in the derivation): it runs, and its
+    events are those of the arc-length DOP853 integration written from physics.md alone."""
+    from symvib.checks.arclength import reference_run
+
+    data = {"curve": {"x": "sinh(q)", "z": "cosh(q)"}, "limiters": {"left": -0.9, "right": 1.2},
+            "physics": {"mu": 0.1, "restitution": 0.7}, "initial": {"q": 0.0, "qdot": 3.0}, "run": {"t_max": 4.0}}
+    result = _events_of(data)
+    ref = reference_run(scene_from_dict(data))
+    assert len(result.events) >= 4 and len(ref.events) >= len(result.events)
+    for e, r in zip(result.events, ref.events):
+        assert e.kind.value == r[0] and abs(e.t - r[1]) < TIME_TOL and abs(e.q - r[2]) < TIME_TOL, (e, r)
