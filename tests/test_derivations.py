@@ -105,7 +105,11 @@ def test_notebook_runs(path, tmp_path, monkeypatch):
 
 
 def test_readme_own_curve_runs(tmp_path, monkeypatch, capsys):
+    from symvib.numeric import kernels
+
     monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
+    # As in a fresh process: the corpus's "bowl" (the same shape) may have been loaded by this worker.
+    monkeypatch.setattr(kernels, "_LOADED", {})
     namespace = run_section("## Your own curve", "readme_own_curve")
     result = namespace["result"]
     assert result.status.value == "arrested"

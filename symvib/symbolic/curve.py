@@ -35,8 +35,8 @@ import sympy as sp
 from symvib import expr as _expr
 from symvib.symbolic.symbols import RESERVED
 
-__all__ = ["Curve", "CurveError", "graph", "parametric", "to_sympy", "sample_points", "generic_branch",
-           "tangent_angle", "angle_jump", "removable_form"]
+__all__ = ["Curve", "CurveError", "graph", "parametric", "to_sympy", "sample_points", "reference_point",
+           "generic_branch", "tangent_angle", "angle_jump", "removable_form"]
 
 #: Parameter assumptions a curve may declare.
 ASSUMPTIONS = {
@@ -162,19 +162,23 @@ def removable_form(expr: sp.Expr) -> sp.Expr:
     SymPy cancels it to ``2 q / ((1 + q**4)**(3/2) sign(q))``, which the kernels
     evaluate with ``sign(0)`` printed as ``copysign(1, 0) = 1``: finite, and the limit
     from the right where the function jumps (``z = x abs(x)``: ``z'' = 2 sign(x)``).
-    An expression with ``Abs`` in numerators only is left as it is.
+    So is ``|u| / u`` (``z = x abs(x) + x**2``: ``kappa = 2 |q| / (q (4 q**2 + 1)**(3/2)) + ...``):
+    ``sign(u)``.  An expression with ``Abs`` in numerators only, over denominators without
+    its argument, is left as it is.
 
     Examples
     --------
     >>> q = sp.Symbol("q", real=True)
-    >>> removable_form(q**2 / sp.Abs(q)), removable_form(sp.Abs(q) / sp.cos(q))
-    (q/sign(q), Abs(q)/cos(q))
+    >>> removable_form(q**2 / sp.Abs(q)), removable_form(sp.Abs(q) / sp.cos(q)), removable_form(sp.Abs(q) / q)
+    (q/sign(q), Abs(q)/cos(q), sign(q))
     >>> removable_form((q + sp.Abs(q)) / (q * (1 + q * sp.Abs(q))))
     (sign(q) + 1)/(q**2*sign(q) + 1)
     """
     if not isinstance(expr, sp.Basic) or not expr.has(sp.Abs):
         return expr
-    if not any(p.exp.is_negative and p.base.has(sp.Abs) for p in expr.atoms(sp.Pow)):
+    denominators = {p.base for p in expr.atoms(sp.Pow) if p.exp.is_negative}
+    arguments = {a.args[0] for a in expr.atoms(sp.Abs)}
+    if not (any(b.has(sp.Abs) for b in denominators) or arguments & denominators):
         return expr
     rewritten = expr.replace(lambda e: isinstance(e, sp.Abs), lambda e: e.args[0] * sp.sign(e.args[0]))
     try:
@@ -477,7 +481,7 @@ def tangent_angle(curve: Curve):
     key = tuple(sp.srepr(e) for e in (curve.x, curve.z, curve.h, curve.domain, curve.q_scale))
     if key in _ANGLES:
         return _ANGLES[key]
-    q0 = _reference_point(curve)
+    q0 = reference_point(curve)
     args = (sp.srepr(curve.xp), sp.srepr(curve.zp), curve.q.name, sp.srepr(q0))
     found = None
     for job, seconds in ((_integration_job, ALPHA_SECONDS), (_rotation_job, ROTATION_SECONDS)):
@@ -497,8 +501,9 @@ def tangent_angle(curve: Curve):
     return found
 
 
-def _reference_point(curve: Curve) -> sp.Expr:
-    """0 when it is inside the domain, else the middle, or one ``q_scale`` inside a finite end."""
+def reference_point(curve: Curve) -> sp.Expr:
+    """A finite point inside the domain: 0 when it is inside, else the middle, or one
+    ``q_scale`` inside the finite end of a half-infinite domain (whose middle is infinite)."""
     lo, hi = curve.domain
     if (lo.is_infinite or (lo < 0) == sp.true) and (hi.is_infinite or (hi > 0) == sp.true):
         return sp.Integer(0)

@@ -46,7 +46,14 @@ import mpmath
 import sympy as sp
 
 from symvib.symbolic import budget
-from symvib.symbolic.curve import CHECK_DIGITS, CHECK_TOLERANCE, Curve, numeric_zero, sample_points
+from symvib.symbolic.curve import (
+    CHECK_DIGITS,
+    CHECK_TOLERANCE,
+    Curve,
+    numeric_zero,
+    reference_point,
+    sample_points,
+)
 from symvib.symbolic.symbols import mu
 
 __all__ = ["Attempt", "Antiderivative", "antiderivative", "integrand", "ROUTES", "ROUTE_SECONDS",
@@ -270,7 +277,7 @@ def antiderivative(curve: Curve, s: int, *, seconds: float = ROUTE_SECONDS,
     if key in _CACHE:
         # The reference point depends on the domain: one integrand on (0.3, oo) and on
         # (-oo, -0.3) shares the symbolic work but not q_ref.
-        return _with_q_ref(_CACHE[key], _q_ref(curve), curve.q)
+        return _with_q_ref(_CACHE[key], reference_point(curve), curve.q)
     q = curve.q
     attempts = []
     result = None
@@ -303,11 +310,11 @@ def antiderivative(curve: Curve, s: int, *, seconds: float = ROUTE_SECONDS,
         F_reg, regular = regularize(F, q)
         attempts.append(Attempt(route, f"closed form, verified {how}", elapsed))
         result = Antiderivative(s=s, integrand=f, expr=F_reg, route=route, verification=how,
-                                attempts=tuple(attempts), q_ref=_q_ref(curve), mu_regular=regular)
+                                attempts=tuple(attempts), q_ref=reference_point(curve), mu_regular=regular)
         break
     if result is None:
         u = sp.Dummy("u", real=True)
-        q_ref = _q_ref(curve)
+        q_ref = reference_point(curve)
         result = Antiderivative(s=s, integrand=f, expr=sp.Integral(f.subs(q, u), (u, q_ref, q)),
                                 route="numeric", verification="quadrature", attempts=tuple(attempts),
                                 q_ref=q_ref)
@@ -335,19 +342,6 @@ def _tidy(F: sp.Expr) -> sp.Expr:
         except Exception:  # noqa: BLE001 - tidying is optional
             pass
     return min(candidates, key=sp.count_ops)
-
-
-def _q_ref(curve: Curve) -> sp.Expr:
-    """A finite point inside the domain: 0 when it is inside, else the middle, or one
-    ``q_scale`` inside the finite end of a half-infinite domain (whose middle is infinite)."""
-    lo, hi = curve.domain
-    if (lo.is_infinite or (lo < 0) == sp.true) and (hi.is_infinite or (hi > 0) == sp.true):
-        return sp.Integer(0)
-    if hi.is_infinite:
-        return lo + curve.q_scale
-    if lo.is_infinite:
-        return hi - curve.q_scale
-    return (lo + hi) / 2
 
 
 def frictionless_gap(F: Antiderivative, curve: Curve, values: dict, points: int = 5) -> float:

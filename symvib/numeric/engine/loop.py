@@ -229,6 +229,11 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
             status = StatusCode.LEFT_CURVE
             break
         s = sigma * nsign
+        q_next = np.nextafter(q, q + sigma)
+        if abs(K.alpha(q_next, *cp) - K.alpha(q, *cp)) > math.pi:
+            # q is on the tangent angle's branch cut (a start, an impact or a turn there): go on
+            # from the first double beyond it, on the branch the motion is on (as at End.CUT).
+            q = q_next
         if tail_next > 0.0:
             t = min(t + tail_next, t_max)  # from the turning point, past the double it was stopped on, to q
             t_err += 4.0 * EPS * tail_next

@@ -314,7 +314,7 @@ def branch_cut(roots, count, a, b, K, cp):
     if not abs(fb - fa) > math.pi:
         return roots
     for _ in range(CUT_BISECT):
-        m = 0.5 * (a + b)
+        m = 0.0 if a < 0.0 < b else 0.5 * (a + b)
         if not a < m < b:
             break
         fm = K.alpha(m, *cp)
@@ -322,6 +322,10 @@ def branch_cut(roots, count, a, b, K, cp):
             b, fb = m, fm
         else:
             a, fa = m, fm
+    if b == 0.0 or a == 0.0:
+        # A jump at q = 0 (a loop's lowest point): halving only approaches it, over a thousand binades.
+        below = np.nextafter(0.0, -1.0)
+        a = below if abs(K.alpha(below, *cp) - K.alpha(0.0, *cp)) > math.pi else 0.0
     for i in range(count[CUT_ROW]):
         if roots[CUT_ROW, i] == a:
             return roots
@@ -335,7 +339,8 @@ def next_cut(roots, count, a, b, sigma):
     for i in range(count[CUT_ROW]):
         c = roots[CUT_ROW, i]
         if sigma < 0:
-            c = np.nextafter(c, math.inf)
+            # (+ 0.0: -0.0 is +0.0; the kernels' atan2 takes the sign of a zero z' for a branch)
+            c = np.nextafter(c, math.inf) + 0.0
         if (a < c < b or b < c < a) and (math.isnan(best) or abs(c - a) < abs(best - a)):
             best = c
     return best
