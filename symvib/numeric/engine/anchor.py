@@ -24,15 +24,13 @@ import math
 
 import numpy as np
 
-from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, dF_edge, node
+from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, EPS, dF_edge, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, ROOT_RTOL
 
 __all__ = ["crit_near", "dF_best", "anchored_G", "root_anchored", "PANEL_Q"]
 
 #: Widest quadrature panel, in units of the curve's q_scale (here and in the time quadrature).
 PANEL_Q = 1.0
-#: Unit roundoff of a double.
-EPS = 2.220446049250313e-16
 #: :func:`root_anchored` stops where ``|G|`` is below this many rounding errors of the anchor's ``G``.
 ROOT_NOISE = 4.0
 #: Doubles :func:`root_anchored` steps back towards the anchor to stand where ``G >= 0``.

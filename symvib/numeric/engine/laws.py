@@ -19,12 +19,14 @@ import math
 from symvib.numeric.layout import EventCode, StatusCode
 
 __all__ = ["Fs", "dFs", "ddFs", "dF_edge", "node", "energy", "qdot_of", "finite_state", "nsign_of", "impact", "side_at",
-           "rest", "rest_outcome", "zeno_series", "CONE_RTOL", "ZENO_W"]
+           "rest", "rest_outcome", "zeno_series", "CONE_RTOL", "ZENO_W", "EPS"]
 
+#: Unit roundoff of a double.
+EPS = 2.220446049250313e-16
 #: Relative tolerance of the arrest test |tan alpha| <= mu at a turning point.
 CONE_RTOL = 1e-9
 #: Absolute slack of the arrest test, a few rounding errors of a sine of order 1.
-CONE_ATOL = 4.0 * 2.220446049250313e-16
+CONE_ATOL = 4.0 * EPS
 #: A Zeno accumulation is summed analytically once w at an impact is below
 #: ZENO_W * g * (a length of the curve): the local model is then exact to rounding.
 ZENO_W = 1e-10

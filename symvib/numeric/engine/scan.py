@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from symvib.numeric.engine.anchor import anchored_G, root_anchored
-from symvib.numeric.engine.laws import Fs
+from symvib.numeric.engine.laws import EPS, Fs
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update, root_G
 
 __all__ = ["End", "Region", "scratch", "map_new", "locate", "curve_scale", "branch_cut", "next_cut", "CRIT_STEP",
@@ -68,8 +68,6 @@ CUT_BISECT = 80
 #: with ``G`` carried from its start (:func:`symvib.numeric.engine.anchor.anchored_G`).
 CANCEL_RTOL = 1e-11
 NOISE_ROUNDS = 8.0
-#: Unit roundoff of a double.
-EPS = 2.220446049250313e-16
 
 
 class End(enum.IntEnum):

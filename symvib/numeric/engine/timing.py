@@ -40,7 +40,7 @@ from math import sqrt
 import numpy as np
 
 from symvib.numeric.engine.anchor import PANEL_Q, crit_near, dF_best
-from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, Fs, dF_edge, node
+from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, EPS, Fs, dF_edge, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update
 from symvib.numeric.engine.scan import ROOT_ROWS, scratch
 from symvib.numeric.layout import IntervalColumn
@@ -60,8 +60,6 @@ ROOT_RATIO = 1.0
 ROOT_GRADE = 1e-3
 #: Smallest positive double, used to keep 1/sqrt(G) finite at a node on a root.
 TINY = np.finfo(float).tiny
-#: Unit roundoff of a double.
-EPS = 2.220446049250313e-16
 #: Rows of the quadrature's scratch array (node values and the cumulative sums).
 WORK_ROWS = 10
 #: Most panels a half-interval may accept; with at most MAX_TRIES evaluated, including the
@@ -355,8 +353,8 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
         return 0.0, 0.0, 0.0, QUAD_OK, o, qa, Ga, qa
     half = 0.5 * L
     maxq = PANEL_Q * scale
-    ft, fp, fw, acc = work[7], work[8], work[9], work[6]
     rows = (work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7], work[8], work[9])
+    acc, ft, fp, fw = rows[6], rows[7], rows[8], rows[9]
     rule_w = (R.Xw, R.Ww, R.SWw, R.Tw)
     rule_p = (R.Xp, R.Wp, R.Sp, R.Tp)
     T = 0.0
