@@ -142,10 +142,11 @@ def table_text() -> str:
 
 
 def write_table(out_dir) -> Path:
-    """Write the table module into ``out_dir``; returns its path."""
-    path = Path(out_dir) / f"{TABLE_MODULE}.py"
-    path.write_text(table_text(), encoding="utf-8")
-    return path
+    """Write the table module into ``out_dir`` (:func:`symvib.safeio.write_text`); returns its path."""
+    from symvib import safeio
+
+    out = safeio.check_root(out_dir, "output folder")
+    return safeio.write_text(out, f"{TABLE_MODULE}.py", table_text())
 
 
 def table_problems(out_dir) -> list:

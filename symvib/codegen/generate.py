@@ -56,7 +56,6 @@ import builtins
 import hashlib
 import keyword
 import math
-import os
 import re
 import sys
 import unicodedata
@@ -67,7 +66,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-from symvib import provenance
+from symvib import provenance, safeio
 from symvib.codegen import gauss
 from symvib.numeric.kernels import DIGEST_PREFIX, verify_text
 from symvib.symbolic.curve import CurveError, generic_branch, removable_form
@@ -563,19 +562,9 @@ def module_name(name: str) -> str:
     return out if out[:1].isalpha() else "c_" + out
 
 
-def generate(curve, out_dir, *, name: str | None = None, source: dict | None = None,
-             seconds: float | None = None, routes=None) -> Path:
-    """Derive ``curve`` and write its kernel module into ``out_dir``; returns the path.
-
-    ``curve`` is a catalogue name, a :class:`~symvib.shapes.Shape` or a
-    :class:`~symvib.symbolic.curve.Curve` (then give ``source``, its defining data).
-    ``seconds`` and ``routes`` are :func:`~symvib.symbolic.derive.derive`'s (default: every
-    route of :data:`~symvib.symbolic.integrals.ROUTES`, :data:`~symvib.symbolic.integrals.ROUTE_SECONDS`
-    each); ``routes=()`` takes the numeric route at once, as a curve with no closed-form
-    ``F_sigma`` ends up doing after the budgets of every route.
-    """
+def _resolved(curve, source, name):
+    """``(curve, source, name)`` of a catalogue name, a Shape, or a Curve with its ``source``."""
     from symvib.shapes import Shape, shape
-    from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
     if isinstance(curve, str):
         curve = shape(curve)
@@ -585,24 +574,44 @@ def generate(curve, out_dir, *, name: str | None = None, source: dict | None = N
         curve = curve.curve()
     if source is None:
         raise ValueError("generate() needs the curve's defining data (source) to hash")
+    return curve, source, name
+
+
+def module_source(curve, *, source: dict | None = None, seconds: float | None = None, routes=None,
+                  origin="<generated module>") -> str:
+    """Derive ``curve`` and return the text of its kernel module, checked by the loader's whitelist.
+
+    Arguments as :func:`generate`'s; ``origin`` names the module in errors.  Nothing is written.
+    """
+    from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
+
+    curve, source, _ = _resolved(curve, source, None)
     check_param_names(p.name for p in curve.params)  # before the derivation: fail in milliseconds
     _py_literal(source)
     d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds,
                routes=ROUTES if routes is None else routes)
     text = module_text(d, source)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    stem = name if name and name.endswith(".tmp") else module_name(name or curve.name)
-    path = out / f"{stem}.py"
-    verify_text(text, path)  # what a generator writes must pass what a loader checks
-    # Written whole or not at all: a reader never sees half a module.
-    tmp = path.with_name(f"{path.name}.{os.getpid()}.part")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
+    verify_text(text, origin)  # what a generator writes must pass what a loader checks
+    return text
+
+
+def generate(curve, out_dir, *, name: str | None = None, source: dict | None = None,
+             seconds: float | None = None, routes=None) -> Path:
+    """Derive ``curve`` and write its kernel module into ``out_dir``; returns the path.
+
+    ``curve`` is a catalogue name, a :class:`~symvib.shapes.Shape` or a
+    :class:`~symvib.symbolic.curve.Curve` (then give ``source``, its defining data).
+    ``seconds`` and ``routes`` are :func:`~symvib.symbolic.derive.derive`'s (default: every
+    route of :data:`~symvib.symbolic.integrals.ROUTES`, :data:`~symvib.symbolic.integrals.ROUTE_SECONDS`
+    each); ``routes=()`` takes the numeric route at once, as a curve with no closed-form
+    ``F_sigma`` ends up doing after the budgets of every route.  The module is written whole
+    or not at all, never through a symbolic link (:func:`symvib.safeio.write_text`).
+    """
+    curve, source, name = _resolved(curve, source, name)
+    stem = module_name(name or curve.name)
+    out = safeio.check_root(out_dir, "output folder")
+    text = module_source(curve, source=source, seconds=seconds, routes=routes, origin=out / f"{stem}.py")
+    return safeio.write_text(out, f"{stem}.py", text)
 
 
 def _generate_one(args):

@@ -30,20 +30,22 @@ from __future__ import annotations
 import builtins
 import hashlib
 import importlib.util
-import os
 import re
 import sys
 import warnings
 from pathlib import Path
 
-from symvib import provenance
+from symvib import cachetrust, provenance, safeio
+from symvib.paths import UserPathError
 from symvib.shapes import CATALOGUE, Shape
 
 __all__ = ["load", "load_generated", "generated_dir", "cache_dir", "check_text", "verify_text", "check_interface",
            "KernelError", "DIGEST_PREFIX"]
 
 #: Environment variable naming the cache folder for user curves.
-CACHE_ENV = "SYMVIB_CACHE"
+CACHE_ENV = cachetrust.CACHE_ENV
+#: Largest module file read from the cache, in bytes (the largest generated module is about 100 kB).
+MAX_MODULE_BYTES = 8 * 2**20
 
 
 class KernelError(RuntimeError):
@@ -78,6 +80,15 @@ NUMPY_ATTRIBUTES = frozenset({
 })
 #: Attributes of values (arrays) a generated module may read.
 VALUE_ATTRIBUTES = frozenset({"shape", "size"})
+#: Keyword arguments a generated module passes (``numpy.asarray(q, dtype=float)``, ``numpy.sum(v, axis=...)``,
+#: ``numpy.max(v, initial=0.0)``); no other (a ufunc's ``out=`` would write into an array it was given).
+ALLOWED_KEYWORDS = frozenset({"dtype", "axis", "initial"})
+#: The one call a module-level assignment may make: ``numpy.array(<a literal or a constant's name>)``
+#: (the quadrature's nodes as arrays).  Every other module-level value is a literal, so importing a
+#: module runs no loop and no function (nothing that could hang or change another module).
+MODULE_CALL = ("numpy", "array")
+#: Builtins a ``for`` loop of a generated function may iterate over (``range(panels)``, ``zip(X, W)``).
+LOOP_ITERATORS = frozenset({"range", "zip"})
 
 
 def verify_text(text: str, origin) -> None:
@@ -124,6 +135,9 @@ def verify_text(text: str, origin) -> None:
             refuse(node, f"a module-level {kind}")
     docstrings = {id(n.body[0]) for n in [tree, *ast.walk(tree)] if isinstance(n, (ast.Module, ast.FunctionDef))
                   and n.body and isinstance(n.body[0], ast.Expr)}
+    # Items a module-level assignment fills (``RULES[3] = (...)``): checked by _check_module_assign.
+    module_targets = {id(t) for n in tree.body if isinstance(n, ast.Assign) for t in n.targets
+                      if isinstance(t, ast.Subscript)}
     for node in ast.walk(tree):
         kind = type(node).__name__
         if kind not in ALLOWED_NODES:
@@ -138,6 +152,24 @@ def verify_text(text: str, origin) -> None:
         elif isinstance(node, ast.FunctionDef):
             if node.decorator_list or node.returns or node.name.startswith("__"):
                 refuse(node, f"function {node.name!r} with decorators, annotations or a dunder name")
+            a = node.args
+            if a.defaults or a.kw_defaults or a.kwonlyargs or a.kwarg or a.posonlyargs:
+                refuse(node, f"function {node.name!r} with defaults, keyword-only or ** arguments "
+                             "(defaults run at import)")
+        elif isinstance(node, (ast.Attribute, ast.Subscript, ast.Starred)) and not isinstance(node.ctx, ast.Load) \
+                and id(node) not in module_targets:
+            refuse(node, "assigning to " + ("an attribute" if isinstance(node, ast.Attribute)
+                                            else "an item" if isinstance(node, ast.Subscript) else "a starred name"))
+        elif isinstance(node, ast.keyword) and node.arg not in ALLOWED_KEYWORDS:
+            refuse(node, f"the keyword argument {node.arg or '**'!r}")
+        elif isinstance(node, ast.AugAssign) and not isinstance(node.target, ast.Name):
+            refuse(node, "augmented assignment to something other than a local name")
+        elif isinstance(node, ast.For) and not _plain_loop(node):
+            refuse(node, "a loop other than over range(name) or zip(names)")
+        elif isinstance(node, ast.comprehension) and not (
+                isinstance(node.target, ast.Name) and isinstance(node.iter, ast.Name) and not node.ifs
+                and not node.is_async):
+            refuse(node.iter, "a comprehension other than over a name")
         elif isinstance(node, ast.arg):
             if node.annotation is not None or node.arg.startswith("__") or node.arg in _FIXED_NAMES:
                 refuse(node, f"argument {node.arg!r}")
@@ -148,7 +180,58 @@ def verify_text(text: str, origin) -> None:
                 refuse(node, f"assigning to {node.id!r}")
         elif isinstance(node, ast.Attribute) and not _attribute_allowed(node, numpy):
             refuse(node, f"the attribute {node.attr!r}")
+    for node in tree.body:   # what runs at import: literals only (after the names, which say more)
+        if isinstance(node, ast.Assign):
+            _check_module_assign(node, refuse)
     check_interface(tree, origin)
+
+
+def _check_module_assign(node, refuse) -> None:
+    """A module-level assignment: one name (or ``NAME[integer]``) bound to a literal or to
+    ``numpy.array(literal or name)`` (:data:`MODULE_CALL`); nothing else runs at import."""
+    import ast
+
+    if len(node.targets) != 1:
+        refuse(node, "a chained assignment at module level")
+    target, value = node.targets[0], node.value
+    if isinstance(target, ast.Subscript):
+        if not (isinstance(target.value, ast.Name) and isinstance(target.slice, ast.Constant)
+                and type(target.slice.value) is int):
+            refuse(node, "a module-level item assignment other than NAME[integer]")
+    elif not isinstance(target, ast.Name):
+        refuse(node, "a module-level assignment to something other than a name")
+    if isinstance(value, ast.Call):
+        func = value.func
+        called = (func.value.id, func.attr) if isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name) \
+            else None
+        if called != MODULE_CALL or value.keywords or len(value.args) != 1 \
+                or not (isinstance(value.args[0], ast.Name) or _is_literal(value.args[0])):
+            refuse(node, "a call at module level (it would run at import)")
+    elif not _is_literal(value):
+        refuse(node, "a module-level value that is not a literal")
+
+
+def _is_literal(node) -> bool:
+    """Whether ``node`` is a plain literal (numbers, strings, None, tuples, lists, dicts of them)."""
+    import ast
+
+    try:
+        ast.literal_eval(node)
+    except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
+        return False
+    return True
+
+
+def _plain_loop(node) -> bool:
+    """``for NAME in range(NAME)`` or ``for NAME, NAME in zip(NAME, NAME)`` (what the generator writes)."""
+    import ast
+
+    it = node.iter
+    names = [node.target] if isinstance(node.target, ast.Name) else \
+        node.target.elts if isinstance(node.target, ast.Tuple) else [None]
+    return (not node.orelse and all(isinstance(n, ast.Name) for n in names)
+            and isinstance(it, ast.Call) and isinstance(it.func, ast.Name) and it.func.id in LOOP_ITERATORS
+            and not it.keywords and it.args and all(isinstance(a, ast.Name) for a in it.args))
 
 
 def check_interface(tree, origin) -> None:
@@ -258,9 +341,10 @@ def generated_dir() -> Path:
 
 
 def cache_dir() -> Path:
-    """Folder where user-curve modules are generated and cached."""
-    root = os.environ.get(CACHE_ENV)
-    return Path(root) if root else Path.home() / ".cache" / "symvib" / "kernels"
+    """Folder where user-curve modules are generated and cached: ``$SYMVIB_CACHE`` (default
+    ``~/.cache/symvib/kernels``), created ``0700`` and used only while it is the user's alone
+    (:func:`symvib.cachetrust.kernel_cache`; else a private temporary folder, with a warning)."""
+    return cachetrust.kernel_cache()
 
 
 def module_name(name: str) -> str:
@@ -315,6 +399,7 @@ def load_generated(name: str):
     >>> sorted(load_generated("gauss_rules").RULES)[:3]
     [1, 2, 3]
     """
+    cachetrust.configure_numba()
     path = generated_dir() / f"{name}.py"
     if not path.exists():
         raise KernelError(f"{path} is missing; run `symvib generate`")
@@ -338,6 +423,7 @@ def load(curve, *, check: bool = True):
     module
         With the kernels listed in its ``SIGNATURES``.
     """
+    cachetrust.configure_numba()   # before any compiled function: numba reads only a checked folder
     if isinstance(curve, str):
         if curve not in CATALOGUE:
             raise KeyError(f"unknown shape {curve!r}; known shapes: {', '.join(sorted(CATALOGUE))}")
@@ -370,46 +456,48 @@ def _load(curve: Shape, check: bool):
                           stacklevel=2)
         return module
     name = f"{module_name(curve.module)}_{want[:16]}"
-    path = cache_dir() / f"{name}.py"
+    folder = cache_dir()
+    path = folder / f"{name}.py"
     key = f"symvib.generated.{name}"
     if key in sys.modules and getattr(sys.modules[key], "__file__", None) == str(path):
         return sys.modules[key]
-    if path.exists():
-        text = path.read_text(encoding="utf-8", errors="replace")
+    try:
+        # Never through a link, and only a file that is the user's alone (symvib.safeio.read_bytes).
+        raw = safeio.read_bytes(folder, path.name, max_bytes=MAX_MODULE_BYTES, what="kernel cache", private=True)
+    except FileNotFoundError:
+        raw = None
+    except UserPathError as err:
+        warnings.warn(f"{err}; regenerating it", stacklevel=3)
+        raw = None
+    if raw is not None:
+        text = raw.decode("utf-8", errors="replace")
         try:
             check_text(text, path, want)
             return _exec(text, path, name)
         except KernelError as err:
             # Tampered, truncated or from a broken generator: made again below.
             warnings.warn(f"{err}; regenerating it", stacklevel=3)
-            path.unlink(missing_ok=True)
-    return _generate(curve, source, want, path, name)
+    return _generate(curve, source, want, folder, name)
 
 
-def _generate(curve: Shape, source: dict, want: str, path: Path, name: str):
-    """Generate a user curve's module atomically: into a temporary file, checked and
-    imported from the text written, and only then renamed into the cache; any
+def _generate(curve: Shape, source: dict, want: str, folder: Path, name: str):
+    """Generate a user curve's module: derived, checked and imported from its text, and only then
+    written into the cache (whole, never through a link: :func:`symvib.safeio.write_text`); any
     failure leaves nothing in the cache."""
     from symvib.codegen import generate as codegen  # the bridge: imports SymPy, only for a curve not generated yet
 
-    tmp = None
-    stem = f"{name}.{os.getpid()}.tmp"
+    path = folder / f"{name}.py"
+    text = codegen.module_source(curve, source=source, origin=path)
+    check_text(text, path, want)
     try:
-        try:
-            tmp = codegen.generate(curve, cache_dir(), name=stem, source=source)
-        except KernelError as err:  # name the module the user asked for, not the temporary file
-            raise KernelError(str(err).replace(str(cache_dir() / f"{stem}.py"), str(path))) from None
-        text = tmp.read_text(encoding="utf-8")
-        check_text(text, path, want)
-        try:
-            module = _exec(text, path, name)
-        except Exception as err:  # noqa: BLE001 - any failure of a fresh module is the generator's
-            sys.modules.pop(f"symvib.generated.{name}", None)
-            raise KernelError(f"{path}: the generated module does not import "
-                              f"({type(err).__name__}: {err}); nothing was cached") from None
-        tmp.replace(path)
-        tmp = None
-        return module
-    finally:
-        if tmp is not None:
-            tmp.unlink(missing_ok=True)
+        module = _exec(text, path, name)
+    except Exception as err:  # noqa: BLE001 - any failure of a fresh module is the generator's
+        sys.modules.pop(f"symvib.generated.{name}", None)
+        raise KernelError(f"{path}: the generated module does not import "
+                          f"({type(err).__name__}: {err}); nothing was cached") from None
+    try:
+        safeio.remove_file(folder, path.name, links=True)   # a stale entry, or a link planted at its name
+        safeio.write_text(folder, path.name, text, what="kernel cache", private=True)
+    except OSError as err:   # a folder in its place, a full disk: the run goes on, uncached
+        warnings.warn(f"{err}; the module is not cached", stacklevel=3)
+    return module
