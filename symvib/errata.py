@@ -123,8 +123,11 @@ def errata_document(verdicts=None, readings=None, claims=None) -> str:
 
 def write_errata(path="docs/errata.md", *, verdicts=None) -> Path:
     """Write :func:`errata_document` to ``path`` (the audit's ``verdicts`` if already made); returns the path."""
+    from symvib import safeio
+
     path = Path(path)
-    path.write_text(errata_document(verdicts) + "\n", encoding="utf-8")
+    with safeio.replacing_file(path, what="errata file") as fh:   # whole, never through a link
+        fh.write((errata_document(verdicts) + "\n").encode("utf-8"))
     return path
 
 

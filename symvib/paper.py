@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 # The readings of the first circle scene's "alpha0 = 3" and the remark they are judged by (re-exported).
+from symvib import safeio
 from symvib.errata import ALPHA0_READINGS, REMARK
 from symvib.numeric.scene import packaged_scene
 
@@ -270,8 +271,8 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
     from symvib.symbolic.audit import errata_markdown
 
     say = progress or (lambda msg: None)
-    out = Path(out_dir)
-    (out / "figures").mkdir(parents=True, exist_ok=True)
+    out = safeio.check_root(out_dir, "report folder")   # a real folder of the user's, not a link
+    safeio.make_folders(out, "figures", what="report folder")
     start = time.perf_counter()
     say("deriving and auditing the paper's equations (in worker processes)")
     pool, jobs = _start_symbolic()
@@ -336,14 +337,14 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
                                     title="## Errata of the paper's printed equations").splitlines()
     lines += ["", f"Generated in {time.perf_counter() - start:.1f} s."]
     text = "\n".join(lines) + "\n"
-    (out / "report.md").write_text(text, encoding="utf-8")
+    safeio.write_text(out, "report.md", text, what="report folder")
     written = {"report": out / "report.md", "figures": [out / "figures" / f for r in runs for f, _ in r.figures]}
     results = {r.key: r.result.to_dict() for r in runs}
-    (out / "results.json").write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    safeio.write_text(out, "results.json", json.dumps(results, indent=1) + "\n", what="report folder")
     written["results"] = out / "results.json"
     if html_too:
-        (out / "report.html").write_text(markdown_to_html(text, title="symvib: the paper reproduced"),
-                                         encoding="utf-8")
+        safeio.write_text(out, "report.html", markdown_to_html(text, title="symvib: the paper reproduced"),
+                          what="report folder")
         written["html"] = out / "report.html"
     if pdf:
         say("writing report.pdf")
@@ -493,7 +494,8 @@ def write_pdf(text: str, figures, path: Path) -> tuple:
     from matplotlib.image import imread
 
     pages = 0
-    with PdfPages(path) as pdf:
+    path = Path(path)
+    with safeio.replacing_file(path, what="PDF file") as fh, PdfPages(fh) as pdf:
         info = pdf.infodict()
         info["Title"], info["Creator"] = "symvib: the paper reproduced", "symvib paper --pdf"
         for page in pdf_text_pages(text):

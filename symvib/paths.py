@@ -52,6 +52,8 @@ _TOML_STRINGS = re.compile(r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\
 _KEY_DOT = re.compile(r"(?<![0-9])\.|\.(?![0-9])")
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]")
+#: The byte-order mark some editors put at the start of a UTF-8 file (TOML parsers refuse it).
+BYTE_ORDER_MARK = "\ufeff"
 
 
 class UserPathError(OSError):
@@ -176,6 +178,7 @@ def read_user_file(path, what: str = "file", *, max_bytes: int = MAX_INPUT_BYTES
 def read_user_toml(path, what: str = "file", *, max_bytes: int = MAX_INPUT_BYTES) -> dict:
     """Read a TOML file named by the user (:func:`read_user_file`, then :mod:`tomllib`).
 
+    A UTF-8 byte-order mark at the start (some editors write one) is dropped.
     Before parsing, the dots of keys are counted (at most :data:`MAX_TOML_DOTS`),
     and nesting too deep for the parser is refused, so no file within the size
     cap can exhaust memory or escape as a RecursionError.
@@ -186,7 +189,7 @@ def read_user_toml(path, what: str = "file", *, max_bytes: int = MAX_INPUT_BYTES
         Everything :func:`read_user_file` refuses, and text that is not valid
         TOML (the message names the file and says ``not valid TOML``).
     """
-    text = read_user_file(path, what, max_bytes=max_bytes)
+    text = read_user_file(path, what, max_bytes=max_bytes).removeprefix(BYTE_ORDER_MARK)
     dots = len(_KEY_DOT.findall(_TOML_STRINGS.sub("", text)))
     if dots > MAX_TOML_DOTS:
         raise UserPathError(path, f"not valid TOML for a {what}: {dots} dots in keys and table names; "
@@ -214,11 +217,23 @@ def _check_path_text(path, what: str) -> Path:
     return Path(text)
 
 
+def _refuse_link(p: Path, path, what: str) -> None:
+    """Refuse a symbolic link as the output itself (links in its parents are the user's choice)."""
+    try:
+        if stat.S_ISLNK(os.lstat(p).st_mode):
+            raise UserPathError(path, f"the {what} is a symbolic link; symvib never writes through one "
+                                      "(name its target instead)")
+    except (OSError, ValueError) as exc:
+        if isinstance(exc, UserPathError):
+            raise
+
+
 def check_output_file(path, what: str = "output file") -> Path:
     """Check, before any work, that a file can be written at ``path``.
 
-    The path may not be an existing directory, device or fifo, its folder
-    must exist and be writable, an existing file must be writable.
+    The path may not be an existing directory, device, fifo or symbolic link
+    (symvib never writes through one: :mod:`symvib.safeio`), its folder must
+    exist and be writable, an existing file must be writable.
 
     Returns
     -------
@@ -229,6 +244,7 @@ def check_output_file(path, what: str = "output file") -> Path:
     UserPathError
     """
     p = _check_path_text(path, what)
+    _refuse_link(p, path, what)
     try:
         info = os.stat(p)
     except FileNotFoundError:
@@ -264,10 +280,11 @@ def check_output_dir(path, what: str = "output folder") -> Path:
     Raises
     ------
     UserPathError
-        When the path (or a parent of it) is a file or a device, or the
-        folder (or its nearest existing parent) is not writable.
+        When the path (or a parent of it) is a file or a device, the path is a
+        symbolic link, or the folder (or its nearest existing parent) is not writable.
     """
     p = _check_path_text(path, what)
+    _refuse_link(p, path, what)
     probe = Path(os.path.abspath(p))
     while True:
         try:

@@ -689,9 +689,9 @@ def write_references(path, data: dict) -> Path:
     scenes = ",\n".join("  " + json.dumps(e, allow_nan=False, separators=(",", ":")) for e in data["scenes"])
     text = "{\n" + "\n".join(lines) + '\n "scenes": [\n' + scenes + "\n ]\n}\n"
     assert json.loads(text) == json.loads(json.dumps(data)), "the stored text must read back as the data"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return path
+    from symvib import safeio
+
+    return safeio.write_file(path, text, what="reference folder")
 
 
 def read_references(data: dict | str | Path) -> StoredReferences:

@@ -58,6 +58,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import io
 import json
 import math
 import random
@@ -65,6 +66,8 @@ import time
 from dataclasses import dataclass
 from importlib.resources import files
 from pathlib import Path
+
+from symvib import safeio
 
 __all__ = ["Setting", "paper_scenes", "reference_events", "random_scenes", "run_setting",
            "ratio_at_equal_accuracy", "scene_key", "shipped", "work_precision", "stability", "references",
@@ -223,8 +226,7 @@ def _store_json(path: Path, entries: dict, **dump) -> None:
     """Merge ``entries`` into the JSON cache file ``path`` (created with its folder)."""
     data = _load_json(path)
     data.update(entries)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(data, sort_keys=True, **dump) + "\n", encoding="utf-8")
+    safeio.write_file(path, json.dumps(data, sort_keys=True, **dump) + "\n", what="bench cache folder")
 
 
 def reference_events(scene, *, label: str = "", cached: bool = True, cache: Path | None = None) -> list:
@@ -424,7 +426,7 @@ def _warm_up(scenes, backend) -> dict:
 def work_precision(out: Path, *, quick: bool = False, n_random: int | None = None, workers: int = 1,
                    budget: float = PEER_BUDGET, log=print) -> dict:
     """Measure and draw the work-precision diagram; returns the summary (see the module docstring)."""
-    out.mkdir(parents=True, exist_ok=True)
+    safeio.check_root(out, "bench folder")
     backend = _backend()
     scenes = paper_scenes(quick)
     warm = _warm_up(scenes, backend)
@@ -476,7 +478,7 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
     _write_csv(out / "wrong_sequences.csv", seq["rows"])
     _plot(out / "work_precision.png", summary, backend)
     md = _summary_markdown(summary, ratios, seq, backend, warm, scenes)
-    (out / "summary.md").write_text(md, encoding="utf-8")
+    safeio.write_file(out / "summary.md", md, what="bench folder")
     log(f"wrote {out / 'work_precision.png'}, work_precision.csv, work_precision_runs.csv, wrong_sequences.csv, "
         f"summary.md")
     return {"summary": summary, "ratios": ratios, "sequences": seq, "backend": backend}
@@ -515,11 +517,12 @@ def _sequence_counts(n, settings, workers, budget, backend, log, cache_file: Pat
 def _write_csv(path: Path, rows) -> None:
     if not rows:
         return
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    text = io.StringIO(newline="")
+    w = csv.DictWriter(text, fieldnames=list(rows[0]))
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    safeio.write_file(path, text.getvalue(), what="bench folder")
 
 
 _STYLE = {"symvib": ("k", "o"), "RK45": ("tab:blue", "s"), "DOP853": ("tab:orange", "^"),
@@ -547,7 +550,8 @@ def _plot(path: Path, summary, backend) -> None:
     ax.grid(True, which="major", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    with safeio.replacing(safeio.check_root(path.parent, "bench folder"), path.name, what="bench folder") as fh:
+        fig.savefig(fh, format="png")
 
 
 def _summary_markdown(summary, ratios, seq, backend, warm, scenes) -> str:
@@ -600,7 +604,7 @@ def stability(out: Path, *, quick: bool = False, workers: int = 1, budget: float
     """Run every method on every stability case; write ``stability.csv`` and ``stability.md``."""
     from symvib.checks.stability import case, cases, expected
 
-    out.mkdir(parents=True, exist_ok=True)
+    safeio.check_root(out, "bench folder")
     backend = _backend()
     names = [c.name for c in cases()]
     if quick:
@@ -616,7 +620,7 @@ def stability(out: Path, *, quick: bool = False, workers: int = 1, budget: float
     rows = [r for group in results for r in group]
     _write_csv(out / "stability.csv", rows)
     md = stability_markdown(rows, names, [Setting(m, v).label for m, v in settings])
-    (out / "stability.md").write_text(md, encoding="utf-8")
+    safeio.write_file(out / "stability.md", md, what="bench folder")
     log(md)
     log(f"wrote {out / 'stability.csv'}, {out / 'stability.md'}")
     return rows

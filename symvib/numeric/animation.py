@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from symvib import safeio
 from symvib.numeric.events import EventKind
 from symvib.paths import check_output_file
 
@@ -226,11 +227,13 @@ def animate(result, path, *, fps: float = DEFAULT_FPS, duration: float | None = 
         return moving
 
     fig.tight_layout(rect=(0, 0.05, 1, 1))
-    if writer_name == "pillow":
-        _write_gif(fig, moving, draw, len(times), out, fps)
-    else:  # pragma: no cover - needs ffmpeg
-        movie = animation.FuncAnimation(fig, draw, frames=len(times), blit=False)
-        movie.save(out, writer=animation.writers[writer_name](fps=fps), dpi=DPI)
+    # Written whole under a temporary name created here, then renamed onto ``out`` (never through a link).
+    with safeio.replacing_file(out, what="animation file") as fh:
+        if writer_name == "pillow":
+            _write_gif(fig, moving, draw, len(times), fh, fps)
+        else:  # pragma: no cover - needs ffmpeg
+            movie = animation.FuncAnimation(fig, draw, frames=len(times), blit=False)
+            movie.save(fh.temporary, writer=animation.writers[writer_name](fps=fps), dpi=DPI)
     return out
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.transforms import blended_transform_factory
 
+from symvib import safeio
 from symvib.numeric.events import EventKind
 from symvib.paths import UserPathError, check_output_dir, inside, safe_stem
 
@@ -519,8 +520,8 @@ def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None, p
     symvib.paths.UserPathError
         When ``out_dir`` is a file or a device, or cannot be created.
     """
-    out = check_output_dir(out_dir, "figure folder")
-    out.mkdir(parents=True, exist_ok=True)
+    check_output_dir(out_dir, "figure folder")
+    out = safeio.check_root(out_dir, "figure folder")   # a real folder of the user's, not a link
     # File names from user text: a plain stem, and never outside ``out_dir`` (docs: README "Trust").
     prefix = safe_stem(prefix or result.scene.name)
     paths = []
@@ -528,6 +529,7 @@ def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None, p
         path = out / f"{prefix}-{name}.png"
         if not inside(path, out):
             raise UserPathError(path, f"figure file name would leave the folder {out}")
-        fig.savefig(path)
+        with safeio.replacing(out, path.name, what="figure folder") as fh:   # whole, never through a link
+            fig.savefig(fh, format="png")
         paths.append(path)
     return paths

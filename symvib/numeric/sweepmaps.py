@@ -28,12 +28,11 @@ Examples
 """
 from __future__ import annotations
 
-from pathlib import Path
-
 import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
+from symvib import safeio
 from symvib.numeric.sweep.labels import axis_label, column_attrs, field_attrs, label, unit_text
 
 __all__ = ["sweep_maps", "MAPS"]
@@ -80,9 +79,12 @@ def _at_first(res, others):
 
 
 def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
-    """Write one PNG per quantity of :data:`MAPS` into ``out_dir``; returns the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    """Write one PNG per quantity of :data:`MAPS` into ``out_dir``; returns the paths.
+
+    ``out_dir`` is created if missing and must be a real folder of the user's (not a
+    symbolic link); each map is written whole, never through a link (:mod:`symvib.safeio`).
+    """
+    out = safeio.check_root(out_dir, "maps folder")
     spread = [a for a in res.spec.axes if not a.grid or a.size > 1] or list(res.spec.axes)
     shown = spread[:2]
     scene = res.spec.scene
@@ -125,6 +127,7 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
         ax.set_title(f"{scene.name}: {MAPS[name]}{note}\n({res.count} scenes{fixed})", fontsize=10)
         fig.tight_layout()
         path = out / f"{name}.png"
-        fig.savefig(path)
+        with safeio.replacing(out, path.name, what="maps folder") as fh:
+            fig.savefig(fh, format="png")
         paths.append(path)
     return paths
