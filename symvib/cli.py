@@ -189,7 +189,10 @@ def _cmd_run(args) -> int:
           f"{scene.shape.q}dot0 = {scene.qdot0:.6g}")
     print(result.event_table(scene.shape.q))
     if args.json:
-        Path(args.json).write_text(result.to_json(samples=args.samples) + "\n", encoding="utf-8")
+        from symvib import safeio
+
+        with safeio.replacing_file(args.json, what="--json file") as fh:   # whole, never through a link
+            fh.write((result.to_json(samples=args.samples) + "\n").encode("utf-8"))
         print(f"wrote {args.json}")
     if args.plot and result.samples is not None:  # a non_finite run has no samples to draw
         from symvib.numeric.figures import save_run_figures
@@ -387,7 +390,29 @@ def _sweep_file(path) -> dict:
         scene = Path(data["scene"])
         data["scene"] = str(scene if scene.is_absolute() or not (path.parent / scene).exists()
                             else path.parent / scene)
+    if "out" in data:
+        data["out"] = str(_out_of_sweep_file(data["out"], path))
     return data
+
+
+def _out_of_sweep_file(text: str, path):
+    """A sweep file's ``out``: a folder inside the sweep file's own folder (relative to it).
+
+    Where results go elsewhere is the user's choice on the command line (``-o``), never
+    the file's: an absolute path, ``..`` or a link leading out of the folder is refused.
+    """
+    from pathlib import Path
+
+    from symvib.numeric.scene import SceneError
+    from symvib.paths import inside
+
+    folder = Path(path).parent
+    out = Path(text)
+    if out.is_absolute() or not inside(folder / out, folder) or Path(os.path.abspath(folder / out)) == \
+            Path(os.path.abspath(folder)):
+        raise SceneError(f"{Path(path).name}:out", f"{text!r} is not a folder inside the sweep file's folder "
+                                                   f"{folder}; give -o OUT on the command line to write elsewhere")
+    return folder / out
 
 
 #: Types of the keys of a sweep file (``vary`` is a table; integers are checked by
@@ -465,14 +490,22 @@ def _cmd_sweep(args) -> int:
         raise SceneError("scene", "give a scene file (or 'scene = ...' in the sweep file)")
     scene = resolve_scene(str(scene_text))
     vary = dict(conf.get("vary", {}))
+    given = set()
     for item in args.vary:
         if "=" not in item:
             raise SceneError("--vary", f"expected KEY=SPEC, got {item!r}")
         key, value = item.split("=", 1)
+        if key.strip() in given:
+            raise SceneError(f"--vary {key.strip()}", "given twice; give each field once (a,b,c lists values)")
+        given.add(key.strip())
         vary[key.strip()] = value.strip()
     out = args.out or conf.get("out")
     if not out:
         raise SceneError("--out", "give an output folder (-o OUT)")
+    if args.plot and os.path.lexists(Path(out) / "maps"):
+        from symvib import safeio
+
+        safeio.check_root(Path(out) / "maps", "maps folder", create=False)   # before any work: not a link
 
     def pick(name, default):
         value = getattr(args, name)
@@ -506,9 +539,28 @@ def _cmd_sweep(args) -> int:
     return 0
 
 
+def _one_line_warnings(command: str) -> None:
+    """Show a cache-trust warning as one line (``symvib CMD: warning: ...``), not Python's two."""
+    import warnings
+
+    from symvib.cachetrust import CacheTrustWarning
+
+    plain = getattr(warnings.formatwarning, "plain", warnings.formatwarning)
+    prefix = f"symvib {command}" if command else "symvib"
+
+    def fmt(message, category, filename, lineno, line=None):
+        if issubclass(category, CacheTrustWarning):
+            return f"{prefix}: warning: {one_line(message)}\n"
+        return plain(message, category, filename, lineno, line)
+
+    fmt.plain = plain
+    warnings.formatwarning = fmt
+
+
 def main(argv=None) -> int:
     """Entry point of the ``symvib`` command."""
     argv = sys.argv[1:] if argv is None else list(argv)
+    _one_line_warnings(argv[0] if argv and argv[0].isidentifier() else "")
     if argv and argv[0] == "bench":
         command = "bench"
         run = lambda: bench_main(argv[1:])  # noqa: E731

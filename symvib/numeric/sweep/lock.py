@@ -20,12 +20,18 @@ import socket
 import time
 from pathlib import Path
 
+from symvib import safeio
 from symvib.numeric.sweep.limits import SweepError
+from symvib.paths import UserPathError
 
 __all__ = ["WriterLock", "LOCK_GRACE"]
 
 #: Seconds a lock file may stay empty (its writer between creating and filling it) before it counts as stale.
 LOCK_GRACE = 10.0
+#: Most bytes of a lock file read (a lock holds a short JSON object).
+MAX_LOCK_BYTES = 4096
+#: Mode of the lock file (the umask applies).
+LOCK_MODE = 0o644
 
 
 class WriterLock:
@@ -54,11 +60,12 @@ class WriterLock:
     def _holder(self):
         """The lock file's content as (raw bytes, parsed dict or None); ``None`` if there is no lock."""
         try:
-            with open(self.path, "rb") as fh:
-                raw = fh.read(4096)
+            raw = safeio.read_bytes(self.folder, self.NAME, max_bytes=MAX_LOCK_BYTES)   # never through a link
         except FileNotFoundError:
             return None
         except OSError as exc:
+            if isinstance(exc, UserPathError) and "does not exist" in exc.reason:
+                return None
             raise SweepError(str(self.path), f"cannot read the lock: {exc.strerror or exc}") from None
         try:
             data = json.loads(raw.decode("utf-8"))
@@ -69,7 +76,7 @@ class WriterLock:
     def _stale(self, data) -> bool:
         if data is None:   # empty or garbled: its writer died between creating and filling it, or is filling it
             try:
-                return time.time() - self.path.stat().st_mtime > LOCK_GRACE
+                return time.time() - os.lstat(self.path).st_mtime > LOCK_GRACE
             except FileNotFoundError:
                 return True
         pid, host = data.get("pid"), data.get("host")
@@ -87,7 +94,8 @@ class WriterLock:
         """Take the lock, or raise :class:`SweepError` naming the folder and the holder."""
         for _ in range(3):
             try:
-                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY | getattr(os, "O_NOFOLLOW", 0),
+                             LOCK_MODE)
             except FileExistsError:
                 holder = self._holder()
                 if holder is None:
@@ -118,7 +126,8 @@ class WriterLock:
         except FileNotFoundError:
             return
         try:
-            if aside.read_bytes() != raw:   # another writer replaced the stale lock meanwhile: put it back
+            if safeio.read_bytes(self.folder, aside.name, max_bytes=MAX_LOCK_BYTES) != raw:
+                # another writer replaced the stale lock meanwhile: put it back
                 try:
                     os.link(aside, self.path)
                 except FileExistsError:

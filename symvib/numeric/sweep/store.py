@@ -39,12 +39,15 @@ from pathlib import Path
 
 import numpy as np
 
+from symvib import safeio
 from symvib.numeric.layout import EVENT_COLUMNS, EVENT_KINDS, STATUSES, SUMMARY_COLUMNS
 from symvib.numeric.scene import SceneError
 from symvib.numeric.sweep import limits
 from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
+from symvib.numeric.sweep.owned import CHUNK_NAME, FILES, STORE, remove_store, survey
 from symvib.numeric.sweep.result import INTEGER_COLUMNS, SweepResult, join_chunks
 from symvib.numeric.sweep.spec import SweepSpec
+from symvib.paths import UserPathError
 
 __all__ = ["FORMAT", "OLD_FORMATS", "STORAGES", "sweep_id", "load_sweep", "manifest", "read_manifest",
            "column_names", "chunk_path", "chunk_files", "write_chunk", "read_chunk", "check_rows", "check_out",
@@ -89,6 +92,7 @@ def manifest(spec: SweepSpec, ident: str, storage: str = "npz") -> dict:
             "columns": column_names(spec),
             "status_names": list(STATUSES), "event_names": list(EVENT_KINDS),
             "event_log_columns": list(EVENT_COLUMNS),
+            "files": FILES,
             "symvib_version": __version__}
 
 
@@ -113,13 +117,11 @@ def write_chunk(out: Path, index: int, columns: dict, ident: str, storage: str =
         _zarr_writer[0][2].write(index, columns)
         return
     path = chunk_path(out, index)
-    tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")
     try:
-        np.savez(tmp, sweep_id=np.array(ident), **columns)
-        os.replace(tmp, path)
+        with safeio.replacing(out, f"chunks/{path.name}", what="sweep folder") as fh:
+            np.savez(fh, sweep_id=np.array(ident), **columns)
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise SweepError(str(path), f"cannot write the chunk: {exc.strerror or exc}") from None
+        raise SweepError(str(path), f"cannot write the chunk: {exc}") from None
 
 
 def _bad_chunk(path: Path, reason: str) -> SweepError:
@@ -139,30 +141,38 @@ def read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
     n = len(rows)
     expected = column_names(spec)
     try:
-        if path.stat().st_size > spec.chunk_bytes() + limits.MAX_MANIFEST_BYTES:
-            raise _bad_chunk(path, "larger than a chunk of this sweep can be")
-        with np.load(path, allow_pickle=False) as data:
-            names = set(data.files)
-            if "sweep_id" not in names:
-                raise _bad_chunk(path, "no sweep identity: not a chunk of this sweep")
-            _check_header(path, data, "sweep_id", lambda d, sh: d.kind == "U" and sh == () and d.itemsize <= 4 * 64,
-                          "a text")
-            if str(data["sweep_id"]) != ident:
-                raise _bad_chunk(path, "made by another sweep (its sweep_id differs from the manifest's)")
-            if names != set(expected) | {"sweep_id"}:
-                raise _bad_chunk(path, f"columns {sorted(names - {'sweep_id'})} are not this sweep's")
-            columns = {}
-            for name in expected:   # each header checked before its array is allocated
-                want = np.dtype(np.int64 if name == "row" or name in INTEGER_COLUMNS else np.float64)
-                shape = (n, spec.log_events, EVENT_WIDTH) if name == "event_log" else (n,)
-                _check_header(path, data, name, lambda d, sh: d == want and sh == shape,
-                              f"{want}{list(shape)}")
-                columns[name] = data[name]
+        with safeio.reading(path.parent, path.name) as fh:
+            if os.fstat(fh.fileno()).st_size > spec.chunk_bytes() + limits.MAX_MANIFEST_BYTES:
+                raise _bad_chunk(path, "larger than a chunk of this sweep can be")
+            data = np.load(fh, allow_pickle=False)
+            columns = _chunk_columns(path, data, spec, ident, n, expected)
     except SweepError:
         raise
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
         raise _bad_chunk(path, f"truncated or unreadable ({type(exc).__name__})") from None
     check_rows(path, spec, index, columns)
+    return columns
+
+
+def _chunk_columns(path: Path, data, spec: SweepSpec, ident: str, n: int, expected: list) -> dict:
+    """The columns of an open ``.npz`` chunk, each header checked before its array is read."""
+    with data:
+        names = set(data.files)
+        if "sweep_id" not in names:
+            raise _bad_chunk(path, "no sweep identity: not a chunk of this sweep")
+        _check_header(path, data, "sweep_id", lambda d, sh: d.kind == "U" and sh == () and d.itemsize <= 4 * 64,
+                      "a text")
+        if str(data["sweep_id"]) != ident:
+            raise _bad_chunk(path, "made by another sweep (its sweep_id differs from the manifest's)")
+        if names != set(expected) | {"sweep_id"}:
+            raise _bad_chunk(path, f"columns {sorted(names - {'sweep_id'})} are not this sweep's")
+        columns = {}
+        for name in expected:   # each header checked before its array is allocated
+            want = np.dtype(np.int64 if name == "row" or name in INTEGER_COLUMNS else np.float64)
+            shape = (n, spec.log_events, EVENT_WIDTH) if name == "event_log" else (n,)
+            _check_header(path, data, name, lambda d, sh: d == want and sh == shape,
+                          f"{want}{list(shape)}")
+            columns[name] = data[name]
     return columns
 
 
@@ -189,28 +199,26 @@ def _check_header(path: Path, data, name: str, ok, expected: str) -> None:
 
 
 def check_out(out) -> Path:
-    """Create the sweep folder ``out`` (and its ``chunks``), or raise a one-line :class:`SweepError`."""
+    """Create and check the sweep folder ``out`` and its ``chunks``, or raise a one-line :class:`SweepError`.
+
+    ``out`` must be a real folder of the user's (not a symbolic link); ``chunks``
+    is reached without following a link (:func:`symvib.safeio.check_root`).
+    """
     if not isinstance(out, (str, os.PathLike)):
         raise SweepError("out", f"must be a folder path, got {type(out).__name__}")
     out = Path(out)
     if not str(out) or "\0" in str(out):
         raise SweepError("out", f"not a usable folder name: {str(out)!r}")
-    for folder in (out, out / "chunks"):
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except FileExistsError:
-            raise SweepError("out", f"{folder} exists and is not a folder (a file or a device)") from None
-        except NotADirectoryError:
-            raise SweepError("out", f"{folder}: a parent of it is a file, not a folder") from None
-        except OSError as exc:
-            raise SweepError("out", f"cannot create the folder {folder}: {exc.strerror or exc}") from None
-        if not folder.is_dir() or folder.name == "chunks" and folder.is_symlink():
-            raise SweepError("out", f"{folder} is not a folder (or a symbolic link, which could lead outside {out})")
-        if not os.access(folder, os.W_OK | os.X_OK):
-            raise SweepError("out", f"folder {folder} is not writable")
-    manifest = out / "manifest.json"
-    if manifest.exists() and not manifest.is_file():
-        raise SweepError(str(manifest), "is not a regular file")
+    try:
+        safeio.check_root(out, "sweep folder")
+        safeio.make_folders(out, "chunks", what="sweep folder")
+        kinds = safeio.entries(out)
+    except OSError as exc:
+        raise SweepError("out", str(exc)) from None
+    if not os.access(out, os.W_OK | os.X_OK) or not os.access(out / "chunks", os.W_OK | os.X_OK):
+        raise SweepError("out", f"folder {out} is not writable")
+    if kinds.get("manifest.json", "file") != "file":
+        raise SweepError(str(out / "manifest.json"), "is not a regular file")
     return out
 
 
@@ -225,21 +233,24 @@ def read_manifest(out: Path) -> tuple:
         is not valid or not the one its ``sweep_id`` was made of.
     """
     path = out / "manifest.json"
-    if not path.exists():
-        raise SweepError(str(out), "no sweep here (manifest.json missing)")
-    if not path.is_file():
-        raise SweepError(str(path), "is not a regular file")
     try:
-        size = path.stat().st_size
-        if size > limits.MAX_MANIFEST_BYTES:
-            raise SweepError(str(path), f"is {size} bytes, more than a manifest may hold ({limits.MAX_MANIFEST_BYTES})")
-        with open(path, "rb") as fh:
+        with safeio.reading(out, path.name) as fh:   # never through a link
+            size = os.fstat(fh.fileno()).st_size
+            if size > limits.MAX_MANIFEST_BYTES:
+                raise SweepError(str(path), f"is {size} bytes, more than a manifest may hold "
+                                            f"({limits.MAX_MANIFEST_BYTES})")
             raw = fh.read(size + 1)   # the size was checked: no buffer of the bound's size
         if len(raw) > limits.MAX_MANIFEST_BYTES:
             raise SweepError(str(path), f"is more than a manifest may hold ({limits.MAX_MANIFEST_BYTES} bytes)")
         manifest = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
     except SweepError:
         raise
+    except FileNotFoundError:
+        raise SweepError(str(out), "no sweep here (manifest.json missing)") from None
+    except UserPathError as exc:
+        if "does not exist" in exc.reason:
+            raise SweepError(str(out), "no sweep here (manifest.json missing)") from None
+        raise SweepError(str(path), exc.reason if exc.path == str(path) else str(exc)) from None
     except OSError as exc:
         raise SweepError(str(path), f"cannot read it: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
@@ -274,10 +285,15 @@ def _no_constant(name: str):
 
 
 def chunk_files(out: Path) -> set:
+    """Names in ``out/chunks`` (reached without following a link; each is checked when read)."""
     try:
-        return set(os.listdir(out / "chunks"))
-    except (FileNotFoundError, NotADirectoryError):
-        return set()
+        return set(safeio.entries(out, "chunks"))
+    except OSError as exc:
+        raise SweepError(str(Path(out) / "chunks"), str(exc)) from None
+
+
+#: Entries of a folder named in a refusal (the rest are counted).
+SHOWN_ENTRIES = 3
 
 
 def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool, storage: str = "npz") -> tuple:
@@ -287,11 +303,16 @@ def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool, storage: st
     removed because they were truncated, unreadable or another sweep's.  A
     folder holding the same sweep in the other storage is refused (or, with
     ``overwrite``, replaced).
+
+    Only what symvib provably wrote is ever deleted (:func:`symvib.numeric.sweep.owned.survey`):
+    a new sweep in a folder holding anything else (someone's ``sweep.zarr``, a
+    note among the chunks) is refused, and with ``overwrite`` written beside it,
+    deleting only the previous sweep's files.
     """
     check_storage(storage)
     path = out / "manifest.json"
     old = old_storage = None
-    if path.exists():
+    if "manifest.json" in safeio.entries(out):
         try:
             old_manifest, _, old = read_manifest(out)
             old_storage = old_manifest["storage"]
@@ -303,25 +324,38 @@ def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool, storage: st
     if old == ident and old_storage != storage and not overwrite:
         raise SweepError("out", f"{out} holds this sweep stored as {old_storage}; run it with --format "
                                 f"{old_storage} (storage={old_storage!r}), or --overwrite to store it as {storage}")
+    resume = old == ident and old_storage == storage
+    found = survey(out, manifest_ours=old is not None)
+    held = found.unknown + [rel for rel in found.ours if rel != "sweep.lock"]
+    if held and not resume and not overwrite:
+        # A new sweep starts in an empty folder: whatever is here (even an earlier sweep's chunks
+        # without their manifest) stays until the user says --overwrite.
+        unknown = found.unknown or held
+        shown = ", ".join(unknown[:SHOWN_ENTRIES])
+        more = f" and {len(unknown) - SHOWN_ENTRIES} more" if len(unknown) > SHOWN_ENTRIES else ""
+        kind = "files symvib did not write" if found.unknown else "another sweep's files"
+        raise SweepError("out", f"{out} holds {kind} ({shown}{more}); choose another folder, or pass "
+                                "--overwrite to replace symvib's own files (others are never deleted)")
+    for rel in found.temporary:
+        _remove(out, rel)   # a killed writer's partial file
+    if not resume:
+        for rel in found.ours:
+            if rel.startswith(("chunks/", "maps/")):
+                _remove(out, rel)
+        if STORE in found.ours or (found.store and storage == "zarr"):
+            remove_store(out)   # refused (nothing removed) unless provably symvib's
     files = chunk_files(out)
-    if old != ident or old_storage != storage:
-        for name in files:
-            if name.startswith("chunk-"):
-                (out / "chunks" / name).unlink(missing_ok=True)
-        files = set()
-        from symvib.numeric.sweep import zarrstore
-
-        zarrstore.remove(out)
-    for name in files:
-        if name.endswith((".tmp.npz", ".tmp.json")):
-            (out / "chunks" / name).unlink(missing_ok=True)  # a killed writer's partial file
+    if not resume:
+        taken = sorted(n for n in files if CHUNK_NAME.fullmatch(n))
+        if taken:   # not provably symvib's (no sweep identity in it): never replaced
+            raise SweepError(str(out / "chunks" / taken[0]), "symvib cannot tell it wrote this file (no sweep "
+                                                              "identity in it); remove it or choose another folder")
     chunks = _open_zarr(out, spec, ident, files) if storage == "zarr" else None
-    tmp = path.with_suffix(".json.tmp")
+    text = json.dumps(manifest(spec, ident, storage), indent=1, allow_nan=False) + "\n"
     try:
-        tmp.write_text(json.dumps(manifest(spec, ident, storage), indent=1, allow_nan=False) + "\n", encoding="utf-8")
-        os.replace(tmp, path)
+        safeio.write_text(out, path.name, text, what="sweep folder")
     except OSError as exc:
-        raise SweepError(str(path), f"cannot write the manifest: {exc.strerror or exc}") from None
+        raise SweepError(str(path), f"cannot write the manifest: {exc}") from None
     done, discarded = [], []
     for i in range(spec.chunks):
         chunk = chunk_path(out, i) if chunks is None else marker_path(out, i)
@@ -331,9 +365,17 @@ def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool, storage: st
             read_chunk(chunk, spec, ident, i) if chunks is None else chunks.read(i)
             done.append(i)
         except SweepError:
-            chunk.unlink(missing_ok=True)
+            _remove(out, f"chunks/{chunk.name}")   # this sweep's chunk name, in its own folder
             discarded.append(i)
     return done, discarded
+
+
+def _remove(out: Path, rel: str) -> None:
+    """Remove the file ``out/rel`` that symvib wrote (never through a link)."""
+    try:
+        safeio.remove_file(out, rel)
+    except OSError as exc:
+        raise SweepError(str(Path(out) / rel), f"cannot remove it: {exc}") from None
 
 
 def _open_zarr(out: Path, spec: SweepSpec, ident: str, files: set):
@@ -345,8 +387,8 @@ def _open_zarr(out: Path, spec: SweepSpec, ident: str, files: set):
     try:
         chunks = zarrstore.ZarrChunks(out, spec, ident, mode="r+")
     except SweepError:
-        for name in [n for n in files if n.startswith("chunk-")]:
-            (out / "chunks" / name).unlink(missing_ok=True)
+        for name in [n for n in files if CHUNK_NAME.fullmatch(n) and n.endswith(".json")]:   # this sweep's markers
+            _remove(out, f"chunks/{name}")
             files.discard(name)
         zarrstore.create(out, spec, ident)
         chunks = zarrstore.ZarrChunks(out, spec, ident, mode="r+")

@@ -35,13 +35,14 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import shutil
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from symvib import safeio
 from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
+from symvib.paths import UserPathError
 
 __all__ = ["STORE", "MAX_MARKER_BYTES", "store_path", "marker_path", "create", "remove", "ZarrChunks", "digests"]
 
@@ -76,12 +77,11 @@ def digests(columns: dict) -> dict:
 
 
 def remove(out: Path) -> None:
-    """Remove the Zarr store of ``out`` (a symbolic link in its place is unlinked, never followed)."""
-    path = store_path(out)
-    if path.is_symlink() or path.is_file():
-        path.unlink()
-    elif path.is_dir():
-        shutil.rmtree(path)
+    """Remove the Zarr store of ``out`` if symvib provably wrote it (:func:`symvib.numeric.sweep.owned.remove_store`:
+    its sweep identity, and nothing in it but Zarr's own entries); else a :class:`SweepError` naming it."""
+    from symvib.numeric.sweep.owned import remove_store
+
+    remove_store(out)
 
 
 def create(out: Path, spec, ident: str) -> None:
@@ -104,7 +104,8 @@ def create(out: Path, spec, ident: str) -> None:
         # zarr 3: consolidated metadata is not yet part of the v3 specification (xarray reads it).
         warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
         try:
-            ds.to_zarr(store_path(out), mode="w", compute=False, consolidated=True, encoding=encoding)
+            # "w-": a store is never replaced by Zarr itself (remove() above proved what it deletes).
+            ds.to_zarr(store_path(out), mode="w-", compute=False, consolidated=True, encoding=encoding)
         except OSError as exc:
             raise SweepError(str(store_path(out)), f"cannot create the Zarr store: {exc.strerror or exc}") from None
 
@@ -165,11 +166,10 @@ class ZarrChunks:
     def _marker(self, index: int) -> dict:
         path = marker_path(self.out, index)
         try:
-            if path.stat().st_size > MAX_MARKER_BYTES:
-                raise SweepError(str(path), "larger than a chunk marker can be; run the same sweep again")
-            marker = json.loads(path.read_bytes().decode("utf-8"))
-        except SweepError:
-            raise
+            raw = safeio.read_bytes(self.out, f"chunks/{path.name}", max_bytes=MAX_MARKER_BYTES)
+            marker = json.loads(raw.decode("utf-8"))
+        except UserPathError as exc:
+            raise SweepError(str(path), f"{exc.reason}; run the same sweep again to recompute the chunk") from None
         except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
             raise SweepError(str(path), f"not a chunk marker ({type(exc).__name__}); run the same sweep again "
                                         "to recompute the chunk") from None
@@ -202,20 +202,33 @@ class ZarrChunks:
         check_rows(where, self.spec, index, columns)
         return columns
 
+    def _refuse_links(self, index: int) -> None:
+        """Before Zarr writes chunk ``index`` (it opens files by name): no link at the store, an array's
+        folder, its ``c`` folder or the chunk's key (version 3's ``c/N``, version 2's ``N`` or ``N.0.0``)."""
+        store = store_path(self.out)
+        for name in self.names.values():
+            for rel in ("", name, f"{name}/c", f"{name}/c/{index}", f"{name}/{index}", f"{name}/{index}.0.0"):
+                path = store / rel if rel else store
+                if os.path.islink(path):
+                    raise SweepError(str(path), "is a symbolic link; symvib never writes through one (remove it, "
+                                                "or run the sweep into another folder)")
+
     def write(self, index: int, columns: dict) -> None:
         """Write chunk ``index``: unmark it, write its region of every array, then mark it (atomic rename)."""
         path = marker_path(self.out, index)
-        path.unlink(missing_ok=True)
+        try:
+            safeio.remove_file(self.out, f"chunks/{path.name}")
+        except OSError as exc:
+            raise SweepError(str(path), f"cannot remove it: {exc}") from None
         rows = columns["row"]
         start, stop = int(rows[0]), int(rows[-1]) + 1
+        self._refuse_links(index)
         try:
             for column, name in self.names.items():
                 self.arrays[name][start:stop] = columns[column]
             text = json.dumps({"sweep_id": self.ident, "chunk": index, "rows": [start, stop],
                                "sha256": digests(columns)})
-            tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.json")
-            tmp.write_text(text, encoding="utf-8")
-            os.replace(tmp, path)
+            safeio.write_text(self.out, f"chunks/{path.name}", text, what="sweep folder")
         except OSError as exc:
             raise SweepError(str(store_path(self.out)), f"cannot write chunk {index}: {exc.strerror or exc}") \
                 from None
