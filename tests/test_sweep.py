@@ -137,7 +137,7 @@ def test_a_sweep_and_a_scene_file_give_the_same_error_for_the_same_bad_value(sec
     with pytest.raises(SceneError) as from_sweep:
         make_spec(base(), {vary: f"{text},{text}"})
     assert from_sweep.value.field == from_file.value.field
-    assert str(from_sweep.value) == f"{from_file.value} (sweep row 0 of its chunk)"
+    assert str(from_sweep.value) == f"{from_file.value} (sweep row 0)"
 
 
 def test_cli_bad_input_exits_2(capsys):

@@ -629,8 +629,55 @@ def field_unit(name: str, shape: Shape | None = None) -> str | None:
     if shape is None:
         return unit
     if key == "parameters.*" and not shape.in_catalogue:
-        return None
+        return ANGLE_UNIT if name.split(".", 1)[1] in angle_parameters(shape) else None
     return unit.replace("[q]", shape.unit)
+
+
+#: The unit of an angle-valued curve parameter (its values may carry ``deg``, as any angle's).
+ANGLE_UNIT = "rad"
+#: Functions whose argument is an angle: a parameter found only in their arguments is one.
+TRIGONOMETRIC = frozenset({"sin", "cos", "tan"})
+
+
+def angle_parameters(shape: Shape) -> frozenset:
+    """The parameters of a user curve that are angles: every use of them in ``x`` and ``z`` lies
+    inside the argument of a trigonometric function (``z = "x*tan(beta)"``), or in the tangent
+    angle ``alpha`` given with the curve.  Their values may carry angle units (``"17 deg"``).
+
+    Examples
+    --------
+    >>> from symvib.shapes import Shape
+    >>> sorted(angle_parameters(Shape(name="ramp", kind="graph", q="x", z="x*tan(beta) + c*x**2",
+    ...                               params={"beta": "real", "c": "positive"})))
+    ['beta']
+    """
+    names = set(shape.params)
+    outside, inside_ = set(), set()
+    for text, angle in ((shape.x, False), (shape.z, False), (shape.alpha, True)):
+        if not text:
+            continue
+        try:
+            tree = _expr.parse(text, symbols=_expr.ANY_NAME, field="curve").tree
+        except _expr.ExpressionError:
+            return frozenset()
+        _collect(tree, angle, names, outside, inside_)
+    return frozenset(inside_ - outside)
+
+
+def _collect(node: tuple, angle: bool, names: set, outside: set, inside_: set) -> None:
+    """Sort the parameter names of ``node`` by whether they sit in an angle (``angle``) or not."""
+    kind = node[0]
+    if kind == "sym":
+        if node[1] in names:
+            (inside_ if angle else outside).add(node[1])
+    elif kind == "bin":
+        _collect(node[2], angle, names, outside, inside_)
+        _collect(node[3], angle, names, outside, inside_)
+    elif kind == "neg":
+        _collect(node[1], angle, names, outside, inside_)
+    elif kind == "call":
+        for arg in node[2:]:
+            _collect(arg, angle or node[1] in TRIGONOMETRIC, names, outside, inside_)
 
 
 def _value_units(name: str, unit: str) -> str:
@@ -686,8 +733,10 @@ def _split_unit(text: str, field_: str, unit: str | None, symbols) -> tuple[str,
     if unit == "1":
         raise SceneError(field_, f"takes no unit (a dimensionless number), got the unit {_show(given)}")
     if unit is None:
+        hint = (" (a curve parameter is an angle when the curve uses it only inside "
+                f"{', '.join(sorted(TRIGONOMETRIC))} or its alpha)") if field_.startswith("parameters.") else ""
         raise SceneError(field_, f"takes no unit, got {_show(given)}; units are accepted on angles only "
-                                 f"({', '.join(VALUE_UNITS['rad'])})")
+                                 f"({', '.join(VALUE_UNITS['rad'])}){hint}")
     angles = ", ".join(VALUE_UNITS["rad"])
     if re.fullmatch(_UNIT_NAME, unit):
         raise SceneError(field_, f"unknown unit {_show(given)}: this field is in {unit} (SI), the one unit it "

@@ -66,7 +66,7 @@ def canonical_field(scene: Scene, key: str) -> str:
         return _SHORT[key]
     if key in aliases:
         return aliases[key]
-    known = sorted(set(_SHORT) | set(params))
+    known = sorted(set(_SHORT) | set(params) | set(aliases))
     raise SceneError(f"vary.{key}", f"not a sweepable field of this scene; use one of {', '.join(known)} "
                                     f"(or a dotted scene-file name such as initial.qdot)")
 

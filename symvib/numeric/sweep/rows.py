@@ -5,7 +5,7 @@ columns :class:`symvib.numeric.layout.SceneRow`) with the varied fields set,
 and is checked by the scene's own checks (:data:`symvib.numeric.scene.CHECKS`,
 applied element-wise to the columns): a bad row raises the
 :class:`~symvib.numeric.scene.SceneError` a scene file with that value raises,
-naming the field, with ``(sweep row i of its chunk)`` appended.
+naming the field, with ``(sweep row N)`` appended: the row's number in the sweep.
 
 Examples
 --------
@@ -30,7 +30,14 @@ from symvib.numeric.sweep.axes import FIELDS
 __all__ = ["scene_rows", "check_rows"]
 
 
-def scene_rows(scene, axes, values) -> tuple:
+def _where(axes, values, rows, i: int) -> str:
+    """Which scene of the sweep row ``i`` of a chunk is: its sweep row number, else its varied values."""
+    if rows is not None:
+        return f"sweep row {int(rows[i])}"
+    return "varied values " + ", ".join(f"{a.field} = {float(np.asarray(v)[i]):g}" for a, v in zip(axes, values))
+
+
+def scene_rows(scene, axes, values, rows=None) -> tuple:
     """The engine's rows for varied ``values`` (one array per axis) of ``scene``.
 
     Parameters
@@ -41,6 +48,9 @@ def scene_rows(scene, axes, values) -> tuple:
         The varied fields (:class:`symvib.numeric.sweep.axes.Axis`).
     values : sequence of ndarray
         Each axis's values, one per row.
+    rows : ndarray, optional
+        The rows' numbers in the sweep (named in an error); without them an error names
+        the varied values.
 
     Returns
     -------
@@ -53,7 +63,8 @@ def scene_rows(scene, axes, values) -> tuple:
         For the first check a row fails (:func:`check_rows`), naming the field and the row.
     """
     n = len(values[0]) if values else 0
-    rows = np.repeat(scene_row(scene)[None, :], n, axis=0)
+    where = lambda i: _where(axes, values, rows, i)  # noqa: E731
+    out = np.repeat(scene_row(scene)[None, :], n, axis=0)
     names = [name for name, _ in scene.params]
     params = np.repeat(np.array(scene.param_values, dtype=float)[None, :], n, axis=0)
     for axis, v in zip(axes, values):
@@ -62,17 +73,17 @@ def scene_rows(scene, axes, values) -> tuple:
             params[:, names.index(axis.field.split(".", 1)[1])] = v
             continue
         if axis.field == "physics.alpha0":
-            v = _friction_coefficients(v, axis.field)
-        rows[:, FIELDS[axis.field]] = v
+            v = _friction_coefficients(v, axis.field, where)
+        out[:, FIELDS[axis.field]] = v
         if axis.field == "limiters.left":
-            rows[:, SceneRow.has_left] = 1.0
+            out[:, SceneRow.has_left] = 1.0
         elif axis.field == "limiters.right":
-            rows[:, SceneRow.has_right] = 1.0
-    check_rows(scene, rows, params, vary_params=any(a.field.startswith("parameters.") for a in axes))
-    return np.ascontiguousarray(rows), np.ascontiguousarray(params)
+            out[:, SceneRow.has_right] = 1.0
+    check_rows(scene, out, params, vary_params=any(a.field.startswith("parameters.") for a in axes), where=where)
+    return np.ascontiguousarray(out), np.ascontiguousarray(params)
 
 
-def _friction_coefficients(alpha0: np.ndarray, field: str) -> np.ndarray:
+def _friction_coefficients(alpha0: np.ndarray, field: str, where) -> np.ndarray:
     """``mu = tan(alpha0)`` per row, by the scene's own conversion
     (:func:`~symvib.numeric.scene.friction_coefficient`)."""
     out = np.empty_like(alpha0)
@@ -80,23 +91,25 @@ def _friction_coefficients(alpha0: np.ndarray, field: str) -> np.ndarray:
         try:
             out[i] = friction_coefficient(a, field)
         except SceneError as exc:
-            raise SceneError(exc.field, f"{exc.reason} (sweep row {i} of its chunk)") from None
+            raise SceneError(exc.field, f"{exc.reason} ({where(i)})") from None
     return out
 
 
-def check_rows(scene, rows: np.ndarray, params: np.ndarray, *, vary_params: bool = True) -> None:
+def check_rows(scene, rows: np.ndarray, params: np.ndarray, *, vary_params: bool = True, where=None) -> None:
     """Make the checks of :func:`symvib.numeric.scene.check_numbers` on every row, in the same order.
 
     ``rows`` are scene rows (columns :class:`~symvib.numeric.layout.SceneRow`),
     ``params`` the curve's parameter values per row.  The curve's domain is
-    evaluated once, or per row when ``vary_params``.
+    evaluated once, or per row when ``vary_params``.  ``where(i)`` says which scene
+    row ``i`` is (default ``row i``).
 
     Raises
     ------
     SceneError
         The scene's message for the first failing check (of its first failing
-        row), with ``(sweep row i of its chunk)`` appended.
+        row), with ``(where(i))`` appended.
     """
+    where = where or (lambda i: f"row {i}")
     count = rows.shape[0]
     names = [name for name, _ in scene.params]
 
@@ -123,4 +136,4 @@ def check_rows(scene, rows: np.ndarray, params: np.ndarray, *, vary_params: bool
         bad = np.flatnonzero(~np.broadcast_to(ok, (count,)))
         if bad.size:
             i = int(bad[0])
-            raise SceneError(c.field, f"{c.message(numbers.row(i))} (sweep row {i} of its chunk)")
+            raise SceneError(c.field, f"{c.message(numbers.row(i))} ({where(i)})")

@@ -51,7 +51,7 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
     if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < spec.chunks:
         raise SweepError("chunk", f"index must be an integer in [0, {spec.chunks}), got {index!r}")
     rows, values = spec.rows(int(index))
-    scene_rows, param_rows = spec.scalars(values)
+    scene_rows, param_rows = spec.scalars(values, rows)
     summary, logs = sweep_function(spec.scene, backend)(scene_rows, param_rows, spec.nodes, spec.log_events)
     out = {"row": rows}
     for axis, v in zip(spec.axes, values):

@@ -18,6 +18,7 @@ Examples
 """
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -126,14 +127,15 @@ class SweepSpec:
         per_row = (1 + len(self.axes) + len(SUMMARY_COLUMNS) + EVENT_WIDTH * self.log_events) * ITEM
         return min(self.chunk, self.count) * per_row
 
-    def scalars(self, values) -> tuple:
+    def scalars(self, values, rows=None) -> tuple:
         """Scene rows (:class:`symvib.numeric.layout.SceneRow`) and curve-parameter rows for varied ``values``.
 
         Every row is checked as :class:`~symvib.numeric.scene.Scene` checks one
         scene (:func:`symvib.numeric.sweep.rows.scene_rows`); a bad row raises
-        :class:`SceneError` naming the field and the row.
+        :class:`SceneError` naming the field and the row (its number in the sweep,
+        from ``rows``, else its varied values).
         """
-        return scene_rows(self.scene, self.axes, values)
+        return scene_rows(self.scene, self.axes, values, rows)
 
 
 def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
@@ -182,10 +184,22 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
     check_sizes(spec)
     # Every corner of the box of varied values is a valid scene (the linear
     # constraints then hold inside it); each chunk is checked row by row too.
+    if spec.mode == "grid":   # a corner is a grid point: an error names its row in the sweep
+        for index in itertools.product(*[sorted({_end(a, min), _end(a, max)}) for a in axes]):
+            row = np.ravel_multi_index(index, spec.shape)
+            spec.scalars([a.at(np.array([i])) for a, i in zip(axes, index)], rows=np.array([row]))
+        return spec
     corners = [a.bounds for a in axes]
     for corner in np.array(np.meshgrid(*corners, indexing="ij")).reshape(len(axes), -1).T:
         spec.scalars([np.array([v]) for v in corner])
     return spec
+
+
+def _end(axis, which) -> int:
+    """The grid position of an axis's smallest (``which=min``) or largest (``max``) value."""
+    if axis.items is not None:
+        return axis.items.index(which(axis.items))
+    return 0 if which(axis.start, axis.stop) == axis.start else axis.count - 1
 
 
 def check_sizes(spec: SweepSpec, prefix: str = "") -> None:
