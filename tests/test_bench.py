@@ -1,5 +1,6 @@
 """symvib bench: options, ratio, random scenes, peer budgets, shipped data, and (slow) the quick runs end to end."""
 import csv
+import importlib.util
 from fnmatch import fnmatch
 from pathlib import Path
 
@@ -9,6 +10,9 @@ import tomllib
 from symvib.checks import bench
 from symvib.checks.peers import solve_ivp_events
 from symvib.cli import main
+
+#: The peers are scipy's integrators (the optional extra "bench"): their tests skip without it.
+needs_scipy = pytest.mark.skipif(importlib.util.find_spec("scipy") is None, reason="needs the optional scipy")
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(bench.__file__).resolve().parent / bench.DATA_FOLDER
@@ -77,12 +81,14 @@ def test_random_scenes_are_reproducible_and_capped():
         assert (s.left is None or s.left < s.q0) and (s.right is None or s.q0 < s.right)
 
 
+@needs_scipy
 def test_peer_budget_stops_a_run():
     _, scene = bench.paper_scenes()[0]
     run = solve_ivp_events(scene, "Radau", 1e-12, budget=0.0)
     assert run.status == "failed" and "budget" in run.message
 
 
+@needs_scipy
 @pytest.mark.slow
 def test_quick_work_precision_run(tmp_path):
     before = _package_state()
@@ -99,6 +105,7 @@ def test_quick_work_precision_run(tmp_path):
     assert int(ours["wrong"]) == 0 and int(ours["failed"]) == 0
 
 
+@needs_scipy
 @pytest.mark.slow
 def test_quick_stability_run(tmp_path):
     assert main(["bench", "stability", "--quick", "--out", str(tmp_path), "--budget", "5"]) == 0
@@ -108,6 +115,7 @@ def test_quick_stability_run(tmp_path):
     assert "| case |" in (tmp_path / "stability.md").read_text(encoding="utf-8")
 
 
+@needs_scipy
 def test_peers_cross_a_normal_force_zero_once():
     """A restarted peer takes the other sign of N after an N = 0 event (not the same event again)."""
     from symvib.checks import stability as st

@@ -298,7 +298,7 @@ def test_contact_default_is_bilateral():
 
 def _leaving_time(mu):
     """Where N = R phidot^2 + g cos(phi) reaches 0, by solve_ivp in time (independent of the engine)."""
-    from scipy.integrate import solve_ivp
+    solve_ivp = pytest.importorskip("scipy.integrate").solve_ivp   # the optional extra "bench"
 
     def rhs(t, y):  # branch s = +1: moving up the inside of the circle, N > 0
         return [y[1], -mu * y[1] ** 2 - G / R_CIRCLE * (math.sin(y[0]) + mu * math.cos(y[0]))]
@@ -356,8 +356,8 @@ def _first_normal_zero(qdot, mu):
     sees sign changes at step ends only, and misses this narrow dip itself)
     and the zero refined by brentq.
     """
-    from scipy.integrate import solve_ivp
-    from scipy.optimize import brentq
+    solve_ivp = pytest.importorskip("scipy.integrate").solve_ivp   # the optional extra "bench"
+    brentq = pytest.importorskip("scipy.optimize").brentq
 
     def rhs(t, y):
         return [y[1], -mu * y[1] ** 2 - G / R_CIRCLE * (math.sin(y[0]) + mu * math.cos(y[0]))]
