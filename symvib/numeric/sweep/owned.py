@@ -83,7 +83,7 @@ def _is_chunk(out: Path, rel: str) -> bool:
         return False
 
 
-def survey(out, *, manifest_ours: bool) -> Survey:
+def survey(out, *, manifest_ours: bool, prove: bool = True) -> Survey:
     """Sort the entries of the sweep folder ``out`` into symvib's, temporary and unknown.
 
     Parameters
@@ -92,6 +92,9 @@ def survey(out, *, manifest_ours: bool) -> Survey:
         The sweep folder (checked by the caller).
     manifest_ours : bool
         Whether ``out/manifest.json`` is a valid symvib manifest (then its maps count as symvib's).
+    prove : bool
+        Open every chunk file for its sweep identity (``False``: a resumed sweep, whose
+        manifest lists its chunk names and which checks every chunk it reads anyway).
 
     Returns
     -------
@@ -116,7 +119,8 @@ def survey(out, *, manifest_ours: bool) -> Survey:
                 rel = f"{name}/{entry}"
                 if sub == "file" and (safeio.is_temporary(entry) or _OLD_TEMPORARY.fullmatch(entry)):
                     found.temporary.append(rel)
-                elif sub == "file" and name == "chunks" and CHUNK_NAME.fullmatch(entry) and _is_chunk(out, rel):
+                elif sub == "file" and name == "chunks" and CHUNK_NAME.fullmatch(entry) and (
+                        not prove or _is_chunk(out, rel)):
                     found.ours.append(rel)
                 elif sub == "file" and name == "maps" and manifest_ours and _MAP.fullmatch(entry):
                     found.ours.append(rel)

@@ -325,7 +325,7 @@ def prepare(out: Path, spec: SweepSpec, ident: str, overwrite: bool, storage: st
         raise SweepError("out", f"{out} holds this sweep stored as {old_storage}; run it with --format "
                                 f"{old_storage} (storage={old_storage!r}), or --overwrite to store it as {storage}")
     resume = old == ident and old_storage == storage
-    found = survey(out, manifest_ours=old is not None)
+    found = survey(out, manifest_ours=old is not None, prove=not resume)
     held = found.unknown + [rel for rel in found.ours if rel != "sweep.lock"]
     if held and not resume and not overwrite:
         # A new sweep starts in an empty folder: whatever is here (even an earlier sweep's chunks
