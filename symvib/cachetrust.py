@@ -136,9 +136,13 @@ def trusted(path, what: str) -> Path:
     if why is None:
         return path
     fallback = _fallback(str(path))
-    _warn_once(f"{what} {path} is {why}; it is not used (caches must be yours alone, chmod 700): "
-               f"this run caches in {fallback}")
+    _warn_once(f"{what} {path} is {why}; it is not used{_hint(why)}: this run caches in {fallback}")
     return fallback
+
+
+def _hint(why: str) -> str:
+    """The remedy for a cache others could change (none for a path that is not a folder)."""
+    return " (a cache must be yours alone: chmod 700)" if "owned by" in why or "writable by" in why else ""
 
 
 #: Private temporary folders used instead of untrusted caches, by the path they replace.
@@ -180,8 +184,7 @@ def numba_cache() -> Path:
         why = problem(configured, create=True)
         if why is None:
             return Path(configured)
-        _warn_once(f"numba's cache ${NUMBA_CACHE_ENV} {configured} is {why}; it is not used "
-                   "(caches must be yours alone, chmod 700)")
+        _warn_once(f"numba's cache ${NUMBA_CACHE_ENV} {configured} is {why}; it is not used{_hint(why)}")
     elif configured:
         return Path(configured)   # this process's private fallback, set by configure_numba
     return trusted(_cache_home().joinpath(*DEFAULT_NUMBA_CACHE), "numba's cache")
