@@ -298,7 +298,7 @@ class DenseOutput:
         roots = fns["map_extend"](region, roots, count, qb, S.mu, K, self._cp, fns["CRIT_STEP"] * S.scale)
         n = max(len(R.Xw), len(R.Xp))
         out = np.zeros((2 * fns["MAX_PANELS"] + 2, PANEL_COLUMNS))
-        rows = fns["quad"](qa, qb, Ga, Gb, s, sigma, S, K, self._cp, R, fns["scratch"](WORK_ROWS, n), PANELS,
+        rows = fns["quad"](qa, qb, Ga, Gb, s, sigma, S, K, self._cp, R, fns["scratch"](1, WORK_ROWS * n)[0], PANELS,
                            out, 0, roots, count)[4]
         panels = out[:rows]
         halves = []

@@ -133,7 +133,7 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
     g, m, mu, k, scale = S.g, S.m, S.mu, S.k, S.scale
     region, roots, count = map_new(q0, S.lo, S.hi, mu, K, cp, CRIT_STEP * scale)
     X = R.Xw
-    work = scratch(WORK_ROWS, max(len(X), len(R.Xp)))
+    work = scratch(1, WORK_ROWS * max(len(X), len(R.Xp)))[0]
     dummy = np.empty((1, 4))
     events = np.zeros((min(max_events + EVENT_LOG_SPARE, EVENT_LOG_START), EVENT_WIDTH))
     ne = 0
