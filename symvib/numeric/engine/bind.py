@@ -39,7 +39,7 @@ from typing import NamedTuple
 from symvib.numeric.engine import anchor, laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
-__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
+__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks", "own_rules",
            "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS",
            "NO_REFCOUNT"]
 
@@ -354,6 +354,13 @@ def guided_blocks(n: int, threads: int):
         start = stop
 
 
+def own_rules(R: Rules) -> Rules:
+    """A copy of the rules ``R`` whose arrays share nothing with ``R``'s (for one thread of a sweep)."""
+    import numpy as np
+
+    return Rules(*(np.array(v, copy=True) if isinstance(v, np.ndarray) else v for v in R))
+
+
 def threaded_sweep(block):
     """A sweep ``(rows, cp_rows, R, max_log) -> (summary, logs)`` that runs the compiled
     ``block(rows, cp_rows, R, max_log, out, logs, start, stop)`` (which releases the GIL)
@@ -362,6 +369,7 @@ def threaded_sweep(block):
     Each thread takes the next of the :func:`guided_blocks` (the scenes of a grid differ in
     cost: a row of fast scenes makes many events, so fixed shares would leave a thread idle).
     """
+    import threading
     from concurrent.futures import ThreadPoolExecutor
 
     import numba
@@ -370,9 +378,14 @@ def threaded_sweep(block):
         n = rows.shape[0]
         out, logs = loop.sweep_arrays(n, max_log)
         threads = max(1, min(numba.get_num_threads(), -(-n // SWEEP_GRAIN)))
+        own = threading.local()
 
         def run(span):
-            block(rows, cp_rows, R, max_log, out, logs, *span)
+            # Each thread its own copy of the rules: the compiled engine counts references to
+            # them atomically, and two cores counting on one array's count take turns.
+            if not hasattr(own, "R"):
+                own.R = R if threads == 1 else own_rules(R)
+            block(rows, cp_rows, own.R, max_log, out, logs, *span)
 
         if threads == 1:
             for span in guided_blocks(n, 1):

@@ -321,15 +321,17 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, Xr, Wr, Sr, Tr, wo
             out[o + j, 1] = work[qn + j]
             out[o + j, 2] = w
             out[o + j, 3] = N
+    floor_T = ROUND_TAIL * EPS * T
     r_geom = 0.0
-    if not weighted:
+    if not weighted and max(abs(b1), abs(b2)) > floor_T:
+        # (a tail at the rounding floor is 0 whatever the zero's ellipse: tail_error)
         # G's local model at its smallest node: value, slope and curvature in r (from the slopes
         # at the neighbouring nodes), for the zero that bounds the time integrand's analyticity.
         j0, j1 = max(j_min - 1, 0), min(j_min + 1, n - 1)
         x0, x1 = r1 + hw * (Xr[j0] + 1.0), r1 + hw * (Xr[j1] + 1.0)
         curv = (work[cum + j1] - work[cum + j0]) / (x1 - x0) if x1 > x0 else 0.0
         r_geom = zero_ratio(r1 + hw * (Xr[j_min] + 1.0), G_min, work[cum + j_min], curv, r1 + hw, hw)
-    err_T = hw * tail_error(b1, b2, b3, b4, n, weighted, r_geom, ROUND_TAIL * EPS * T)
+    err_T = hw * tail_error(b1, b2, b3, b4, n, weighted, r_geom, floor_T)
     return total, hw * T, hw * W, hw * P, err_T, err_G, 0.5 * hw * sens, round_G, G_min, q_min
 
 
