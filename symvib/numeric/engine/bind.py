@@ -39,9 +39,8 @@ from typing import NamedTuple
 from symvib.numeric.engine import anchor, laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
-__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks", "own_rules",
-           "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS",
-           "NO_REFCOUNT"]
+__all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
+           "own_rules", "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS", "NO_REFCOUNT"]
 
 #: The engine's modules, in import order.
 ENGINE_MODULES = (laws, roots, anchor, scan, timing, loop)
@@ -114,7 +113,8 @@ HOT_INLINE = ("cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
 #: per event (``benchmarks/profile_sweep.py``).  ``tests/test_engine_refcount.py`` checks that none
 #: of them returns an array (a returned array would be freed under its new owner).
 NO_REFCOUNT = ("panel", "quad", "anchored_G", "root_anchored", "tail_time", "turn_departure", "time_excess",
-               "root_time")
+               "root_time", "locate", "walk", "map_extend", "extend_side", "crossing", "branch_cut", "add_root",
+               "room")
 #: numba options of an engine function only compiled code calls: no Python or C wrapper
 #: to build (about 2.5 s of the parabola engine's compile).
 INNER = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
@@ -251,7 +251,7 @@ def _compiled_engine(ncp: int) -> dict:
 
     options = {name: {"cache": True} for name in ENTRY_POINTS}
     options["sweep_block"] = {"cache": True, "nogil": True}
-    options.update({name: {"_nrt": False, **INNER} for name in NO_REFCOUNT})
+    # (not NO_REFCOUNT here: the kernels' structure is itself reference counted)
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: not n.endswith("_bound") and n != "params_of",
                                    names={"params_of": _params_of(ncp)}, options=options, default=INNER)
     _flush_if_stale([compiled[name] for name in ENTRY_POINTS], cache_dir() / "engines" / f"engine-{engine_digest()}")
