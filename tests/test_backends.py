@@ -96,14 +96,16 @@ def test_the_threaded_sweep_runs_every_scene_once_in_blocks_and_raises_a_block_s
 
     import numba
 
+    from symvib.numeric.driver import NODES, rules
     from symvib.numeric.engine.bind import SWEEP_GRAIN, threaded_sweep
     from symvib.numeric.layout import Summary
 
-    calls, threads_seen = [], set()
+    calls, threads_seen, rules_seen = [], set(), {}
 
     def block(rows, cp_rows, R, max_log, out, logs, start, stop):
         calls.append((start, stop))
         threads_seen.add(threading.get_ident())
+        rules_seen.setdefault(threading.get_ident(), set()).add(id(R.Xw))
         out[start:stop, Summary.events] += rows[start:stop, 0]
 
     n = 1000
@@ -111,7 +113,8 @@ def test_the_threaded_sweep_runs_every_scene_once_in_blocks_and_raises_a_block_s
     threads = numba.get_num_threads()
     numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
     try:
-        out, logs = threaded_sweep(block)(rows, rows, None, 3)
+        R = rules(NODES)
+        out, logs = threaded_sweep(block)(rows, rows, R, 3)
     finally:
         numba.set_num_threads(threads)
     assert np.array_equal(out[:, Summary.events], rows[:, 0])  # each scene once
@@ -122,9 +125,13 @@ def test_the_threaded_sweep_runs_every_scene_once_in_blocks_and_raises_a_block_s
     assert all(stop - start >= SWEEP_GRAIN for start, stop in spans[:-1])
     assert max(stop - start for start, stop in spans) < n  # more than one block
     assert len(threads_seen) >= 1
+    # Each thread one copy of the rules of its own (reference counts are not shared between cores).
+    assert all(len(ids) == 1 for ids in rules_seen.values())
+    mine = [next(iter(ids)) for ids in rules_seen.values()]
+    assert len(set(mine)) == len(mine) and (len(mine) == 1 or id(R.Xw) not in mine)
 
     def failing(rows, cp_rows, R, max_log, out, logs, start, stop):
         raise ZeroDivisionError("in a block")
 
     with pytest.raises(ZeroDivisionError, match="in a block"):
-        threaded_sweep(failing)(rows, rows, None, 0)
+        threaded_sweep(failing)(rows, rows, R, 0)

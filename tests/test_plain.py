@@ -21,12 +21,18 @@ def test_cumulate_is_the_loop_versions_sum_to_rounding(nodes):
     rng = np.random.default_rng(7)
     for St in (R.Sw, R.SWw, R.Sp):
         n = St.shape[0]
-        v = rng.normal(size=n + 3) * 10.0 ** rng.integers(-5, 5, size=n + 3)  # a scratch row is longer than n
-        want = timing.cumulate(St, v, n, np.full(n + 3, np.nan))[:n]
-        got = plain.cumulate(St, v.tolist(), n, None)
-        assert isinstance(got, list) and len(got) == n and all(type(x) is float for x in got)
-        bound = np.abs(St[:n, :n]).T @ np.abs(v[:n])  # the sum's rounding scales with it
-        assert np.all(np.abs(np.array(got) - want) <= 8 * np.finfo(float).eps * bound)
+        # Rows of one flat scratch array: the integrand at offset 2, the sums at offset n + 5.
+        v = rng.normal(size=2 * n + 8) * 10.0 ** rng.integers(-5, 5, size=2 * n + 8)
+        want = timing.cumulate(St, v.copy(), 2, n, v.copy(), n + 5)
+        got = plain.cumulate(St, v.tolist(), 2, n, v.tolist(), n + 5)
+        assert isinstance(got, list) and len(got) == len(v) and all(type(x) is float for x in got)
+        # Only the n sums are written, the rest of the row is left as it was.
+        assert got[:n + 5] == v[:n + 5].tolist() and got[2 * n + 5:] == v[2 * n + 5:].tolist()
+        assert np.array_equal(want[:n + 5], v[:n + 5]) and np.array_equal(want[2 * n + 5:], v[2 * n + 5:])
+        bound = np.abs(St[:n, :n]).T @ np.abs(v[2:n + 2])  # the sum's rounding scales with it
+        exact = St[:n, :n].T @ v[2:n + 2]
+        assert np.all(np.abs(want[n + 5:2 * n + 5] - exact) <= 8 * np.finfo(float).eps * bound)
+        assert np.all(np.abs(np.array(got[n + 5:2 * n + 5]) - want[n + 5:2 * n + 5]) <= 8 * np.finfo(float).eps * bound)
 
 
 def test_scratch_rows_have_the_loop_versions_shape_and_are_independent():

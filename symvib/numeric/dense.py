@@ -295,10 +295,13 @@ class DenseOutput:
         s, sigma = int(s), int(sigma)
         # The critical points the run knew there (for F_s' next to the cone edge).
         region, roots, count = fns["map_new"](qa, S.lo, S.hi, S.mu, K, self._cp, fns["CRIT_STEP"] * S.scale)
-        roots = fns["map_extend"](region, roots, count, qb, S.mu, K, self._cp, fns["CRIT_STEP"] * S.scale)
+        fns["map_extend"](region, roots, count, qb, S.mu, K, self._cp, fns["CRIT_STEP"] * S.scale)
+        while not fns["room"](roots, count):  # the scan stopped on a full row: grow it, scan on
+            roots = fns["grown_roots"](roots, count)
+            fns["map_extend"](region, roots, count, qb, S.mu, K, self._cp, fns["CRIT_STEP"] * S.scale)
         n = max(len(R.Xw), len(R.Xp))
         out = np.zeros((2 * fns["MAX_PANELS"] + 2, PANEL_COLUMNS))
-        rows = fns["quad"](qa, qb, Ga, Gb, s, sigma, S, K, self._cp, R, fns["scratch"](WORK_ROWS, n), PANELS,
+        rows = fns["quad"](qa, qb, Ga, Gb, s, sigma, S, K, self._cp, R, fns["scratch"](1, WORK_ROWS * n)[0], PANELS,
                            out, 0, roots, count)[4]
         panels = out[:rows]
         halves = []

@@ -40,7 +40,7 @@ from symvib.numeric.engine import anchor, laws, loop, roots, scan, timing
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
 __all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
-           "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS"]
+           "own_rules", "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS", "NO_REFCOUNT"]
 
 #: The engine's modules, in import order.
 ENGINE_MODULES = (laws, roots, anchor, scan, timing, loop)
@@ -104,8 +104,17 @@ SWEEP_GRAIN = 16
 #: large blocks first, small ones at the end, so the threads finish together).
 SWEEP_SHARE = 4
 #: Small engine functions of the hot loops that take arrays, inlined where they are called (numba
-#: counts a reference of every array an ordinary call passes: about a third of a sweep's time).
-HOT_INLINE = ("panel", "cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
+#: counts a reference of every array an ordinary call passes, atomically).
+HOT_INLINE = ("cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
+#: Engine functions that neither allocate nor return an array, compiled without reference counting
+#: (numba's ``_nrt=False``): the arrays they receive stay owned by their caller, which outlives the
+#: call.  The time quadrature (``quad`` and its ``panel``, on one flat scratch array) was a third of
+#: a sweep's time in reference counts; without them a sweep of the paper grid takes 0.67 of the CPU
+#: per event (``benchmarks/profile_sweep.py``).  ``tests/test_engine_refcount.py`` checks that none
+#: of them returns an array (a returned array would be freed under its new owner).
+NO_REFCOUNT = ("panel", "quad", "anchored_G", "root_anchored", "tail_time", "turn_departure", "time_excess",
+               "root_time", "locate", "walk", "map_extend", "extend_side", "crossing", "branch_cut", "add_root",
+               "room")
 #: numba options of an engine function only compiled code calls: no Python or C wrapper
 #: to build (about 2.5 s of the parabola engine's compile).
 INNER = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
@@ -242,6 +251,7 @@ def _compiled_engine(ncp: int) -> dict:
 
     options = {name: {"cache": True} for name in ENTRY_POINTS}
     options["sweep_block"] = {"cache": True, "nogil": True}
+    # (not NO_REFCOUNT here: the kernels' structure is itself reference counted)
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: not n.endswith("_bound") and n != "params_of",
                                    names={"params_of": _params_of(ncp)}, options=options, default=INNER)
     _flush_if_stale([compiled[name] for name in ENTRY_POINTS], cache_dir() / "engines" / f"engine-{engine_digest()}")
@@ -322,6 +332,7 @@ def _specialized_engine(module, ncp: int) -> dict:
     options["sweep_bound"] = {"cache": True, "nogil": True}
     options.update({name: {"inline": "always", **INNER}
                     for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE)})
+    options.update({name: {"_nrt": False, **INNER} for name in NO_REFCOUNT})
     names = {"params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,
@@ -343,6 +354,13 @@ def guided_blocks(n: int, threads: int):
         start = stop
 
 
+def own_rules(R: Rules) -> Rules:
+    """A copy of the rules ``R`` whose arrays share nothing with ``R``'s (for one thread of a sweep)."""
+    import numpy as np
+
+    return Rules(*(np.array(v, copy=True) if isinstance(v, np.ndarray) else v for v in R))
+
+
 def threaded_sweep(block):
     """A sweep ``(rows, cp_rows, R, max_log) -> (summary, logs)`` that runs the compiled
     ``block(rows, cp_rows, R, max_log, out, logs, start, stop)`` (which releases the GIL)
@@ -351,6 +369,7 @@ def threaded_sweep(block):
     Each thread takes the next of the :func:`guided_blocks` (the scenes of a grid differ in
     cost: a row of fast scenes makes many events, so fixed shares would leave a thread idle).
     """
+    import threading
     from concurrent.futures import ThreadPoolExecutor
 
     import numba
@@ -359,9 +378,14 @@ def threaded_sweep(block):
         n = rows.shape[0]
         out, logs = loop.sweep_arrays(n, max_log)
         threads = max(1, min(numba.get_num_threads(), -(-n // SWEEP_GRAIN)))
+        own = threading.local()
 
         def run(span):
-            block(rows, cp_rows, R, max_log, out, logs, *span)
+            # Each thread its own copy of the rules: the compiled engine counts references to
+            # them atomically, and two cores counting on one array's count take turns.
+            if not hasattr(own, "R"):
+                own.R = R if threads == 1 else own_rules(R)
+            block(rows, cp_rows, own.R, max_log, out, logs, *span)
 
         if threads == 1:
             for span in guided_blocks(n, 1):

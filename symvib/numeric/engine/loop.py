@@ -43,7 +43,7 @@ from symvib.numeric.engine.laws import (
     side_at,
     zeno_series,
 )
-from symvib.numeric.engine.scan import CRIT_STEP, End, curve_scale, locate, map_new, scratch
+from symvib.numeric.engine.scan import CRIT_STEP, End, curve_scale, grown_roots, locate, map_new, scratch
 from symvib.numeric.engine.state import Outcome, Setup, Zeno
 from symvib.numeric.engine.timing import (
     EPS,
@@ -133,7 +133,7 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
     g, m, mu, k, scale = S.g, S.m, S.mu, S.k, S.scale
     region, roots, count = map_new(q0, S.lo, S.hi, mu, K, cp, CRIT_STEP * scale)
     X = R.Xw
-    work = scratch(WORK_ROWS, max(len(X), len(R.Xp)))
+    work = scratch(1, WORK_ROWS * max(len(X), len(R.Xp)))[0]
     dummy = np.empty((1, 4))
     events = np.zeros((min(max_events + EVENT_LOG_SPARE, EVENT_LOG_START), EVENT_WIDTH))
     ne = 0
@@ -239,7 +239,10 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
             t_err += 4.0 * EPS * tail_next
             tail_next = 0.0
         Ga = w * math.exp(2.0 * s * mu * K.alpha(q, *cp))
-        end, qb, Gb, roots = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, R.Xp, R.Wp)
+        end, qb, Gb = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, R.Xp, R.Wp)
+        while end == End.ROOM:
+            roots = grown_roots(roots, count)
+            end, qb, Gb = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, R.Xp, R.Wp)
         T, Wi, Te, flag, _, q_ok, G_ok, q_neg = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
                                                      roots, count)
         if flag == QUAD_NEGATIVE:

@@ -18,8 +18,8 @@ cumulative sums only in another order, which changes the last bits.
 
 Examples
 --------
->>> cumulate(np.eye(2), [1.0, 2.0, 3.0], 2, None)
-[1.0, 2.0]
+>>> cumulate(np.eye(2), [1.0, 2.0, 3.0], 1, 2, [0.0] * 3, 1)
+[0.0, 2.0, 3.0]
 >>> scratch(2, 3)
 [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
 """
@@ -39,10 +39,11 @@ def scratch(rows, n):
     return [[0.0] * n for _ in range(rows)]
 
 
-def cumulate(St, v, n, acc):
-    """``sum_i St[i, j] v[i]`` for ``j < n`` as a list, by NumPy (:func:`symvib.numeric.engine.timing.cumulate`;
-    ``acc`` is not used: the caller takes the returned list)."""
-    return np.dot(v[:n], St).tolist()
+def cumulate(St, v, vo, n, acc, ao):
+    """``acc[ao + j] = sum_i St[i, j] v[vo + i]`` for ``j < n``, by NumPy, into the list ``acc``
+    (:func:`symvib.numeric.engine.timing.cumulate`); returns ``acc``."""
+    acc[ao:ao + n] = np.dot(v[vo:vo + n], St).tolist()
+    return acc
 
 
 def grown(a, n, rows):

@@ -26,8 +26,8 @@ from symvib.numeric.engine.anchor import anchored_G, root_anchored
 from symvib.numeric.engine.laws import EPS, Fs
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update, root_G
 
-__all__ = ["End", "Region", "scratch", "map_new", "locate", "curve_scale", "branch_cut", "next_cut", "CRIT_STEP",
-           "CRIT_TURN", "WINDOW", "CHUNK", "DIP_ITER", "SCALE_POINTS", "SCALE_TURN"]
+__all__ = ["End", "Region", "scratch", "map_new", "room", "grown_roots", "locate", "curve_scale", "branch_cut",
+           "next_cut", "CRIT_STEP", "CRIT_TURN", "WINDOW", "CHUNK", "DIP_ITER", "SCALE_POINTS", "SCALE_TURN"]
 
 #: Search window where no limiter bounds the motion, in units of q_scale.
 WINDOW = 2.0
@@ -52,7 +52,10 @@ N_FLOOR = 1e-300
 SCALE_POINTS = 9
 #: The run's length scale is at most the distance in q over which the tangent turns by this (rad).
 SCALE_TURN = 1.0
-#: Initial capacity of the list of critical points per branch.
+#: Initial capacity of the list of critical points per branch.  The scan never grows the array: it
+#: stops where a row is full and says so (:func:`room`, ``End.ROOM``), and the one function that owns
+#: the array (the run) grows it (:func:`grown_roots`); so no function of the scan allocates or returns
+#: an array, and they run without reference counts (:data:`symvib.numeric.engine.bind.NO_REFCOUNT`).
 ROOTS_CAPACITY = 8
 #: Rows of the array of special points: the critical points of the branches s = +1 and s = -1,
 #: and the branch cuts of the tangent angle (:data:`CUT_ROW`).
@@ -79,6 +82,7 @@ class End(enum.IntEnum):
     PASS = 3  # at the end of the search window: the motion goes on
     EDGE = 4  # at an end of the curve's regular domain
     CUT = 5  # at a branch cut of the tangent angle: the motion goes on from the other side
+    ROOM = 6  # not found: the array of special points is full (grow it, :func:`grown_roots`, and locate again)
 
 
 class Region(enum.IntEnum):
@@ -213,30 +217,43 @@ def map_new(q0, lo, hi, mu, K, cp, step):
     roots = np.empty((ROOT_ROWS, ROOTS_CAPACITY))
     count = np.zeros(ROOT_ROWS, dtype=np.int64)
     if region[FP_LO] == 0.0:
-        roots = add_root(roots, count, 0, x0)
+        add_root(roots, count, 0, x0)
     if region[FM_LO] == 0.0:
-        roots = add_root(roots, count, 1, x0)
+        add_root(roots, count, 1, x0)
     return region, roots, count
 
+
+def room(roots, count):
+    """Whether every row of the special points has a free place (a scan step adds at most one a row)."""
+    for b in range(ROOT_ROWS):
+        if count[b] >= roots.shape[1]:
+            return False
+    return True
+
+
+def grown_roots(roots, count):
+    """The special points in an array of twice the capacity (the scan stopped where a row was full)."""
+    new = np.empty((ROOT_ROWS, 2 * roots.shape[1]))
+    for i in range(ROOT_ROWS):
+        for j in range(count[i]):
+            new[i, j] = roots[i, j]  # element by element: see timing.grown
+    return new
+
+
 def add_root(roots, count, b, r):
-    """Append the critical point ``r`` of branch row ``b`` (grows the array when full)."""
-    if count[b] == roots.shape[1]:
-        new = np.empty((ROOT_ROWS, 2 * roots.shape[1]))
-        for i in range(ROOT_ROWS):
-            for j in range(roots.shape[1]):
-                new[i, j] = roots[i, j]  # element by element: see timing.grown
-        roots = new
-    roots[b, count[b]] = r
-    count[b] += 1
-    return roots
+    """Append the critical point ``r`` of branch row ``b`` (the scan makes :func:`room` first)."""
+    if count[b] < roots.shape[1]:
+        roots[b, count[b]] = r
+        count[b] += 1
 
 def crossing(roots, count, row, x_old, x_new, f_old, f_new, mu, K, cp):
     """Record the root of F_s' between two scanned points where :func:`changes_sign`
     (at the new one, if exactly 0)."""
     if f_new == 0.0:
-        return add_root(roots, count, row, x_new)
-    s = 1 if row == 0 else -1
-    return add_root(roots, count, row, root_crit((s, mu, K, cp), x_old, x_new, f_old, f_new))
+        add_root(roots, count, row, x_new)
+    else:
+        s = 1 if row == 0 else -1
+        add_root(roots, count, row, root_crit((s, mu, K, cp), x_old, x_new, f_old, f_new))
 
 def changes_sign(f_old, f_new):
     """Whether F_s' has a root between two scanned points with values f_old, f_new (or at the
@@ -244,12 +261,12 @@ def changes_sign(f_old, f_new):
     return f_new == 0.0 or (f_old != 0.0 and (f_old > 0.0) != (f_new > 0.0))
 
 def map_extend(region, roots, count, target, mu, K, cp, step):
-    """Scan outward until target is covered (or the domain ends)."""
+    """Scan outward until target is covered (or the domain ends, or a row of ``roots`` is full:
+    then not :func:`room`)."""
     if target > region[X_HI]:
-        return extend_side(region, roots, count, target, mu, K, cp, step, 1.0)
-    if target < region[X_LO]:
-        return extend_side(region, roots, count, target, mu, K, cp, step, -1.0)
-    return roots
+        extend_side(region, roots, count, target, mu, K, cp, step, 1.0)
+    elif target < region[X_LO]:
+        extend_side(region, roots, count, target, mu, K, cp, step, -1.0)
 
 def extend_side(region, roots, count, target, mu, K, cp, step, up):
     """Scan up (``up = 1``) or down (``up = -1``) until target is covered (or the domain ends), in
@@ -267,7 +284,7 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
     x_old, edge, xp_old = region[ix], region[iedge], region[idx]
     fp_old, fm_old, turn, safe_open = region[ifp], region[ifm], region[iturn], region[iopen] != 0.0
     zp_old = 0.5 * (fp_old + fm_old)
-    while (target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0:
+    while (target - x_old) * up > 0.0 and (x_old - edge) * up < 0.0 and room(roots, count):
         h = scan_step(turn, step)
         while True:
             x = x_old + up * h
@@ -284,12 +301,12 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
         if not (fp * fp_old > 0.0 and fm * fm_old > 0.0):
             # Both signs kept (the common case) records nothing: else a closer look.
             if changes_sign(fp_old, fp):
-                roots = crossing(roots, count, 0, x_old, x, fp_old, fp, mu, K, cp)
+                crossing(roots, count, 0, x_old, x, fp_old, fp, mu, K, cp)
             if changes_sign(fm_old, fm):
-                roots = crossing(roots, count, 1, x_old, x, fm_old, fm, mu, K, cp)
+                crossing(roots, count, 1, x_old, x, fm_old, fm, mu, K, cp)
         if xp < 0.0 and zp * zp_old <= 0.0:
             # z' changed sign with the tangent along -x: where atan2's angle jumps, if it does.
-            roots = branch_cut(roots, count, min(x_old, x), max(x_old, x), K, cp)
+            branch_cut(roots, count, min(x_old, x), max(x_old, x), K, cp)
         if safe_open:
             if xp > 0.0 and K.kappa(x, *cp) >= 0.0:
                 region[isafe] = x
@@ -298,7 +315,6 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
         x_old, fp_old, fm_old, xp_old, zp_old = x, fp, fm, xp, zp
     region[ix], region[ifp], region[ifm], region[iturn], region[idx] = x_old, fp_old, fm_old, turn, xp_old
     region[iopen] = 1.0 if safe_open else 0.0
-    return roots
 
 def branch_cut(roots, count, a, b, K, cp):
     """Record where the kernels' tangent angle jumps by more than pi between ``a < b`` (if it does),
@@ -310,7 +326,7 @@ def branch_cut(roots, count, a, b, K, cp):
     """
     fa, fb = K.alpha(a, *cp), K.alpha(b, *cp)
     if not abs(fb - fa) > math.pi:
-        return roots
+        return
     for _ in range(CUT_BISECT):
         m = 0.0 if a < 0.0 < b else 0.5 * (a + b)
         if not a < m < b:
@@ -326,8 +342,8 @@ def branch_cut(roots, count, a, b, K, cp):
         a = below if abs(K.alpha(below, *cp) - K.alpha(0.0, *cp)) > math.pi else 0.0
     for i in range(count[CUT_ROW]):
         if roots[CUT_ROW, i] == a:
-            return roots
-    return add_root(roots, count, CUT_ROW, a)
+            return
+    add_root(roots, count, CUT_ROW, a)
 
 
 def next_cut(roots, count, a, b, sigma):
@@ -391,7 +407,8 @@ def dip_below(pn, a, b):
 
 def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, Xa, Wa):
     """Walk from ``q`` towards ``bound`` over the pieces on which ``G`` is monotone: the first
-    root of ``G`` (a turning point), else ``bound`` (of ``kind``).  Returns ``(qe, Ge, kind, roots)``.
+    root of ``G`` (a turning point), else ``bound`` (of ``kind``).  Returns ``(qe, Ge, kind)``; kind
+    ``End.ROOM`` (at ``q``) when the special points filled their array first.
 
     ``G`` at the pieces' ends is the closed form ``C - 2 g F_s``, until its rounding is too
     large for the ``G`` that decides a turning point or the end (:data:`CANCEL_RTOL`):
@@ -409,7 +426,9 @@ def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, Xa, Wa
         # the known critical points are all there are, so G is monotone between them.
         ahead = a + sigma * CHUNK * step
         target = min(ahead, bound) if sigma > 0 else max(ahead, bound)
-        roots = map_extend(region, roots, count, target, mu, K, cp, step)
+        map_extend(region, roots, count, target, mu, K, cp, step)
+        if not room(roots, count):
+            return q, Ga, End.ROOM
         edge = min(region[X_HI], bound) if sigma > 0 else max(region[X_LO], bound)
         cut = next_cut(roots, count, a, edge, sigma)
         if not math.isnan(cut):
@@ -434,28 +453,28 @@ def walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, Xa, Wa
             # A non-finite G at a domain end stands in as -1 (the finder bisects there).
             Gb = Gb if math.isfinite(Gb) else -1.0
             if not anchored:
-                return root_G(s, C, a, b, Gq, Gb, g2, mu, K, cp), 0.0, End.TURN, roots
+                return root_G(s, C, a, b, Gq, Gb, g2, mu, K, cp), 0.0, End.TURN
             if Gq <= 0.0:
-                return a, 0.0, End.TURN, roots
+                return a, 0.0, End.TURN
             # The closed form's root, then the anchored form's from there.
             Fa = C - g2 * Fs(s, a, mu, K, cp)
             Fb = C - g2 * Fs(s, b, mu, K, cp)
             x = root_G(s, C, a, b, Fa, Fb, g2, mu, K, cp) if Fa > 0.0 >= Fb else math.nan
             qe, Ge = root_anchored(a, Gq, b, Gb, x, s, S, K, cp, Xa, Wa, roots, count)
-            return qe, Ge, End.TURN, roots
+            return qe, Ge, End.TURN
         if b == bound:
-            return bound, Gb, kind, roots
+            return bound, Gb, kind
         a, Gq = b, Gb
 
 def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, Xa, Wa):
     """The end of the motion interval that starts at ``q`` moving ``sigma`` on branch ``s``
     with ``G(q) = Ga``, for the scene constants ``S`` (:class:`~symvib.numeric.engine.state.Setup`).
 
-    Returns ``(end, qe, Ge, roots)``: how it ends (:class:`End`), where, ``G`` there,
-    and the (possibly grown) array of critical points.  The normal force is scanned at
-    the nodes ``X`` (``Rules.Xw``) where it may change sign, and ``G`` carried from the start
-    with the rule ``Xa, Wa`` (``Rules.Xp, Rules.Wp``) where the closed form cancels
-    (:data:`CANCEL_RTOL`).
+    Returns ``(end, qe, Ge)``: how it ends (:class:`End`), where, and ``G`` there; ``End.ROOM``
+    when the array of special points ``roots`` is full (:func:`grown_roots`, then locate again).
+    The normal force is scanned at the nodes ``X`` (``Rules.Xw``) where it may change sign, and
+    ``G`` carried from the start with the rule ``Xa, Wa`` (``Rules.Xp, Rules.Wp``) where the
+    closed form cancels (:data:`CANCEL_RTOL`).
     """
     g, mu, left, right, lo, hi, scale = S.g, S.mu, S.left, S.right, S.lo, S.hi, S.scale
     has_left, has_right = S.has_left, S.has_right
@@ -472,12 +491,14 @@ def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, Xa, Wa):
             bound, kind = edge, End.EDGE
         else:
             bound, kind = window, End.PASS
-    qe, Ge, kind_out, roots = walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, Xa, Wa)
+    qe, Ge, kind_out = walk(q, sigma, s, Ga, C, bound, kind, S, K, cp, region, roots, count, Xa, Wa)
+    if kind_out == End.ROOM:
+        return kind_out, qe, Ge
     # An earlier zero of N on [q, qe] ends the interval there instead.
     safe_lo = region[SAFE_LO]
     safe_hi = region[SAFE_HI]
     if safe_lo <= min(q, qe) and max(q, qe) <= safe_hi:
-        return kind_out, qe, Ge, roots
+        return kind_out, qe, Ge
     # N is scanned at the Gauss nodes and at qe (its sign can change after the last node);
     # around a local minimum of the scanned values a golden-section search looks for a
     # dip below 0 between nodes.  The start counts as positive (N may be 0 there, just
@@ -492,13 +513,13 @@ def locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, Xa, Wa):
         fx = normal_on(x, pn)
         if fx < 0.0:
             r = root_normal(pn, prev, x, fprev, fx)
-            return End.NSIGN, r, C - g2 * Fs(s, r, mu, K, cp), roots
+            return End.NSIGN, r, C - g2 * Fs(s, r, mu, K, cp)
         if j > 0 and fprev <= fbefore and fprev <= fx:
             xd, fd = dip_below(pn, before, x)
             if not math.isnan(xd):
                 r = root_normal(pn, before, xd, fbefore, fd)
-                return End.NSIGN, r, C - g2 * Fs(s, r, mu, K, cp), roots
+                return End.NSIGN, r, C - g2 * Fs(s, r, mu, K, cp)
         before, fbefore = prev, max(fprev, N_FLOOR)
         prev, fprev = x, fx
-    return kind_out, qe, Ge, roots
+    return kind_out, qe, Ge
 

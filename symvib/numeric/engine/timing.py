@@ -60,7 +60,13 @@ ROOT_RATIO = 1.0
 ROOT_GRADE = 1e-3
 #: Smallest positive double, used to keep 1/sqrt(G) finite at a node on a root.
 TINY = np.finfo(float).tiny
-#: Rows of the quadrature's scratch array (node values and the cumulative sums).
+#: Rows of the quadrature's scratch array, one after the other in one flat array of
+#: ``WORK_ROWS * n`` floats (``n`` the nodes of a panel): per node the integrand of ``G``'s cumulative
+#: integral, ``q``, ``h dq/dr``, ``exp(s mu alpha)``, ``kappa``, ``cos alpha``, the cumulative sums, and
+#: with samples the integrands of time, path and friction work.  One flat array, not a tuple of row
+#: views: the compiled engine counts a reference of every array it passes or unpacks (atomically),
+#: which had cost a third of a sweep's time.
+W_CUM, W_Q, W_HD, W_EX, W_KAPPA, W_COS, W_ACC, W_FT, W_FP, W_FW = range(10)
 WORK_ROWS = 10
 #: Most panels a half-interval may accept; with at most MAX_TRIES evaluated, including the
 #: halved ones.  A half that needs more ends the run ``tolerance_not_met``.
@@ -133,15 +139,16 @@ SAMPLE_COLUMNS = 1 + max(v for k, v in vars(SampleColumn).items() if not k.start
 SAMPLE_GROWTH = 2 * MAX_PANELS
 
 
-def cumulate(St, v, n, acc):
-    """``acc[j] = sum_i St[i, j] v[i]`` for ``j < n``, summed over ``i`` in order: a cumulative
-    Gauss-Legendre integral at every node (``St`` the transposed matrix); returns ``acc``."""
+def cumulate(St, v, vo, n, acc, ao):
+    """``acc[ao + j] = sum_i St[i, j] v[vo + i]`` for ``j < n``, summed over ``i`` in order: a cumulative
+    Gauss-Legendre integral at every node (``St`` the transposed matrix; ``v`` and ``acc`` flat rows of
+    the quadrature's one scratch array, :data:`WORK_ROWS`); returns ``acc``."""
     for j in range(n):
-        acc[j] = 0.0
+        acc[ao + j] = 0.0
     for i in range(n):
-        vi = v[i]
+        vi = v[vo + i]
         for j in range(n):
-            acc[j] += St[i, j] * vi
+            acc[ao + j] += St[i, j] * vi
     return acc
 
 
@@ -202,18 +209,14 @@ def zero_ratio(x, G, G1, G2, c, hw):
     return 0.0
 
 
-def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, rule, rows, mode, out, o, roots, count):
+def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, Xr, Wr, Sr, Tr, work, mode, out, o, roots, count):
     """One panel ``[r1, r2]`` of a half-interval anchored at ``e`` (entered in direction ``d``),
     with ``G = Gstart`` at ``r1``: its nodes, ``G`` rebuilt at them, the integrals and their errors.
 
     ``r`` is the quadrature variable (``xi = r^2 - delta`` next to a root, ``xi = r``
-    otherwise; ``q = e + d xi``); ``rule`` holds the nodes, weights, cumulative matrix and
+    otherwise; ``q = e + d xi``); ``Xr, Wr, Sr, Tr`` are the nodes, weights, cumulative matrix and
     flattened tail rows of the Gauss-Legendre rule (a panel that starts on the root itself
-    takes the weighted one), ``rows`` the scratch rows: per node the integrand of ``G``'s
-    cumulative integral, ``q``, ``h dq/dr``, ``exp(s mu alpha)``, ``kappa``, ``cos alpha``,
-    ``G``'s cumulative integral, and with samples the integrands of time, path and work.
-    :func:`quad` builds both tuples once per interval (the compiled engine counts a reference
-    of every array view it builds, a third of a sweep's time when that happened per panel).
+    takes the weighted one), ``work`` the flat scratch array (rows :data:`WORK_ROWS`).
     In mode :data:`SAMPLES` the nodes' ``q, w, N`` go to ``out[o:]`` and the time, path and
     friction-work integrands to the last three rows.  Where ``F_s'`` at a node is small next
     to its terms and a critical point of ``roots`` is near, it is taken from there
@@ -230,9 +233,9 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, rule, rows, mode, 
     g, mu = S.g, S.mu
     hw = 0.5 * (r2 - r1)
     weighted = root and r1 == 0.0
-    Xr, Wr, Sr, Tr = rule
-    cum, qn, hd, exn, kn, cn, acc, ft, fp, fw = rows
     n = len(Xr)
+    cum, qn, hd, exn, kn, cn = W_CUM * n, W_Q * n, W_HD * n, W_EX * n, W_KAPPA * n, W_COS * n
+    acc, ft, fp, fw = W_ACC * n, W_FT * n, W_FP * n, W_FW * n
     total = 0.0
     size = 0.0
     terms = 0.0
@@ -268,17 +271,17 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, rule, rows, mode, 
         a3 += Tr[2 * n + j] * dG
         a4 += Tr[3 * n + j] * dG
         # The integrand of G's cumulative integral: gamma with the weight r next to a root.
-        cum[j] = gj if weighted else dG
-        hd[j] = hh * dq
-        exn[j] = ex
-        kn[j] = ka
-        cn[j] = co
-        qn[j] = qj
+        work[cum + j] = gj if weighted else dG
+        work[hd + j] = hh * dq
+        work[exn + j] = ex
+        work[kn + j] = ka
+        work[cn + j] = co
+        work[qn + j] = qj
     total *= hw
     err_G = hw * tail_error(a1, a2, a3, a4, n, False, -1.0, ROUND_TAIL * EPS * (size + 2.0 * g * terms))
     round_G = EPS * hw * (4.0 * size + 2.0 * g * terms)
     # G at the nodes: the anchor plus the cumulative integral of dG/dr.
-    acc = cumulate(Sr, cum, n, acc)
+    cumulate(Sr, work, cum, n, work, acc)
     scale_acc = 2.0 * hw * hw if weighted else hw
     T = 0.0
     W = 0.0
@@ -289,19 +292,19 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, rule, rows, mode, 
     j_min = 0
     b1, b2, b3, b4 = 0.0, 0.0, 0.0, 0.0
     for j in range(n):
-        G = Gstart + acc[j] * scale_acc
+        G = Gstart + work[acc + j] * scale_acc
         if G < G_min:
             G_min = G
-            q_min = qn[j]
+            q_min = work[qn + j]
             j_min = j
         if G < TINY:
             G = TINY
-        ex = exn[j]
-        hdj = hd[j]
+        ex = work[exn + j]
+        hdj = work[hd + j]
         inv = 1.0 / sqrt(G)
         f = hdj * ex * inv
         w = G / (ex * ex)
-        N = kn[j] * w + g * cn[j]
+        N = work[kn + j] * w + g * work[cn + j]
         wj = Wr[j]
         T += wj * f
         W += wj * mu * abs(N) * hdj
@@ -311,22 +314,24 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, rule, rows, mode, 
         b3 += Tr[2 * n + j] * f
         b4 += Tr[3 * n + j] * f
         if mode == SAMPLES:
-            ft[j] = f
-            fp[j] = hdj
-            fw[j] = mu * abs(N) * hdj
+            work[ft + j] = f
+            work[fp + j] = hdj
+            work[fw + j] = mu * abs(N) * hdj
             P += wj * hdj
-            out[o + j, 1] = qn[j]
+            out[o + j, 1] = work[qn + j]
             out[o + j, 2] = w
             out[o + j, 3] = N
+    floor_T = ROUND_TAIL * EPS * T
     r_geom = 0.0
-    if not weighted:
+    if not weighted and max(abs(b1), abs(b2)) > floor_T:
+        # (a tail at the rounding floor is 0 whatever the zero's ellipse: tail_error)
         # G's local model at its smallest node: value, slope and curvature in r (from the slopes
         # at the neighbouring nodes), for the zero that bounds the time integrand's analyticity.
         j0, j1 = max(j_min - 1, 0), min(j_min + 1, n - 1)
         x0, x1 = r1 + hw * (Xr[j0] + 1.0), r1 + hw * (Xr[j1] + 1.0)
-        curv = (cum[j1] - cum[j0]) / (x1 - x0) if x1 > x0 else 0.0
-        r_geom = zero_ratio(r1 + hw * (Xr[j_min] + 1.0), G_min, cum[j_min], curv, r1 + hw, hw)
-    err_T = hw * tail_error(b1, b2, b3, b4, n, weighted, r_geom, ROUND_TAIL * EPS * T)
+        curv = (work[cum + j1] - work[cum + j0]) / (x1 - x0) if x1 > x0 else 0.0
+        r_geom = zero_ratio(r1 + hw * (Xr[j_min] + 1.0), G_min, work[cum + j_min], curv, r1 + hw, hw)
+    err_T = hw * tail_error(b1, b2, b3, b4, n, weighted, r_geom, floor_T)
     return total, hw * T, hw * W, hw * P, err_T, err_G, 0.5 * hw * sens, round_G, G_min, q_min
 
 
@@ -353,10 +358,6 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
         return 0.0, 0.0, 0.0, QUAD_OK, o, qa, Ga, qa
     half = 0.5 * L
     maxq = PANEL_Q * scale
-    rows = (work[0], work[1], work[2], work[3], work[4], work[5], work[6], work[7], work[8], work[9])
-    acc, ft, fp, fw = rows[6], rows[7], rows[8], rows[9]
-    rule_w = (R.Xw, R.Ww, R.SWw, R.Tw)
-    rule_p = (R.Xp, R.Wp, R.Sp, R.Tp)
     T = 0.0
     Wf = 0.0
     P = 0.0
@@ -406,9 +407,14 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                 r2 = r1 + width
                 if r2 >= seg_b or seg_b - r2 < 0.25 * width:
                     r2 = seg_b
-                dG, Tq, Wq, Pq, eT, eG, sens, rG, G_min, q_min = panel(
-                    r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, rule_w if root and r1 == 0.0 else rule_p,
-                    rows, mode, out, o, roots, count)
+                if root and r1 == 0.0:
+                    dG, Tq, Wq, Pq, eT, eG, sens, rG, G_min, q_min = panel(
+                        r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R.Xw, R.Ww, R.SWw, R.Tw, work, mode,
+                        out, o, roots, count)
+                else:
+                    dG, Tq, Wq, Pq, eT, eG, sens, rG, G_min, q_min = panel(
+                        r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R.Xp, R.Wp, R.Sp, R.Tp, work, mode,
+                        out, o, roots, count)
                 tries += 1
                 share = atol * (r2 - r1) / (r_hi - r_lo) if r_hi > r_lo else atol
                 tol = rtol * Tq + share
@@ -451,15 +457,16 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                     St = R.Sw if weighted else R.Sp
                     n = len(R.Xw) if weighted else len(R.Xp)
                     hw = 0.5 * (r2 - r1)
-                    acc = cumulate(St, ft, n, acc)
+                    acc = W_ACC * n
+                    cumulate(St, work, W_FT * n, n, work, acc)
                     for j in range(n):
-                        out[o + j, 0] = tau0 + hw * acc[j]
-                    acc = cumulate(St, fp, n, acc)
+                        out[o + j, 0] = tau0 + hw * work[acc + j]
+                    cumulate(St, work, W_FP * n, n, work, acc)
                     for j in range(n):
-                        out[o + j, 4] = path0 + hw * acc[j]
-                    acc = cumulate(St, fw, n, acc)
+                        out[o + j, 4] = path0 + hw * work[acc + j]
+                    cumulate(St, work, W_FW * n, n, work, acc)
                     for j in range(n):
-                        out[o + j, 5] = work0 + hw * acc[j]
+                        out[o + j, 5] = work0 + hw * work[acc + j]
                     o += n
                 tau0 += Tq
                 path0 += Pq
@@ -598,7 +605,7 @@ def samples(ivs, ni, S, K, cp, R, pieces):
     Rows are in time order within each piece's half; the caller sorts by time.
     """
     n = max(len(R.Xw), len(R.Xp))
-    work = scratch(WORK_ROWS, n)
+    work = scratch(1, WORK_ROWS * n)[0]
     g, k = S.g, S.k
     roots = np.empty((ROOT_ROWS, 1))  # no critical points known: F_s' from its kernel
     count = np.zeros(ROOT_ROWS, dtype=np.int64)
