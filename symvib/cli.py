@@ -11,7 +11,8 @@
 Every error the user can cause (an unknown shape, a malformed expression, a
 bad scene, a path that is a directory, a device or not writable) is reported
 in one line naming the field or file, with exit status 2, never a traceback;
-output paths are checked before any work is done.
+output paths are checked before any work is done.  Ctrl-C and SIGTERM end a job with
+one line (exit status 130 and 143), after its child processes are stopped.
 """
 from __future__ import annotations
 
@@ -520,8 +521,18 @@ def main(argv=None) -> int:
         args = build_parser().parse_args(argv)
         command = args.command
         run = lambda: args.func(args)  # noqa: E731
+    from symvib.children import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated, terminate_as_exception
+
     try:
-        return run()
+        with terminate_as_exception():
+            return run()
+    except KeyboardInterrupt:
+        # Child processes were stopped by the finally blocks on the way here (symvib.children).
+        print(f"symvib {command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Terminated:
+        print(f"symvib {command}: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
     except _user_errors() as exc:
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         if isinstance(exc, (RecursionError, MemoryError)):

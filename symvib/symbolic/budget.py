@@ -4,7 +4,9 @@ SymPy's ``integrate`` and ``simplify`` can run for minutes and cannot be
 interrupted from another thread, so every open-ended symbolic step of a
 derivation runs in a forked child (``spawn`` where ``fork`` is unavailable)
 that is killed when its budget is spent.  Expressions cross the process
-boundary as ``srepr`` text, which round-trips exactly.
+boundary as ``srepr`` text, which round-trips exactly.  The child is tethered
+(:func:`symvib.children.tether`): it dies with its parent, and the kernel ends it
+a little after its budget in CPU time even when its parent cannot.
 
 Examples
 --------
@@ -15,11 +17,13 @@ Examples
 """
 from __future__ import annotations
 
-import multiprocessing as mp
+import os
 import time
 from dataclasses import dataclass
 
 import sympy as sp
+
+from symvib import children
 
 __all__ = ["Outcome", "run", "worker_pool"]
 
@@ -40,23 +44,17 @@ class Outcome:
     seconds: float
 
 
-def _context():
-    methods = mp.get_all_start_methods()
-    return mp.get_context("fork" if "fork" in methods else "spawn")
-
-
 def worker_pool(workers: int):
-    """A :class:`~concurrent.futures.ProcessPoolExecutor` whose workers may run derivations.
+    """A process pool whose workers may run derivations (:func:`symvib.children.worker_pool`).
 
-    Not :class:`multiprocessing.Pool`: its daemonic workers may not start the
-    budgeted child processes of :func:`run`.
+    Not :class:`multiprocessing.Pool`: its daemonic workers may not start the budgeted
+    child processes of :func:`run`.  The workers die with this process.
     """
-    from concurrent.futures import ProcessPoolExecutor
-
-    return ProcessPoolExecutor(workers, mp_context=_context())
+    return children.worker_pool(workers)
 
 
-def _child(conn, job, args):
+def _child(conn, job, args, parent, seconds):
+    children.tether(parent, seconds)
     try:
         result = job(*args)
         conn.send(("ok", sp.srepr(result) if isinstance(result, sp.Basic) else result))
@@ -73,9 +71,9 @@ def run(job, args: tuple, *, seconds: float) -> Outcome:
     as ``srepr`` strings.  A SymPy result comes back as an expression.
     """
     start = time.perf_counter()
-    ctx = _context()
+    ctx = children._context()
     parent, child = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(child, job, args), daemon=True)
+    proc = ctx.Process(target=_child, args=(child, job, args, os.getpid(), seconds), daemon=True)
     proc.start()
     child.close()
     try:
