@@ -52,6 +52,33 @@ def _user_errors() -> tuple:
     return (ValueError, KeyError, OSError, KernelError, RecursionError, MemoryError)
 
 
+#: Largest ``--budget`` of a derivation route, seconds (a day).
+MAX_BUDGET_SECONDS = 86_400.0
+
+
+def _budget(value, option: str = "--budget"):
+    """``value`` (seconds per integration route) when it is a positive finite number (or None)."""
+    import math
+
+    if value is not None and not (math.isfinite(value) and 0.0 < value <= MAX_BUDGET_SECONDS):
+        raise ValueError(f"{option}: must be a number of seconds in (0, {MAX_BUDGET_SECONDS:g}], got {value!r}")
+    return value
+
+
+def _refuse_corners(curve) -> None:
+    """A curve with a corner (kink) has no derivation across it: one line naming the point (exit 2)."""
+    from symvib.symbolic.curve import CurveError
+    from symvib.symbolic.singular import corners
+
+    found = corners(curve)
+    if found:
+        at, label = min(found, key=lambda c: abs(c[0]))  # the one nearest the origin
+        raise CurveError(f"curve '{curve.name}': {curve.q} = {at:.6g} is a singular point ({label} jumps there: "
+                         f"a corner), where eqs. 1-2 hold on each side but not across; derive each smooth piece "
+                         f"(a run stops at the corner)" + (f"; {len(found) - 1} more corner(s)" if len(found) > 1
+                                                           else ""))
+
+
 def _cmd_derive(args) -> int:
     from symvib.shapes import shape
     from symvib.symbolic import curve as _curve
@@ -66,6 +93,8 @@ def _cmd_derive(args) -> int:
         c = shape(args.shape).curve()
     else:
         raise ValueError("give a catalogue shape name, or --z (and --x) expressions")
+    _budget(args.budget)
+    _refuse_corners(c)
     d = derive(c, seconds=args.budget)
     if args.latex:
         for key, value in d.latex().items():
@@ -106,6 +135,7 @@ def _cmd_generate(args) -> int:
     from symvib.numeric.kernels import generated_dir, module_name
     from symvib.paths import check_output_dir
 
+    _budget(args.budget)
     if args.out:
         check_output_dir(args.out, "--out folder")
     if args.scene is not None:

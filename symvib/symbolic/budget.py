@@ -18,6 +18,8 @@ Examples
 from __future__ import annotations
 
 import os
+import signal
+import threading
 import time
 from dataclasses import dataclass
 
@@ -25,10 +27,22 @@ import sympy as sp
 
 from symvib import children
 
-__all__ = ["Outcome", "run", "worker_pool"]
+__all__ = ["Outcome", "run", "simplify", "worker_pool", "SIMPLIFY_SECONDS"]
 
 #: Seconds to wait for a killed child to exit.
 _JOIN_SECONDS = 5.0
+#: Wall-clock budget (seconds) of one simplification in the calling process (:func:`simplify`):
+#: a catalogue curve's take well under a second, ``cos(1000000*x)``'s would take hours.
+SIMPLIFY_SECONDS = 5.0
+#: Function applications (``cos(1000000*x)``) of expressions whose simplification ran out of its
+#: budget in this process: an expression holding one is not simplified again (the derivation of one
+#: curve simplifies dozens of its expressions, and each would spend the whole budget).
+_HOPELESS: set = set()
+#: Most entries kept in ``_HOPELESS``.
+_HOPELESS_SIZE = 1000
+#: Seconds between repeated alarms once the budget of :func:`simplify` is spent (should SymPy
+#: swallow the first).
+_REALARM_SECONDS = 0.1
 
 
 @dataclass(frozen=True)
@@ -106,3 +120,80 @@ def _integrate_job(integrand: str, variable: str):
     expr = sp.sympify(integrand)
     var = next(s for s in expr.free_symbols if s.name == variable)
     return sp.integrate(expr, var)
+
+
+class _Expired(BaseException):
+    """The budget of :func:`simplify` is spent (a BaseException: SymPy's ``except Exception`` lets it by)."""
+
+
+def _expire(signum, frame):
+    raise _Expired
+
+
+def simplify(expr, seconds: float = SIMPLIFY_SECONDS, how=None):
+    """``sympy.simplify(expr)`` (or ``how(expr)``) within ``seconds``, else ``expr`` itself.
+
+    The simplified form is a convenience (shorter kernels, readable equations): where
+    SymPy cannot find it in time (``cos(1000000*x)``: its trigonometric rewrites run for
+    hours), the unsimplified expression, which is equal, stands.  In the main thread a
+    real-time interval timer (SIGALRM) interrupts SymPy in this process, which costs
+    nothing when the budget is not spent; elsewhere (a worker thread, a pending timer of
+    someone else) the simplification runs in a child process (:func:`run`).  An expression
+    that holds a function application of one whose budget ran out is returned as it is
+    (``_HOPELESS``): one budget per hopeless curve, not one per expression.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    seconds : float
+        Wall-clock budget.
+    how : callable, optional
+        The simplifier (default :func:`sympy.simplify`), a module-level function.
+
+    Returns
+    -------
+    sympy.Expr
+        The simplified form, or ``expr`` when the budget was spent or SymPy failed.
+
+    Examples
+    --------
+    >>> x = sp.Symbol("x")
+    >>> simplify(sp.sin(x)**2 + sp.cos(x)**2)
+    1
+    """
+    how = how or sp.simplify
+    if not isinstance(expr, sp.Basic) or expr.is_Atom:
+        return expr
+    applied = expr.atoms(sp.Function)
+    if applied & _HOPELESS:
+        return expr
+    if (threading.current_thread() is not threading.main_thread() or not hasattr(signal, "setitimer")
+            or signal.getitimer(signal.ITIMER_REAL)[0] > 0):
+        outcome = run(_simplify_job, (sp.srepr(expr), how), seconds=seconds)
+        if outcome.status == "timeout":
+            _give_up(applied)
+        return outcome.value if outcome.status == "ok" else expr
+    previous = signal.signal(signal.SIGALRM, _expire)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, seconds, _REALARM_SECONDS)
+        try:
+            return how(expr)
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+    except _Expired:
+        _give_up(applied)
+        return expr
+    except Exception:  # noqa: BLE001 - a simplifier that fails leaves the (equal) input
+        return expr
+    finally:
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _give_up(applied: set) -> None:
+    if len(_HOPELESS) + len(applied) > _HOPELESS_SIZE:
+        _HOPELESS.clear()
+    _HOPELESS.update(applied)
+
+
+def _simplify_job(expr: str, how):
+    return how(sp.sympify(expr))
