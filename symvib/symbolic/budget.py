@@ -27,13 +27,16 @@ import sympy as sp
 
 from symvib import children
 
-__all__ = ["Outcome", "run", "simplify", "worker_pool", "SIMPLIFY_SECONDS"]
+__all__ = ["Outcome", "run", "simplify", "worker_pool", "SIMPLIFY_SECONDS", "CHECK_SIMPLIFY_SECONDS"]
 
 #: Seconds to wait for a killed child to exit.
 _JOIN_SECONDS = 5.0
 #: Wall-clock budget (seconds) of one simplification in the calling process (:func:`simplify`):
 #: a catalogue curve's take well under a second, ``cos(1000000*x)``'s would take hours.
 SIMPLIFY_SECONDS = 5.0
+#: Wall-clock budget (seconds) of the simplification that verifies an identity (a derivation's
+#: back-substitution takes up to about 11 s on the catalogue; a numeric check follows a spent one).
+CHECK_SIMPLIFY_SECONDS = 60.0
 #: Function applications (``cos(1000000*x)``) of expressions whose simplification ran out of its
 #: budget in this process: an expression holding one is not simplified again (the derivation of one
 #: curve simplifies dozens of its expressions, and each would spend the whole budget).
@@ -130,7 +133,7 @@ def _expire(signum, frame):
     raise _Expired
 
 
-def simplify(expr, seconds: float = SIMPLIFY_SECONDS, how=None):
+def simplify(expr, seconds: float = SIMPLIFY_SECONDS, how=None, *, remember: bool = True):
     """``sympy.simplify(expr)`` (or ``how(expr)``) within ``seconds``, else ``expr`` itself.
 
     The simplified form is a convenience (shorter kernels, readable equations): where
@@ -149,6 +152,10 @@ def simplify(expr, seconds: float = SIMPLIFY_SECONDS, how=None):
         Wall-clock budget.
     how : callable, optional
         The simplifier (default :func:`sympy.simplify`), a module-level function.
+    remember : bool
+        Whether a spent budget marks the expression's function applications as hopeless
+        for later calls (a verification, which has a numeric fallback, should not make
+        the derivation's own forms depend on how long it took).
 
     Returns
     -------
@@ -170,7 +177,7 @@ def simplify(expr, seconds: float = SIMPLIFY_SECONDS, how=None):
     if (threading.current_thread() is not threading.main_thread() or not hasattr(signal, "setitimer")
             or signal.getitimer(signal.ITIMER_REAL)[0] > 0):
         outcome = run(_simplify_job, (sp.srepr(expr), how), seconds=seconds)
-        if outcome.status == "timeout":
+        if outcome.status == "timeout" and remember:
             _give_up(applied)
         return outcome.value if outcome.status == "ok" else expr
     previous = signal.signal(signal.SIGALRM, _expire)
@@ -181,7 +188,8 @@ def simplify(expr, seconds: float = SIMPLIFY_SECONDS, how=None):
         finally:
             signal.setitimer(signal.ITIMER_REAL, 0)
     except _Expired:
-        _give_up(applied)
+        if remember:
+            _give_up(applied)
         return expr
     except Exception:  # noqa: BLE001 - a simplifier that fails leaves the (equal) input
         return expr

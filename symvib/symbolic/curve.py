@@ -391,7 +391,7 @@ def identity_holds(expr: sp.Expr, curve: Curve, *, extra=None, points: int = IDE
         return "symbolic"
     if simplify:
         try:
-            if budget.simplify(expr) == 0:
+            if budget.simplify(expr, budget.CHECK_SIMPLIFY_SECONDS, remember=False) == 0:
                 return "symbolic"
         except Exception:  # noqa: BLE001 - simplify may fail on odd input; fall back
             pass
