@@ -11,7 +11,8 @@
 Every error the user can cause (an unknown shape, a malformed expression, a
 bad scene, a path that is a directory, a device or not writable) is reported
 in one line naming the field or file, with exit status 2, never a traceback;
-output paths are checked before any work is done.
+output paths are checked before any work is done.  Ctrl-C and SIGTERM end a job with
+one line (exit status 130 and 143), after its child processes are stopped.
 """
 from __future__ import annotations
 
@@ -51,6 +52,33 @@ def _user_errors() -> tuple:
     return (ValueError, KeyError, OSError, KernelError, RecursionError, MemoryError)
 
 
+#: Largest ``--budget`` of a derivation route, seconds (a day).
+MAX_BUDGET_SECONDS = 86_400.0
+
+
+def _budget(value, option: str = "--budget"):
+    """``value`` (seconds per integration route) when it is a positive finite number (or None)."""
+    import math
+
+    if value is not None and not (math.isfinite(value) and 0.0 < value <= MAX_BUDGET_SECONDS):
+        raise ValueError(f"{option}: must be a number of seconds in (0, {MAX_BUDGET_SECONDS:g}], got {value!r}")
+    return value
+
+
+def _refuse_corners(curve) -> None:
+    """A curve with a corner (kink) has no derivation across it: one line naming the point (exit 2)."""
+    from symvib.symbolic.curve import CurveError
+    from symvib.symbolic.singular import corners
+
+    found = corners(curve)
+    if found:
+        at, label = min(found, key=lambda c: abs(c[0]))  # the one nearest the origin
+        raise CurveError(f"curve '{curve.name}': {curve.q} = {at:.6g} is a singular point ({label} jumps there: "
+                         f"a corner), where eqs. 1-2 hold on each side but not across; derive each smooth piece "
+                         f"(a run stops at the corner)" + (f"; {len(found) - 1} more corner(s)" if len(found) > 1
+                                                           else ""))
+
+
 def _cmd_derive(args) -> int:
     from symvib.shapes import shape
     from symvib.symbolic import curve as _curve
@@ -65,6 +93,8 @@ def _cmd_derive(args) -> int:
         c = shape(args.shape).curve()
     else:
         raise ValueError("give a catalogue shape name, or --z (and --x) expressions")
+    _budget(args.budget)
+    _refuse_corners(c)
     d = derive(c, seconds=args.budget)
     if args.latex:
         for key, value in d.latex().items():
@@ -105,6 +135,7 @@ def _cmd_generate(args) -> int:
     from symvib.numeric.kernels import generated_dir, module_name
     from symvib.paths import check_output_dir
 
+    _budget(args.budget)
     if args.out:
         check_output_dir(args.out, "--out folder")
     if args.scene is not None:
@@ -572,8 +603,18 @@ def main(argv=None) -> int:
         args = build_parser().parse_args(argv)
         command = args.command
         run = lambda: args.func(args)  # noqa: E731
+    from symvib.children import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated, terminate_as_exception
+
     try:
-        return run()
+        with terminate_as_exception():
+            return run()
+    except KeyboardInterrupt:
+        # Child processes were stopped by the finally blocks on the way here (symvib.children).
+        print(f"symvib {command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Terminated:
+        print(f"symvib {command}: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
     except _user_errors() as exc:
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         if isinstance(exc, (RecursionError, MemoryError)):

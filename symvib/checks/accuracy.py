@@ -486,10 +486,9 @@ def check_scenes(scenes, simulate=None, progress=None, workers: int = 1, referen
     tasks = list(zip(scenes, [simulate] * n, references or [None] * n, time_scales or [None] * n))
     records = []
     if workers > 1:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
+        from symvib.children import worker_pool
 
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with worker_pool(workers, "spawn") as pool:
             for record in pool.map(check_scene, *zip(*tasks)):
                 records.append(record)
                 if progress is not None:
@@ -663,10 +662,9 @@ def compute_references(seed: int = STORED_SEED, n: int = STORED_SCENES, curves=N
     scenes = random_scenes(seed, n, names, workers=workers)
     entries = []
     if workers > 1:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
+        from symvib.children import worker_pool
 
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with worker_pool(workers, "spawn") as pool:
             entries = list(pool.map(_entry, scenes))
     else:
         entries = [_entry(rs) for rs in scenes]

@@ -452,8 +452,7 @@ def _map(fn, tasks, workers):
     """``[fn(*task) for task in tasks]``, in ``workers`` processes (spawned: safe after threads) when above 1."""
     if workers <= 1:
         return [fn(*task) for task in tasks]
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    from symvib.children import worker_pool
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+    with worker_pool(workers, "spawn") as pool:
         return list(pool.map(fn, *zip(*tasks)))

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 import os
+from contextlib import contextmanager
 from functools import lru_cache, partial
 
 import numpy as np
@@ -52,7 +53,8 @@ from symvib.numeric.kernels import load
 from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, SceneRow, StatusCode, Summary
 from symvib.numeric.quadrature import rule
 
-__all__ = ["simulate", "NODES", "RTOL", "ATOL", "check_tolerances", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET",
+__all__ = ["simulate", "NODES", "MAX_F_PANELS", "check_panels", "quiet_compiler",
+           "RTOL", "ATOL", "check_tolerances", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET",
            "sample_pieces",
            "backend_available", "resolve_backend", "run_backend", "checked_status",
            "guarded_sweep",
@@ -77,6 +79,10 @@ MAX_SAMPLES_PER_INTERVAL = 100_000
 SAMPLE_BUDGET = 1_000_000
 #: Most samples a run computes (about 1.5 GB); a run that would pass it gets no samples and says why.
 MAX_SAMPLES = 10_000_000
+#: Most Gauss-Legendre panels one evaluation of a numeric ``F_sigma`` may take (``|q - Q_REF| / (PANEL
+#: * q_scale)`` at the start and the limiters): a run evaluates it thousands of times, so a curve
+#: whose ``q_scale`` is tiny against its span (``q_scale = "1e-7"``: 1e6-1e7 panels) is refused up front.
+MAX_F_PANELS = 10_000
 #: Environment variable that forces a backend ("numba" or "python").
 BACKEND_ENV = "SYMVIB_BACKEND"
 #: Largest relative residual of the energy budget (physics.md, "Energies") a trusted run may
@@ -143,6 +149,42 @@ def run_backend(shape, backend: str = "auto", entry: str = "simulate_bound") -> 
     from symvib.numeric.engine.bind import is_compiled
 
     return "numba" if is_compiled(load(shape), entry) else "python"
+
+
+#: Entries of the compiled engine whose disk-cache markers :func:`quiet_compiler` removes.
+COMPILED_ENTRIES = ("simulate_bound", "sample_bound")
+#: What numba says when it compiles a function it cannot store in its disk cache.
+UNCACHEABLE = "cannot cache"
+
+
+@contextmanager
+def quiet_compiler(mod, backend: str):
+    """No NumbaWarning reaches the user; a curve whose engine numba cannot cache is not taken by ``auto`` again.
+
+    numba warns (NumbaWarning blocks on stderr) when it compiles a function it cannot
+    store on disk; such an engine compiles anew in every process (10.9 s against 1.1 s
+    for the plain engine), so the markers that make ``auto`` take it
+    (:func:`symvib.numeric.engine.bind.is_compiled`) are removed: later runs take the
+    plain engine, silently.  The run at hand has paid the compilation and uses it.
+    """
+    if backend != "numba":
+        yield
+        return
+    import warnings
+
+    from numba.core.errors import NumbaWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", NumbaWarning)
+        yield
+    if any(UNCACHEABLE in str(w.message).lower() for w in caught if issubclass(w.category, NumbaWarning)):
+        from symvib.numeric.engine.bind import compiled_marker
+
+        for entry in COMPILED_ENTRIES:
+            compiled_marker(mod, entry).unlink(missing_ok=True)
+    for w in caught:  # the others (not numba's) as they were
+        if not issubclass(w.category, NumbaWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def check_tolerances(rtol, atol) -> tuple:
@@ -217,10 +259,11 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     mod, eng = bound_engine(shape, backend)
     R = rules(nodes, rtol, atol)
     cp = tuple(float(v) for v in scene.param_values)
+    check_panels(scene, mod, cp)
     row = scene_row(scene)
     try:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
-            out = eng.simulate(cp, row, R, samples)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet_compiler(mod, backend):
+            out = eng.simulate(cp, row, R, samples)  # the status says what overflowed
     except (ArithmeticError, ValueError) as exc:
         if not _math_error(exc):
             raise
@@ -294,7 +337,7 @@ def _lazy_samples(engine_of, cp, row, ivs, ni, R, scene, mod, pieces):
     ``engine_of()`` gives the engine (:func:`_sample_engine`)."""
     eng = engine_of()
     try:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet_compiler(mod, "numba"):
             return _samples(eng, cp, row, ivs, ni, R, scene, mod, pieces), None
     except (ArithmeticError, ValueError) as exc:
         if not _math_error(exc):
@@ -447,6 +490,29 @@ def sweep_function(scene, backend: str = "auto", *, rtol: float = RTOL, atol: fl
                   rules(nodes, rtol, atol), int(max_log))
 
     return run
+
+
+def check_panels(scene, mod, cp) -> None:
+    """Refuse a run whose numeric ``F_sigma`` would take more than :data:`MAX_F_PANELS` panels.
+
+    Raises
+    ------
+    symvib.numeric.scene.SceneError
+        Naming ``curve.q_scale`` and the bound.
+    """
+    if "numeric" not in getattr(mod, "F_ROUTES", {}).values():
+        return
+    from symvib.numeric.scene import SceneError
+
+    width = mod.PANEL * float(mod.q_scale_scalar(*cp))
+    reach = max(abs(v - mod.Q_REF) for v in (scene.q0, scene.left, scene.right) if v is not None)
+    panels = reach / width if width > 0 else math.inf
+    if not panels <= MAX_F_PANELS:
+        raise SceneError("curve.q_scale", f"{float(mod.q_scale_scalar(*cp)):.3g} is too small for this run: "
+                                          f"F_sigma has no closed form and one evaluation of its quadrature would "
+                                          f"take {panels:.3g} panels of {mod.PANEL:g} q_scale, more than "
+                                          f"{MAX_F_PANELS:,} (driver.MAX_F_PANELS); give a q_scale near the length "
+                                          "on which the curve turns, or leave it out")
 
 
 def _run_shape(scene):

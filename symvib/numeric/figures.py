@@ -129,6 +129,25 @@ def _kernels(result):
     return load(result.scene.shape), tuple(float(v) for v in result.scene.param_values)
 
 
+#: Legend of the one point a run without motion draws (it ends where it starts).
+STILL_LABEL = "start (the run ends where it starts: no motion)"
+
+
+def _moved(result) -> bool:
+    """Whether the run has samples of a motion (a run that ends at once, at rest, has none)."""
+    return result.samples is not None and len(result.samples.t) > 0
+
+
+def _start_values(result) -> dict:
+    """``F_N, P_mu, Ek, Ep, E`` of the initial state (from the kernels; for a run without samples)."""
+    mod, cp = _kernels(result)
+    sc = result.scene
+    _, _, v, normal, friction, _ = _forces_at(result, mod, cp, None)
+    ek = 0.5 * sc.m * v * v
+    ep = sc.m * sc.g * float(np.broadcast_to(mod.z(sc.q0, *cp), ()))
+    return {"F_N": normal, "P_mu": friction * v, "Ek": ek, "Ep": ep, "E": ek + ep}
+
+
 def _intervals(result):
     """``(selection, sign of v)`` of every motion interval of the samples."""
     S = result.samples
@@ -283,7 +302,10 @@ def energy_vs_q(result, quantity: str, ax=None, *, paper=None):
     q, unit = _coord(result)
     label, qunit = QUANTITIES[quantity]
     values = getattr(S, quantity)
-    if quantity == "Ep":
+    if not _moved(result):
+        ax.plot([result.scene.q0], [_start_values(result)[quantity]], ">", color="k", ms=7, ls="none",
+                label=STILL_LABEL)
+    elif quantity == "Ep":
         order = np.argsort(S.q, kind="stable")
         ax.plot(S.q[order], values[order], color="k", lw=1.3, label="$E_p = m g z$ (depends on the position only)")
         for kind in (EventKind.REVERSAL, EventKind.IMPACT, EventKind.ARREST):
@@ -323,6 +345,8 @@ def energy_vs_t(result, ax=None, *, paper=None):
     at an impact the state after it carries its loss)."""
     ax = _new_axes(ax)
     S = result.samples
+    if not _moved(result):
+        ax.plot([0.0], [_start_values(result)["E"]], ">", color="k", ms=7, ls="none", label=STILL_LABEL)
     polys = ax.stackplot(S.t, S.E, S.W_mu, S.W_impacts,
                          labels=["mechanical energy $E$", r"friction work $W_\mu$", "impact losses $W_k$"],
                          colors=["tab:blue", "tab:orange", "0.6"], alpha=0.75)
@@ -429,9 +453,8 @@ def force_diagram(result, ax=None, *, paper=None, sample: int = 0):
     tangent against the velocity; lengths in proportion to the forces."""
     ax = _new_axes(ax)
     mod, cp = _kernels(result)
-    S = result.samples
     sc = result.scene
-    qs = float(S.q[sample])
+    qs, ts, v, normal, friction, friction_label = _forces_at(result, mod, cp, sample)
     xs, zs, a = _point(mod, cp, qs)
     lo, hi = _sketch_range(result)
     _, _, _, span = _draw_curve(ax, result, mod, cp, lo, hi, color="0.4", lw=1.2)
@@ -440,10 +463,12 @@ def force_diagram(result, ax=None, *, paper=None, sample: int = 0):
     n_vec = np.array([-np.sin(a), np.cos(a)])
     forces = [
         ("weight $m g$", np.array([0.0, -weight]), "k", "-"),
-        ("normal force $F_N$", float(S.F_N[sample]) * n_vec, "tab:blue", "-"),
-        (r"friction force $F_\mu$", float(S.F_mu[sample]) * t_vec, "tab:red", "-"),
+        ("normal force $F_N$", normal * n_vec, "tab:blue", "-"),
+        (friction_label, friction * t_vec, "tab:red", "-"),
     ]
     largest = max(float(np.hypot(*f)) for _, f, _, _ in forces)
+    if not (np.isfinite(largest) and largest > 0.0):
+        largest = 1.0  # g = 0 at rest: no force to draw in proportion
     unit = FORCE_LENGTH * span / largest  # metres per newton: the largest force is FORCE_LENGTH of the scene
     for label, f, colour, ls in forces:
         size = float(np.hypot(*f))
@@ -455,7 +480,6 @@ def force_diagram(result, ax=None, *, paper=None, sample: int = 0):
                     arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.8, "ls": ls})
         ax.plot([tip[0]], [tip[1]], ls="none")  # the axes' limits include the arrow
         ax.plot([], [], color=colour, lw=1.8, ls=ls, label=f"{label} = {size:.4g} N{note}")
-    v = float(S.v[sample])
     if v != 0.0:
         L = 0.2 * span * np.sign(v)
         ax.annotate("", xy=(xs + L * t_vec[0], zs + L * t_vec[1]), xytext=(xs, zs), zorder=4,
@@ -464,8 +488,33 @@ def force_diagram(result, ax=None, *, paper=None, sample: int = 0):
     ax.plot([xs - 0.25 * span, xs + 0.25 * span], [zs, zs], color="0.6", lw=0.8, ls=":")
     ax.plot([xs, xs + 0.25 * span * t_vec[0]], [zs, zs + 0.25 * span * t_vec[1]], color="0.6", lw=0.8, ls=":")
     ax.text(xs + 0.27 * span, zs, f"$\\alpha$ = {np.degrees(a):.3g} deg", fontsize=8, va="center")
-    ax.plot([xs], [zs], "o", color="k", ms=6, zorder=6, label=f"particle at t = {float(S.t[sample]):.3g} s")
+    ax.plot([xs], [zs], "o", color="k", ms=6, zorder=6, label=f"particle at t = {ts:.3g} s")
     return _plane_axes(ax, _title(result, "force plan", paper))
+
+
+def _forces_at(result, mod, cp, sample: int | None) -> tuple:
+    """``(q, t, v, F_N, F_mu, friction label)`` at a sample, or at the start (``sample`` None, or a
+    run without samples).
+
+    A run that ends where it starts (at rest in the friction cone, on a limiter) has no
+    samples: its forces are those of the initial state, the normal force ``m (kappa v**2 +
+    g cos alpha)`` and, at rest, the static friction that holds the particle (``m g sin
+    alpha`` along the tangent, at most ``mu |F_N|``).
+    """
+    S = result.samples
+    if sample is not None and S is not None and -len(S.t) <= sample < len(S.t):
+        return (float(S.q[sample]), float(S.t[sample]), float(S.v[sample]), float(S.F_N[sample]),
+                float(S.F_mu[sample]), r"friction force $F_\mu$")
+    sc = result.scene
+    h = float(np.broadcast_to(mod.h(sc.q0, *cp), ()))
+    kappa = float(np.broadcast_to(mod.kappa(sc.q0, *cp), ()))
+    _, _, a = _point(mod, cp, sc.q0)
+    v = h * sc.qdot0
+    normal = sc.m * (kappa * v * v + sc.g * np.cos(a))
+    if v != 0.0:
+        return sc.q0, 0.0, v, normal, -np.sign(v) * sc.mu * abs(normal), r"friction force $F_\mu$"
+    static = float(np.clip(sc.m * sc.g * np.sin(a), -sc.mu * abs(normal), sc.mu * abs(normal)))
+    return sc.q0, 0.0, 0.0, normal, static, r"static friction $F_\mu$"
 
 
 def _drawers():

@@ -4,7 +4,9 @@ SymPy's ``integrate`` and ``simplify`` can run for minutes and cannot be
 interrupted from another thread, so every open-ended symbolic step of a
 derivation runs in a forked child (``spawn`` where ``fork`` is unavailable)
 that is killed when its budget is spent.  Expressions cross the process
-boundary as ``srepr`` text, which round-trips exactly.
+boundary as ``srepr`` text, which round-trips exactly.  The child is tethered
+(:func:`symvib.children.tether`): it dies with its parent, and the kernel ends it
+a little after its budget in CPU time even when its parent cannot.
 
 Examples
 --------
@@ -15,16 +17,35 @@ Examples
 """
 from __future__ import annotations
 
-import multiprocessing as mp
+import os
+import signal
+import threading
 import time
 from dataclasses import dataclass
 
 import sympy as sp
 
-__all__ = ["Outcome", "run", "worker_pool"]
+from symvib import children
+
+__all__ = ["Outcome", "run", "simplify", "worker_pool", "SIMPLIFY_SECONDS", "CHECK_SIMPLIFY_SECONDS"]
 
 #: Seconds to wait for a killed child to exit.
 _JOIN_SECONDS = 5.0
+#: Wall-clock budget (seconds) of one simplification in the calling process (:func:`simplify`):
+#: a catalogue curve's take well under a second, ``cos(1000000*x)``'s would take hours.
+SIMPLIFY_SECONDS = 5.0
+#: Wall-clock budget (seconds) of the simplification that verifies an identity (a derivation's
+#: back-substitution takes up to about 11 s on the catalogue; a numeric check follows a spent one).
+CHECK_SIMPLIFY_SECONDS = 60.0
+#: Function applications (``cos(1000000*x)``) of expressions whose simplification ran out of its
+#: budget in this process: an expression holding one is not simplified again (the derivation of one
+#: curve simplifies dozens of its expressions, and each would spend the whole budget).
+_HOPELESS: set = set()
+#: Most entries kept in ``_HOPELESS``.
+_HOPELESS_SIZE = 1000
+#: Seconds between repeated alarms once the budget of :func:`simplify` is spent (should SymPy
+#: swallow the first).
+_REALARM_SECONDS = 0.1
 
 
 @dataclass(frozen=True)
@@ -40,23 +61,17 @@ class Outcome:
     seconds: float
 
 
-def _context():
-    methods = mp.get_all_start_methods()
-    return mp.get_context("fork" if "fork" in methods else "spawn")
-
-
 def worker_pool(workers: int):
-    """A :class:`~concurrent.futures.ProcessPoolExecutor` whose workers may run derivations.
+    """A process pool whose workers may run derivations (:func:`symvib.children.worker_pool`).
 
-    Not :class:`multiprocessing.Pool`: its daemonic workers may not start the
-    budgeted child processes of :func:`run`.
+    Not :class:`multiprocessing.Pool`: its daemonic workers may not start the budgeted
+    child processes of :func:`run`.  The workers die with this process.
     """
-    from concurrent.futures import ProcessPoolExecutor
-
-    return ProcessPoolExecutor(workers, mp_context=_context())
+    return children.worker_pool(workers)
 
 
-def _child(conn, job, args):
+def _child(conn, job, args, parent, seconds):
+    children.tether(parent, seconds)
     try:
         result = job(*args)
         conn.send(("ok", sp.srepr(result) if isinstance(result, sp.Basic) else result))
@@ -73,9 +88,9 @@ def run(job, args: tuple, *, seconds: float) -> Outcome:
     as ``srepr`` strings.  A SymPy result comes back as an expression.
     """
     start = time.perf_counter()
-    ctx = _context()
+    ctx = children._context()
     parent, child = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(child, job, args), daemon=True)
+    proc = ctx.Process(target=_child, args=(child, job, args, os.getpid(), seconds), daemon=True)
     proc.start()
     child.close()
     try:
@@ -108,3 +123,85 @@ def _integrate_job(integrand: str, variable: str):
     expr = sp.sympify(integrand)
     var = next(s for s in expr.free_symbols if s.name == variable)
     return sp.integrate(expr, var)
+
+
+class _Expired(BaseException):
+    """The budget of :func:`simplify` is spent (a BaseException: SymPy's ``except Exception`` lets it by)."""
+
+
+def _expire(signum, frame):
+    raise _Expired
+
+
+def simplify(expr, seconds: float = SIMPLIFY_SECONDS, how=None, *, remember: bool = True):
+    """``sympy.simplify(expr)`` (or ``how(expr)``) within ``seconds``, else ``expr`` itself.
+
+    The simplified form is a convenience (shorter kernels, readable equations): where
+    SymPy cannot find it in time (``cos(1000000*x)``: its trigonometric rewrites run for
+    hours), the unsimplified expression, which is equal, stands.  In the main thread a
+    real-time interval timer (SIGALRM) interrupts SymPy in this process, which costs
+    nothing when the budget is not spent; elsewhere (a worker thread, a pending timer of
+    someone else) the simplification runs in a child process (:func:`run`).  An expression
+    that holds a function application of one whose budget ran out is returned as it is
+    (``_HOPELESS``): one budget per hopeless curve, not one per expression.
+
+    Parameters
+    ----------
+    expr : sympy.Expr
+    seconds : float
+        Wall-clock budget.
+    how : callable, optional
+        The simplifier (default :func:`sympy.simplify`), a module-level function.
+    remember : bool
+        Whether a spent budget marks the expression's function applications as hopeless
+        for later calls (a verification, which has a numeric fallback, should not make
+        the derivation's own forms depend on how long it took).
+
+    Returns
+    -------
+    sympy.Expr
+        The simplified form, or ``expr`` when the budget was spent or SymPy failed.
+
+    Examples
+    --------
+    >>> x = sp.Symbol("x")
+    >>> simplify(sp.sin(x)**2 + sp.cos(x)**2)
+    1
+    """
+    how = how or sp.simplify
+    if not isinstance(expr, sp.Basic) or expr.is_Atom:
+        return expr
+    applied = expr.atoms(sp.Function)
+    if applied & _HOPELESS:
+        return expr
+    if (threading.current_thread() is not threading.main_thread() or not hasattr(signal, "setitimer")
+            or signal.getitimer(signal.ITIMER_REAL)[0] > 0):
+        outcome = run(_simplify_job, (sp.srepr(expr), how), seconds=seconds)
+        if outcome.status == "timeout" and remember:
+            _give_up(applied)
+        return outcome.value if outcome.status == "ok" else expr
+    previous = signal.signal(signal.SIGALRM, _expire)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, seconds, _REALARM_SECONDS)
+        try:
+            return how(expr)
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+    except _Expired:
+        if remember:
+            _give_up(applied)
+        return expr
+    except Exception:  # noqa: BLE001 - a simplifier that fails leaves the (equal) input
+        return expr
+    finally:
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _give_up(applied: set) -> None:
+    if len(_HOPELESS) + len(applied) > _HOPELESS_SIZE:
+        _HOPELESS.clear()
+    _HOPELESS.update(applied)
+
+
+def _simplify_job(expr: str, how):
+    return how(sp.sympify(expr))

@@ -33,6 +33,7 @@ import numpy as np
 import sympy as sp
 
 from symvib import expr as _expr
+from symvib.symbolic import budget
 from symvib.symbolic.symbols import RESERVED
 
 __all__ = ["Curve", "CurveError", "graph", "parametric", "to_sympy", "sample_points", "reference_point",
@@ -307,18 +308,18 @@ class Curve:
     @cached_property
     def hp(self) -> sp.Expr:
         """``h'(q)`` (its generic branch: :func:`generic_branch`)."""
-        return removable_form(generic_branch(sp.simplify(sp.diff(self.h, self.q)), f"curve '{self.name}': h'"))
+        return removable_form(generic_branch(budget.simplify(sp.diff(self.h, self.q)), f"curve '{self.name}': h'"))
 
     @cached_property
     def alphap(self) -> sp.Expr:
         """``alpha'(q) = (x' z'' - z' x'') / h**2`` (its generic branch)."""
-        return removable_form(generic_branch(sp.simplify(sp.diff(self.alpha, self.q)),
+        return removable_form(generic_branch(budget.simplify(sp.diff(self.alpha, self.q)),
                                              f"curve '{self.name}': alpha'"))
 
     @cached_property
     def kappa(self) -> sp.Expr:
         """Curvature ``kappa = alpha' / h`` (its generic branch)."""
-        return removable_form(generic_branch(sp.simplify(self.alphap / self.h), f"curve '{self.name}': kappa"))
+        return removable_form(generic_branch(budget.simplify(self.alphap / self.h), f"curve '{self.name}': kappa"))
 
     @property
     def coordinate(self) -> str:
@@ -390,7 +391,7 @@ def identity_holds(expr: sp.Expr, curve: Curve, *, extra=None, points: int = IDE
         return "symbolic"
     if simplify:
         try:
-            if sp.simplify(expr) == 0:
+            if budget.simplify(expr, budget.CHECK_SIMPLIFY_SECONDS, remember=False) == 0:
                 return "symbolic"
         except Exception:  # noqa: BLE001 - simplify may fail on odd input; fall back
             pass
@@ -476,8 +477,6 @@ def tangent_angle(curve: Curve):
         ``None`` when no candidate passes; the caller keeps ``atan2`` and sets
         :attr:`Curve.alpha_cut`.
     """
-    from symvib.symbolic import budget
-
     key = tuple(sp.srepr(e) for e in (curve.x, curve.z, curve.h, curve.domain, curve.q_scale))
     if key in _ANGLES:
         return _ANGLES[key]
@@ -564,7 +563,7 @@ def _accepted(candidate: sp.Expr, curve: Curve, q0: sp.Expr):
     q = curve.q
     at = sp.atan2(curve.zp.subs(q, q0), curve.xp.subs(q, q0)) - candidate.subs(q, q0)
     try:
-        shift = sp.simplify(at)
+        shift = budget.simplify(at)
     except Exception:  # noqa: BLE001 - an odd form: the checks decide on the unsimplified one
         shift = at
     if shift.has(*unwanted) or shift.free_symbols - set(curve.params):
@@ -777,7 +776,7 @@ def _finish(name, kind, q, params, x, z, domain, h_hint, alpha_hint, q_scale, so
         if e.has(sp.I) or e.has(sp.zoo, sp.nan, sp.oo):
             raise CurveError(f"curve '{name}': {key} = {e} is not a finite real expression")
     xp, zp = sp.diff(x, q), sp.diff(z, q)
-    h2 = sp.simplify(xp**2 + zp**2)
+    h2 = budget.simplify(xp**2 + zp**2)
     if h2 == 0:
         raise CurveError(f"curve '{name}': the metric h = sqrt(x'^2 + z'^2) vanishes identically; "
                          "x(q) and z(q) do not trace a curve")

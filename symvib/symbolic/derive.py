@@ -33,6 +33,7 @@ from functools import cached_property
 
 import sympy as sp
 
+from symvib.symbolic import budget
 from symvib.symbolic.curve import Curve, identity_holds
 from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivative
 from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
@@ -44,10 +45,7 @@ def _simplest(expr: sp.Expr) -> sp.Expr:
     """The shortest of a few cheap equivalent forms."""
     forms = [expr]
     for op in (sp.cancel, sp.trigsimp, sp.simplify):
-        try:
-            forms.append(op(expr))
-        except Exception:  # noqa: BLE001 - a simplifier may fail; keep what we have
-            pass
+        forms.append(budget.simplify(expr, how=op))  # the input where one fails or runs out of time
     return min(forms, key=sp.count_ops)
 
 
@@ -265,7 +263,7 @@ def coefficients(xp, zp, h, hp, alphap) -> tuple:
 def _collect(lhs: sp.Expr, c: Curve) -> sp.Expr:
     expanded = sp.expand(lhs)
     coeff = expanded.coeff(c.qdot, 2)
-    rest = sp.simplify(expanded - coeff * c.qdot**2 - c.qddot)
+    rest = budget.simplify(expanded - coeff * c.qdot**2 - c.qddot)
     return sp.Add(c.qddot, _simplest(coeff) * c.qdot**2, _simplest(rest), evaluate=False)
 
 
@@ -296,8 +294,12 @@ def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES) -> Derivatio
     c = curve
     A_sym, B_sym = coefficients(c.xp, c.zp, c.h, c.hp, c.alphap)
     branches = {}
+    spent = ()
     for s in (1, -1):
-        F = antiderivative(c, s, seconds=seconds, routes=routes)
+        # The branches' integrands differ only in the sign of mu: a route that spent its whole
+        # budget on one is not tried on the other (a hopeless curve costs one branch's budget).
+        F = antiderivative(c, s, seconds=seconds, routes=tuple(r for r in routes if r not in spent))
+        spent = tuple(a.route for a in F.attempts if a.outcome.startswith("timeout"))
         A = _simplest(A_sym.subs(sigma, s))
         B = _simplest(B_sym.subs(sigma, s))
         w_ = sp.exp(-2 * s * mu * c.alpha) * (C - 2 * g * F.expr)

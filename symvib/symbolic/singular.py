@@ -42,7 +42,7 @@ import sympy as sp
 
 from symvib.symbolic import budget
 
-__all__ = ["Regular", "regular_interval", "singular_pieces", "geometry"]
+__all__ = ["Regular", "regular_interval", "singular_pieces", "geometry", "corners"]
 
 #: Wall-clock budget (seconds) of the symbolic search (continuous_domain of every function).
 SYMBOLIC_SECONDS = 5.0
@@ -395,6 +395,34 @@ def singular_pieces(curve, values: tuple, lo: float, hi: float) -> tuple:
             pieces.append(corner)
     order = {label: i for i, label in enumerate(labels)}
     return tuple(sorted(pieces, key=lambda p: (p[0], p[1], order[p[2]], p[3])))
+
+
+def corners(curve, values: dict | None = None) -> tuple:
+    """The corners (kinks) of ``curve`` on its declared domain: ``(q, label)`` of each.
+
+    At a corner (``abs(x)`` at 0) the first-order geometry jumps, so the derivation's
+    ``alpha'`` and ``kappa`` hold a ``DiracDelta`` there: eqs. 1-2 hold on each side of it,
+    never across.  An infinite end of the domain is cut at :data:`SCAN_HALF_WIDTH` ``q_scale``.
+
+    Parameters
+    ----------
+    curve : symvib.symbolic.curve.Curve
+    values : dict, optional
+        Parameter values by name (default: every parameter 1).
+
+    Returns
+    -------
+    tuple of (float, str)
+        Each corner's position and the function that jumps there (``"z'"``).
+    """
+    values = {p.name: 1.0 for p in curve.params} if values is None else values
+    subs = {p: values[p.name] for p in curve.params}
+    scale = abs(float(sp.N(sp.sympify(curve.q_scale).subs(subs))))
+    ends = []
+    for end, sign in zip(curve.domain, (-1, 1)):
+        ends.append(sign * SCAN_HALF_WIDTH * scale if end.is_infinite else float(sp.N(end.subs(subs))))
+    pieces = singular_pieces(curve, tuple(sorted(values.items())), *ends)
+    return tuple(((a + b) / 2, label) for a, b, label, kind in pieces if kind == CORNER)
 
 
 def regular_interval(curve, values: dict, q0: float, domain: tuple, *, reach=()) -> Regular:
