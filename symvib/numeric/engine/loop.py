@@ -369,11 +369,12 @@ def setup_scaled(row, K, cp, scale):
 def same_scale(rows, cp_rows, i):
     """Whether scene ``i`` of a sweep has the length scale of scene ``i - 1``: the same curve
     parameters and limiters (and start, where a limiter is missing: :func:`run_scale`)."""
-    a, b = rows[i], rows[i - 1]
+    # (elements, not row views: a view counts a reference to the array all threads share)
     for c in (SceneRow.has_left, SceneRow.left, SceneRow.has_right, SceneRow.right):
-        if a[c] != b[c]:
+        if rows[i, c] != rows[i - 1, c]:
             return False
-    if (a[SceneRow.has_left] == 0.0 or a[SceneRow.has_right] == 0.0) and a[SceneRow.q0] != b[SceneRow.q0]:
+    if (rows[i, SceneRow.has_left] == 0.0 or rows[i, SceneRow.has_right] == 0.0) and \
+            rows[i, SceneRow.q0] != rows[i - 1, SceneRow.q0]:
         return False
     for c in range(cp_rows.shape[1]):
         if cp_rows[i, c] != cp_rows[i - 1, c]:
@@ -419,12 +420,13 @@ def sweep_block(K, rows, cp_rows, R, max_log, out, logs, start, stop):
     scale = 0.0
     for i in range(start, stop):
         cp = params_of(cp_rows[i], cp_rows.shape[1])
+        row = rows[i]
         # The curve's length scale is sampled once for a run of scenes that share it.
         if i == start or not same_scale(rows, cp_rows, i):
-            scale = run_scale(rows[i], K, cp)
-        S = setup_scaled(rows[i], K, cp, scale)
-        o = run(S, K, cp, R, rows[i, SceneRow.q0], rows[i, SceneRow.qdot0], rows[i, SceneRow.t_max],
-                int(rows[i, SceneRow.max_events]), False)
+            scale = run_scale(row, K, cp)
+        S = setup_scaled(row, K, cp, scale)
+        o = run(S, K, cp, R, row[SceneRow.q0], row[SceneRow.qdot0], row[SceneRow.t_max],
+                int(row[SceneRow.max_events]), False)
         impacts = 0
         reversals = 0
         flips = 0
