@@ -108,9 +108,8 @@ SWEEP_SHARE = 4
 HOT_INLINE = ("cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
 #: Engine functions that neither allocate nor return an array, compiled without reference counting
 #: (numba's ``_nrt=False``): the arrays they receive stay owned by their caller, which outlives the
-#: call.  The time quadrature (``quad`` and its ``panel``, on one flat scratch array) was a third of
-#: a sweep's time in reference counts; without them a sweep of the paper grid takes 0.67 of the CPU
-#: per event (``benchmarks/profile_sweep.py``).  ``tests/test_engine_refcount.py`` checks that none
+#: call.  Reference counts had been a third of a sweep's time (``benchmarks/profile_sweep.py``;
+#: docs/benchmarks.md, "Cost of error control").  ``tests/test_engine_refcount.py`` checks that none
 #: of them returns an array (a returned array would be freed under its new owner).
 NO_REFCOUNT = ("panel", "quad", "anchored_G", "root_anchored", "tail_time", "turn_departure", "time_excess",
                "root_time", "locate", "walk", "map_extend", "extend_side", "crossing", "branch_cut", "add_root",

@@ -342,8 +342,8 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
 
     ``R``: the rules and tolerances (:class:`~symvib.numeric.engine.state.Rules`; see
     :func:`symvib.numeric.driver.rules`); ``S``: the scene constants
-    (:class:`~symvib.numeric.engine.state.Setup`); ``work``: scratch rows
-    (:data:`WORK_ROWS`); ``roots, count``: the critical points known
+    (:class:`~symvib.numeric.engine.state.Setup`); ``work``: the flat scratch array
+    (:data:`WORK_ROWS` rows of the larger rule's nodes); ``roots, count``: the critical points known
     (:func:`~symvib.numeric.engine.scan.map_new`).  Returns ``(T, W_friction / m, err, flag, o, q_ok, G_ok, q_neg)``:
     the time, the friction work, the estimated error of the time (s), :data:`QUAD_OK`,
     :data:`QUAD_BUDGET` (a half needed more than :data:`MAX_PANELS` panels) or
