@@ -186,12 +186,13 @@ def _inside(path, folder):
 def _cmd_run(args) -> int:
     from pathlib import Path
 
-    from symvib.numeric.driver import ATOL, RTOL, check_tolerances, simulate
+    from symvib.numeric.driver import ATOL, DEFAULT_WALL_TIME, RTOL, check_tolerances, check_wall_time, simulate
     from symvib.numeric.scene import load_scene
     from symvib.paths import UserPathError, check_output_dir, check_output_file
 
     # Every input and path first: no simulation is spent on a run whose output cannot be written.
     rtol, atol = check_tolerances(RTOL if args.rtol is None else args.rtol, ATOL if args.atol is None else args.atol)
+    wall_time = check_wall_time(DEFAULT_WALL_TIME if args.wall_time is None else args.wall_time, "--wall-time")
     scene = load_scene(args.scene)
     if args.json:
         check_output_file(args.json, "--json file")
@@ -214,7 +215,7 @@ def _cmd_run(args) -> int:
         changes["max_events"] = args.max_events
     if changes:
         scene = scene.replace(**changes)
-    result = simulate(scene, backend=args.backend, rtol=rtol, atol=atol)
+    result = simulate(scene, backend=args.backend, rtol=rtol, atol=atol, wall_time=wall_time)
     print(f"scene {scene.name}: {scene.shape.name}, mu = {scene.mu:.6g}, k = {scene.k:g}, "
           f"limiters {scene.left} .. {scene.right}, {scene.shape.q}0 = {scene.q0:.6g}, "
           f"{scene.shape.q}dot0 = {scene.qdot0:.6g}")
@@ -367,6 +368,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", default="auto", choices=("auto", "numba", "python"),
                    help="auto (default): the compiled engine where it is on disk, else plain Python; "
                         "numba: compile it on first use (about 7 s, once per curve)")
+    p.add_argument("--wall-time", type=float, default=None, metavar="SECONDS",
+                   help="seconds the plain-Python engine may compute before the run ends with status "
+                        "wall_time_limit (default 40; 0: no limit; the compiled engine has no limit)")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("generate", help="write the numeric kernel modules (generated/)")

@@ -109,3 +109,41 @@ def test_derive_rejects_non_curves():
         derive("helix")
     with pytest.raises(ValueError, match="sigma"):
         derive("circle").branch(0)
+
+
+def _numeric_route(z):
+    from symvib.symbolic.curve import graph
+
+    return derive(graph(z), routes=())
+
+
+@pytest.mark.parametrize("z", ["a*(1 - cos(x/b))", "cos(1000000*x)/1000000"])
+def test_back_substitution_of_a_numeric_route_needs_no_quadrature(z):
+    """F = Integral(F', (u, q_ref, q)) on the numeric route: eq. 2 is checked with F a free value
+    whose derivative is F' (the quadrature of cos(1e6 x) took minutes at 30 digits)."""
+    import sympy as sp
+
+    d = _numeric_route(z)
+    assert all(b.F.route == "numeric" for b in d.branches.values())
+    for s in (1, -1):
+        assert not d.residual(s).has(sp.Integral)
+    assert None not in d.check().values()
+
+
+def test_a_wrong_branch_of_a_numeric_route_fails_its_check():
+    """The free value of F does not make every residual vanish: a wrong A or a wrong F' is found."""
+    import dataclasses
+
+    import sympy as sp
+
+    from symvib.symbolic.symbols import mu
+
+    d = _numeric_route("a*(1 - cos(x/b))")
+    br = d.branches[1]
+    wrong_A = dataclasses.replace(d, branches={**d.branches, 1: dataclasses.replace(br, A=br.A + mu)})
+    assert wrong_A.check()[1] is None and wrong_A.check()[-1] is not None
+    (integral,) = br.qdot2.atoms(sp.Integral)
+    flipped = integral.func(-integral.function, *integral.limits)
+    wrong_F = dataclasses.replace(d, branches={**d.branches, 1: dataclasses.replace(
+        br, qdot2=br.qdot2.xreplace({integral: flipped}))})
+    assert wrong_F.check()[1] is None

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from contextlib import contextmanager
 from functools import lru_cache, partial
 
@@ -57,7 +58,7 @@ __all__ = ["simulate", "NODES", "MAX_F_PANELS", "check_panels", "quiet_compiler"
            "RTOL", "ATOL", "check_tolerances", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET",
            "sample_pieces",
            "backend_available", "resolve_backend", "run_backend", "checked_status",
-           "guarded_sweep",
+           "guarded_sweep", "check_wall_time", "DEFAULT_WALL_TIME",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
 
 #: Gauss-Legendre nodes per quadrature panel (a panel's accuracy; the tolerance decides how many panels).
@@ -83,6 +84,16 @@ MAX_SAMPLES = 10_000_000
 #: * q_scale)`` at the start and the limiters): a run evaluates it thousands of times, so a curve
 #: whose ``q_scale`` is tiny against its span (``q_scale = "1e-7"``: 1e6-1e7 panels) is refused up front.
 MAX_F_PANELS = 10_000
+#: How close to an end of its regular interval a run that stopped there (``left_domain``, or
+#: ``energy_budget_mismatch`` where the steps into a pole lose the budget) must be to have reached
+#: the singular point beyond that end: a share of the distance from the start.
+SINGULAR_REACH = 1e-3
+#: ``symvib run``'s wall-clock limit of the plain engine (seconds; ``--wall-time``): a run on the
+#: command line answers within a minute, or says how far it got (status ``wall_time_limit``).
+DEFAULT_WALL_TIME = 40.0
+#: The plain engine's time per event, about (seconds; the message of a run that reached its
+#: ``wall_time``): 0.5 ms on the paper's parabola, 100 to 200 times the compiled engine's.
+PLAIN_SECONDS_PER_EVENT = 5e-4
 #: Environment variable that forces a backend ("numba" or "python").
 BACKEND_ENV = "SYMVIB_BACKEND"
 #: Largest relative residual of the energy budget (physics.md, "Energies") a trusted run may
@@ -187,6 +198,26 @@ def quiet_compiler(mod, backend: str):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
+def check_wall_time(wall_time, name: str = "wall_time") -> float | None:
+    """``wall_time`` as a float (None, or 0: no limit), else a ValueError naming the field ``name``.
+
+    Examples
+    --------
+    >>> check_wall_time(30), check_wall_time(None), check_wall_time(0)
+    (30.0, None, None)
+    >>> check_wall_time(float("nan"))
+    Traceback (most recent call last):
+    ...
+    ValueError: wall_time must be a number of seconds >= 0 (0: no limit), not nan
+    """
+    if wall_time is None:
+        return None
+    ok = isinstance(wall_time, (int, float, np.integer, np.floating)) and not isinstance(wall_time, bool)
+    if not ok or not math.isfinite(wall_time) or wall_time < 0:
+        raise ValueError(f"{name} must be a number of seconds >= 0 (0: no limit), not {wall_time!r}")
+    return float(wall_time) if wall_time > 0 else None
+
+
 def check_tolerances(rtol, atol) -> tuple:
     """``(rtol, atol)`` as floats if a run can aim at them, else a ValueError naming the field.
 
@@ -214,7 +245,8 @@ def check_tolerances(rtol, atol) -> tuple:
 
 
 def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto",
-             samples_per_interval: int | None = None, rtol: float = RTOL, atol: float = ATOL) -> Result:
+             samples_per_interval: int | None = None, rtol: float = RTOL, atol: float = ATOL,
+             wall_time: float | None = None) -> Result:
     """Simulate ``scene`` event by event until arrest, rest, ``t_max`` or ``max_events``.
 
     Parameters
@@ -243,6 +275,12 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         estimates before it (``Event.t_err``).  An interval whose estimate stays above
         100 times its tolerance (:data:`symvib.numeric.engine.loop.TOLERANCE_FACTOR`)
         ends the run with status ``tolerance_not_met`` (``success`` is False).
+    wall_time : float, optional
+        Seconds of computing the plain-Python engine may take (about
+        :data:`PLAIN_SECONDS_PER_EVENT` per event): past them the run ends with status
+        ``wall_time_limit``, its events so far right and its message naming the time reached.
+        The compiled engine has no clock and ignores it (it runs the largest ``max_events``
+        in minutes).  Default: no limit (``symvib run`` sets one: ``--wall-time``).
 
     Returns
     -------
@@ -254,6 +292,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         raise ValueError(f"samples_per_interval must be an integer from 1 to {MAX_SAMPLES_PER_INTERVAL}, "
                          f"not {spi!r}")
     rtol, atol = check_tolerances(rtol, atol)
+    wall_time = check_wall_time(wall_time)
     shape = _run_shape(scene)
     requested, backend = backend, run_backend(shape, backend)
     mod, eng = bound_engine(shape, backend)
@@ -261,6 +300,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     cp = tuple(float(v) for v in scene.param_values)
     check_panels(scene, mod, cp)
     row = scene_row(scene)
+    if wall_time is not None and backend == "python":
+        row[SceneRow.deadline] = time.monotonic() + wall_time
     try:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet_compiler(mod, backend):
             out = eng.simulate(cp, row, R, samples)  # the status says what overflowed
@@ -269,6 +310,14 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
             raise
         return _non_finite(scene, exc)
     status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
+    # A run into a singular point (the end of a narrowed domain) ends left_domain there, or, where the
+    # steps into a pole lose the budget or the interval into it cannot be timed, with those errors.
+    singular, reached = None, {StatusCode.LEFT_DOMAIN: out.q, StatusCode.ENERGY_BUDGET_MISMATCH: out.q,
+                               StatusCode.TOLERANCE_NOT_MET: out.q_bad}.get(status)
+    if reached is not None and shape is not scene.shape:
+        singular = _singular_end(scene, float(reached))
+        if singular is not None:
+            status = int(StatusCode.REACHED_SINGULAR_POINT)
     detail = "plastic" if scene.k == 0.0 else ""
     impact = int(EventCode.IMPACT)
     events = [Event(kind_of(r[0]), r[1], r[2], r[3], r[4], r[5], detail if r[0] == impact else "", r[6])
@@ -302,6 +351,24 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
             f"{float(out.q_bad):.12g} (starting at t = {float(out.t):.12g} s) could not be brought within its "
             f"tolerance (rtol {rtol:g}, atol {atol:g} s); the run stopped at its start. Remedies: a looser "
             f"tolerance (simulate(scene, rtol=...), symvib run --rtol), or more nodes per panel (nodes=...)")
+    if status == StatusCode.WALL_TIME_LIMIT:
+        stats["stopped"] = (
+            f"the plain engine's wall-clock limit of {wall_time:g} s was reached at t = {float(out.t):.12g} s, "
+            f"after {int(out.n_events):,} events (about {PLAIN_SECONDS_PER_EVENT * 1e3:g} ms each); those are "
+            f"right, the run is unfinished. Remedies: a longer limit (simulate(scene, wall_time=...), symvib run "
+            f"--wall-time SECONDS, 0 for none), or the compiled engine (backend='numba', --backend numba: it "
+            f"compiles the curve once, then runs about 100 times faster)")
+    elif singular is not None:
+        point, reason = singular
+        q = scene.shape.q
+        if float(out.q_bad) != float(out.q_bad):  # (nan: it stopped at the end of its regular interval)
+            how = f"reached the singular point {q} = {point:.12g} of curve '{scene.shape.name}' ({reason}) at t = " \
+                  f"{float(out.t):.12g} s"
+        else:
+            how = f"runs into the singular point {q} = {point:.12g} of curve '{scene.shape.name}' ({reason}) from " \
+                  f"{q} = {float(out.q):.12g} at t = {float(out.t):.12g} s (the run stopped there: the time to " \
+                  f"get there is not finite, or not within the tolerance)"
+        stats["stopped"] = f"error: the particle {how}; the model ends at that point, the events before are right"
     return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=sampler,
                   interpolant=interpolant,
                   energy_budget=budget, t_final=float(out.t), q_final=float(out.q), qdot_final=float(out.qdot),
@@ -513,6 +580,17 @@ def check_panels(scene, mod, cp) -> None:
                                           f"take {panels:.3g} panels of {mod.PANEL:g} q_scale, more than "
                                           f"{MAX_F_PANELS:,} (driver.MAX_F_PANELS); give a q_scale near the length "
                                           "on which the curve turns, or leave it out")
+
+
+def _singular_end(scene, q: float):
+    """``(point, reason)`` of the singular point that ends the regular interval a run of ``scene``
+    stopped next to, at ``q`` (:func:`symvib.symbolic.singular.singular_ends`); None elsewhere."""
+    from symvib.symbolic.singular import singular_ends
+
+    for point, reason in singular_ends(scene):
+        if point is not None and abs(q - point) <= SINGULAR_REACH * abs(point - scene.q0):
+            return point, reason
+    return None
 
 
 def _run_shape(scene):

@@ -59,6 +59,10 @@ MESSAGES = {
     Status.ENERGY_BUDGET_MISMATCH: "error: the energy budget does not close; the numbers are not a result",
     Status.TOLERANCE_NOT_MET: "error: the time of a motion interval could not be brought within its tolerance "
                               "(rtol, atol); the run stopped at the start of that interval",
+    Status.WALL_TIME_LIMIT: "the plain engine's wall-clock limit (wall_time) was reached; the events before it "
+                            "are right, the run is unfinished",
+    Status.REACHED_SINGULAR_POINT: "error: the particle reached a singular point of the curve (a pole, a cusp or a "
+                                   "corner), where the model ends; the events before it are right",
 }
 assert set(MESSAGES) == set(Status), "every status needs a message in MESSAGES"
 
@@ -266,8 +270,9 @@ class Result:
     @property
     def message(self) -> str:
         """One sentence on why the run stopped (:data:`MESSAGES`), with the interval and the remedy
-        for a run that ended ``tolerance_not_met``."""
-        return self.stats.get("accuracy") or MESSAGES[self.status]
+        for a run that ended ``tolerance_not_met``, the point for ``reached_singular_point`` and the
+        time reached for ``wall_time_limit``."""
+        return self.stats.get("accuracy") or self.stats.get("stopped") or MESSAGES[self.status]
 
     @property
     def success(self) -> bool:

@@ -53,6 +53,12 @@ class StatusCode(enum.IntEnum):
     ENERGY_BUDGET_MISMATCH = 7
     LEFT_CURVE = 8
     TOLERANCE_NOT_MET = 9
+    #: The plain engine's wall-clock deadline passed (``simulate(..., wall_time=...)``); the events
+    #: before it are right, the run is unfinished.
+    WALL_TIME_LIMIT = 10
+    #: The particle reached a singular point of the curve (a pole, a cusp, a corner) that ends the
+    #: regular interval it runs on; set by the driver where the engine reports ``LEFT_DOMAIN`` there.
+    REACHED_SINGULAR_POINT = 11
 
 
 class EventColumn(enum.IntEnum):
@@ -101,6 +107,9 @@ class SceneRow(enum.IntEnum):
     t_max = 10
     max_events = 11
     unilateral = 12
+    #: The plain engine's deadline (``time.monotonic()`` seconds; 0: none).  The compiled engine
+    #: has no clock and ignores it.
+    deadline = 13
 
 
 class Summary(enum.IntEnum):
@@ -134,7 +143,8 @@ EVENT_KINDS = names(EventCode, lower=True)
 #: Names of the statuses, indexed by :class:`StatusCode`.
 STATUSES = names(StatusCode, lower=True)
 #: Status codes of a failed run (its numbers are not a result).
-ERROR_CODES = (StatusCode.NON_FINITE, StatusCode.ENERGY_BUDGET_MISMATCH, StatusCode.TOLERANCE_NOT_MET)
+ERROR_CODES = (StatusCode.NON_FINITE, StatusCode.ENERGY_BUDGET_MISMATCH, StatusCode.TOLERANCE_NOT_MET,
+               StatusCode.REACHED_SINGULAR_POINT)
 EVENT_COLUMNS = names(EventColumn)
 INTERVAL_COLUMNS = names(IntervalColumn)
 SCENE_ROW = names(SceneRow)

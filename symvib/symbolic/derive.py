@@ -38,6 +38,10 @@ from symvib.symbolic.curve import Curve, identity_holds
 from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivative
 from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
 
+#: The value of a numeric route's ``F_sigma`` at a check point (:meth:`Derivation.residual`): free,
+#: as ``C`` is, since eq. 2 satisfies eq. 1 whatever it is.
+PHI = sp.Symbol("Phi", real=True)
+
 __all__ = ["Branch", "Derivation", "derive", "coefficients", "pm_latex"]
 
 
@@ -156,7 +160,21 @@ class Derivation:
     def residual(self, s: int) -> sp.Expr:
         """Eq. 2 substituted back into eq. 1: ``(qdot**2)'/2 + A qdot**2 + B`` (zero when right)."""
         br = self.branches[s]
-        return sp.diff(br.qdot2, self.curve.q) / 2 + br.A * br.qdot2 + br.B
+        q, qdot2 = self.curve.q, br.qdot2
+        integrals = qdot2.atoms(sp.Integral)
+        if integrals:
+            # The numeric route's F = Integral(F', (u, q_ref, q)): its value at a point is a quadrature
+            # (of an integrand that may oscillate a million times: minutes), but eq. 2 must satisfy
+            # eq. 1 whatever that value, as whatever C.  So F becomes a free value Phi with Phi' = F'
+            # (the fundamental theorem), and the residual is checked at random Phi as at random C.
+            Fq = sp.Function("Phi")(q)
+            qdot2 = qdot2.xreplace({i: Fq for i in integrals})
+            d = sp.diff(qdot2, q)
+            for i in integrals:
+                (u, _, upper), = i.limits
+                d = d.subs(sp.Derivative(Fq, q), i.function.subs(u, upper))
+            return (d / 2 + br.A * qdot2 + br.B).subs(Fq, PHI)
+        return sp.diff(qdot2, q) / 2 + br.A * qdot2 + br.B
 
     def check(self) -> dict:
         """Back-substitute each phase trajectory; ``{s: "symbolic" | "numeric" | None}``.
@@ -164,7 +182,7 @@ class Derivation:
         ``"numeric"`` means the residual is below 1e-25 (relative) at 30 digits
         at random points of the domain, parameters, ``mu``, ``g`` and ``C``.
         """
-        extra = {mu: (0.01, 0.5), g: (1.0, 20.0), C: (5.0, 50.0)}
+        extra = {mu: (0.01, 0.5), g: (1.0, 20.0), C: (5.0, 50.0), PHI: (-1.0, 1.0)}
         return {s: identity_holds(self.residual(s), self.curve, extra=extra) for s in (1, -1)}
 
     # --- display -------------------------------------------------------------------------

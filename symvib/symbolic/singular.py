@@ -225,28 +225,40 @@ def _poles(labels, fns, grid, flags) -> list:
     ok = flags == 0
     for label, fn in zip(labels, fns):
         v = _real(fn, grid)
-        change = ok[:-1] & ok[1:] & (v[:-1] * v[1:] < 0.0)
-        for j in np.flatnonzero(change):
-            a, b, fa = grid[j], grid[j + 1], v[j]
-            for _ in range(BISECT_STEPS * 2):
-                mid = 0.5 * (a + b)
-                if mid in (a, b):
-                    break
-                fm = _real(fn, np.array([mid]))[0]
-                if not np.isfinite(fm) or fm == 0.0:
-                    a = b = mid
-                    break
-                if (fm < 0.0) == (fa < 0.0):
-                    a, fa = mid, fm
-                else:
-                    b = mid
-            ends = _real(fn, np.array([a, b]))
-            size = max(abs(v[j]), abs(v[j + 1]), np.finfo(float).tiny)
-            if not np.all(np.isfinite(ends)) or np.min(np.abs(ends)) > POLE_RATIO * size:
-                pieces.append((float(a), float(b), label, NOT_FINITE))
+        change = np.flatnonzero(ok[:-1] & ok[1:] & (v[:-1] * v[1:] < 0.0))
+        a, b = _bisect_sign_changes(fn, grid[change], grid[change + 1], v[change])
+        ends_a, ends_b = _real(fn, a), _real(fn, b)
+        size = np.maximum(np.maximum(np.abs(v[change]), np.abs(v[change + 1])), np.finfo(float).tiny)
+        with np.errstate(invalid="ignore"):
+            pole = ~(np.isfinite(ends_a) & np.isfinite(ends_b)) | \
+                (np.minimum(np.abs(ends_a), np.abs(ends_b)) > POLE_RATIO * size)
+        pieces += [(float(a[i]), float(b[i]), label, NOT_FINITE) for i in np.flatnonzero(pole)]
         if label == "h":
             pieces += _cusps(fn, grid, v, ok)
     return pieces
+
+
+def _bisect_sign_changes(fn, a: np.ndarray, b: np.ndarray, fa: np.ndarray) -> tuple:
+    """Each sign change of ``fn`` in ``[a_i, b_i]`` (``fn(a_i) = fa_i``) bisected to adjacent doubles,
+    all at once (one evaluation of ``fn`` per step: a curve that oscillates a million times has
+    thousands of changes on the scan grid); where ``fn`` is not finite or 0 at a midpoint, both
+    ends stop there.  Returns the final ``(a, b)``."""
+    a, b, fa = a.copy(), b.copy(), fa.copy()
+    active = np.ones(a.shape, dtype=bool)
+    for _ in range(BISECT_STEPS * 2):
+        if not active.any():
+            break
+        mid = 0.5 * (a + b)
+        active &= (mid != a) & (mid != b)
+        fm = _real(fn, mid)
+        stop = active & (~np.isfinite(fm) | (fm == 0.0))
+        a[stop] = b[stop] = mid[stop]
+        active &= ~stop
+        left = active & ((fm < 0.0) == (fa < 0.0))
+        a[left], fa[left] = mid[left], fm[left]
+        right = active & ~left
+        b[right] = mid[right]
+    return a, b
 
 
 def _cusps(fn, grid, v, ok) -> list:
@@ -477,6 +489,24 @@ _INTERVALS: dict = {}
 def _end_text(v: float) -> str:
     """A domain end as the text a Shape holds (exact: the shortest repr of the double)."""
     return ("oo" if v > 0 else "-oo") if math.isinf(v) else repr(float(v))
+
+
+def singular_ends(scene) -> tuple:
+    """``((point, reason), (point, reason))``: the singular points at the left and right ends of the
+    regular interval around ``initial.q`` (:func:`regular_interval`; ``(None, "")`` where the end
+    is the declared domain's).  For the status ``reached_singular_point``."""
+    import json
+
+    from symvib.numeric.scene import declared_domain
+
+    source = json.dumps(scene.shape.source(), sort_keys=True)
+    key = (source, tuple(scene.params), scene.q0, scene.left, scene.right)
+    if key not in _INTERVALS:
+        curve = _CURVES.get(source) or _CURVES.setdefault(source, scene.shape.curve())
+        reach = [v for v in (scene.left, scene.right) if v is not None]
+        _INTERVALS[key] = regular_interval(curve, scene.param_dict, scene.q0, declared_domain(scene), reach=reach)
+    r = _INTERVALS[key]
+    return ((r.lo, r.lo_reason) if r.lo_reason else (None, ""), (r.hi, r.hi_reason) if r.hi_reason else (None, ""))
 
 
 def regular_shape(scene):

@@ -199,10 +199,12 @@ def _compiled_kernels(module, ncp: int) -> tuple:
 @cache
 def engine_digest() -> str:
     """SHA-256 (hex, 20 digits) of the engine's source files, for cache invalidation (read once)."""
+    from symvib.numeric import layout
     from symvib.numeric.engine import compiled, state
 
     digest = hashlib.sha256()
-    for mod in (*ENGINE_MODULES, state, compiled):
+    # (the layout too: its codes and columns are compile-time constants of the engine)
+    for mod in (*ENGINE_MODULES, state, compiled, layout):
         digest.update(Path(mod.__file__).read_bytes())
     return digest.hexdigest()[:20]
 

@@ -170,6 +170,9 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
             events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp), t_err)
         sigma = direction
     while status == StatusCode.RUNNING:
+        if S.deadline > 0.0 and clock() > S.deadline:
+            status = StatusCode.WALL_TIME_LIMIT  # (the plain engine only: the compiled one has no clock)
+            break
         if not finite_state(t, q, w, Wf, Wimp):
             status = StatusCode.NON_FINITE  # overflow: stop at once rather than run max_events impacts at inf
             break
@@ -327,13 +330,21 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
         else:
             q, w = qb, wb
             status = StatusCode.LEFT_DOMAIN
-    if status == StatusCode.MAX_EVENTS and w == 0.0:
+    if (status == StatusCode.MAX_EVENTS or status == StatusCode.WALL_TIME_LIMIT) and w == 0.0:
         sigma = 0
     if not finite_state(t, q, w, Wf, Wimp):
         status = StatusCode.NON_FINITE  # e.g. mu = 1e65: an arrest reached at t = nan
     qdot_final = qdot_of(q, w, sigma, K, cp) if sigma != 0 else 0.0
     return Outcome(status.value, ne, events, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, energy(q, w, m, g, K, cp),
                    zeno, scale, t_err, q_bad)
+
+
+def clock():
+    """The wall clock (s) a run's deadline (:attr:`~symvib.numeric.engine.state.Setup.deadline`) is
+    read on.  The compiled engine has none (this 0 never passes a deadline): it runs the largest
+    ``max_events`` in minutes; the plain engine takes ``time.monotonic``
+    (:data:`symvib.numeric.engine.plain.PRIMITIVES`), where 100,000 events take about a minute."""
+    return 0.0
 
 
 def params_of(row, n):
@@ -363,7 +374,7 @@ def setup_scaled(row, K, cp, scale):
     lo, hi = K.domain(*cp)
     return Setup(row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k], row[SceneRow.has_left] != 0.0,
                  row[SceneRow.left], row[SceneRow.has_right] != 0.0, row[SceneRow.right], lo, hi, scale,
-                 row[SceneRow.unilateral] != 0.0)
+                 row[SceneRow.unilateral] != 0.0, row[SceneRow.deadline])
 
 
 def same_scale(rows, cp_rows, i):

@@ -11,6 +11,8 @@ rebinds them for numba) to globals in which these primitives replace their loop 
 * :func:`cumulate`: the cumulative Gauss-Legendre integral at every node, a
   matrix-vector product in NumPy instead of ``n^2`` indexed multiplications;
 * :func:`grown`: a full log copied into a larger one by NumPy, not element by element;
+* ``clock``: ``time.monotonic``, the wall clock a run's deadline is read on (the compiled
+  engine's :func:`symvib.numeric.engine.loop.clock` has none);
 
 and :func:`plain_rules` gives the rules' nodes and weights as lists.  Each
 computes what its loop version computes (``tests/test_plain.py``); the
@@ -25,6 +27,7 @@ Examples
 """
 from __future__ import annotations
 
+import time
 from functools import cache
 
 import numpy as np
@@ -54,7 +57,7 @@ def grown(a, n, rows):
 
 
 #: The primitives the plain-Python engine takes instead of the engine's loop versions.
-PRIMITIVES = {"scratch": scratch, "cumulate": cumulate, "grown": grown}
+PRIMITIVES = {"scratch": scratch, "cumulate": cumulate, "grown": grown, "clock": time.monotonic}
 
 
 def plain_rules(R: Rules) -> Rules:

@@ -78,7 +78,8 @@ assert Kernels._fields == tuple(KERNEL_INTERFACE), "Kernels must list KERNEL_INT
 
 class Setup(NamedTuple):
     """One scene's constants: gravity, mass, friction, restitution, limiters, the curve's
-    regular domain ``(lo, hi)``, its length scale ``scale`` (``q_scale``) and its contact."""
+    regular domain ``(lo, hi)``, its length scale ``scale`` (``q_scale``), its contact and the
+    plain engine's wall-clock deadline (``time.monotonic()`` seconds, 0: none)."""
 
     g: float
     m: float
@@ -92,6 +93,7 @@ class Setup(NamedTuple):
     hi: float
     scale: float
     unilateral: bool
+    deadline: float
 
 
 class Rules(NamedTuple):
