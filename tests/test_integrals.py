@@ -117,3 +117,29 @@ def test_one_integrand_on_two_half_infinite_domains_keeps_each_reference_point(r
     if not routes:  # the numeric form integrates from its own reference point
         assert F_left.expr.limits[0][1] == -sp.Rational(13, 10)
         assert sp.simplify(sp.diff(F_left.expr, left.q) - F_left.integrand) == 0
+
+
+def test_jobs_started_together_each_keep_their_own_budget_from_their_start():
+    """budget.start / finish: the branches' routes run side by side; a job's budget counts from
+    its start, so waiting for another job first does not lengthen it."""
+    quick = budget.start(time.sleep, (0.2,), seconds=5.0)
+    slow = budget.start(time.sleep, (30.0,), seconds=1.0)
+    time.sleep(1.2)  # (the slow job's budget is spent while the parent waits elsewhere)
+    assert budget.finish(slow).status == "timeout"
+    done = budget.finish(quick)
+    assert done.status == "ok" and done.value is None
+    assert not slow.proc.is_alive() and not quick.proc.is_alive()
+
+
+def test_both_branches_at_once_find_what_each_finds_alone():
+    """antiderivatives (both branches, routes side by side) against antiderivative branch by branch:
+    the same closed form, route and attempts (routes and verdicts) on each branch."""
+    curve = shape("cycloid").curve()
+    integrals._CACHE.clear()
+    together = integrals.antiderivatives(curve)
+    integrals._CACHE.clear()
+    for s in (1, -1):
+        alone = antiderivative(curve, s)
+        assert sp.simplify(together[s].expr - alone.expr) == 0
+        assert together[s].route == alone.route and together[s].verification == alone.verification
+        assert [(a.route, a.outcome) for a in together[s].attempts] == [(a.route, a.outcome) for a in alone.attempts]

@@ -27,7 +27,8 @@ import sympy as sp
 
 from symvib import children
 
-__all__ = ["Outcome", "run", "simplify", "worker_pool", "SIMPLIFY_SECONDS", "CHECK_SIMPLIFY_SECONDS"]
+__all__ = ["Outcome", "Running", "run", "start", "finish", "simplify", "worker_pool", "SIMPLIFY_SECONDS",
+           "CHECK_SIMPLIFY_SECONDS"]
 
 #: Seconds to wait for a killed child to exit.
 _JOIN_SECONDS = 5.0
@@ -87,14 +88,39 @@ def run(job, args: tuple, *, seconds: float) -> Outcome:
     ``job`` must be a module-level function; SymPy arguments should be passed
     as ``srepr`` strings.  A SymPy result comes back as an expression.
     """
-    start = time.perf_counter()
+    return finish(start(job, args, seconds=seconds))
+
+
+@dataclass
+class Running:
+    """A job started by :func:`start`: its child, the end of its pipe, when it started and its budget."""
+
+    proc: object
+    conn: object
+    started: float
+    seconds: float
+
+
+def start(job, args: tuple, *, seconds: float) -> Running:
+    """Start ``job(*args)`` in a child process (see :func:`run`) and return at once; :func:`finish`
+    waits for its outcome.  Several jobs started one after the other run side by side, each
+    within its own budget (children are started from the calling thread, by fork where there is one)."""
+    started = time.perf_counter()
     ctx = children._context()
     parent, child = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_child, args=(child, job, args, os.getpid(), seconds), daemon=True)
     proc.start()
     child.close()
+    return Running(proc, parent, started, seconds)
+
+
+def finish(running: Running) -> Outcome:
+    """The :class:`Outcome` of a job :func:`start` began: its result, or ``"timeout"`` once
+    ``seconds`` have passed since it started (the child is killed then)."""
+    proc, parent = running.proc, running.conn
     try:
-        if parent.poll(seconds):
+        left = max(0.0, running.seconds - (time.perf_counter() - running.started))
+        if parent.poll(left):
             try:
                 status, payload = parent.recv()
             except EOFError:
@@ -106,7 +132,7 @@ def run(job, args: tuple, *, seconds: float) -> Outcome:
         if proc.is_alive():
             proc.kill()
         proc.join(_JOIN_SECONDS)
-    elapsed = time.perf_counter() - start
+    elapsed = time.perf_counter() - running.started
     if status == "ok" and isinstance(payload, str):
         payload = _from_srepr(payload)
     return Outcome(status, payload, elapsed)

@@ -35,7 +35,7 @@ import sympy as sp
 
 from symvib.symbolic import budget
 from symvib.symbolic.curve import Curve, identity_holds
-from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivative
+from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivatives
 from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
 
 #: The value of a numeric route's ``F_sigma`` at a check point (:meth:`Derivation.residual`): free,
@@ -312,10 +312,11 @@ def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES) -> Derivatio
     c = curve
     A_sym, B_sym = coefficients(c.xp, c.zp, c.h, c.hp, c.alphap)
     branches = {}
+    # Every route on both branches (their integrands differ in the sign of mu, and a route may
+    # find one and not the other; the derivation notebooks show each attempt), side by side.
+    found = antiderivatives(c, seconds=seconds, routes=routes)
     for s in (1, -1):
-        # Every route on both branches (their integrands differ in the sign of mu, and a route may
-        # find one and not the other); the derivation notebooks show each attempt.
-        F = antiderivative(c, s, seconds=seconds, routes=routes)
+        F = found[s]
         A = _simplest(A_sym.subs(sigma, s))
         B = _simplest(B_sym.subs(sigma, s))
         w_ = sp.exp(-2 * s * mu * c.alpha) * (C - 2 * g * F.expr)

@@ -56,7 +56,7 @@ from symvib.symbolic.curve import (
 )
 from symvib.symbolic.symbols import mu
 
-__all__ = ["Attempt", "Antiderivative", "antiderivative", "integrand", "ROUTES", "ROUTE_SECONDS",
+__all__ = ["Attempt", "Antiderivative", "antiderivative", "antiderivatives", "integrand", "ROUTES", "ROUTE_SECONDS",
            "VERIFY_SECONDS"]
 
 #: Closed-form routes, tried in this order.
@@ -267,59 +267,83 @@ def antiderivative(curve: Curve, s: int, *, seconds: float = ROUTE_SECONDS,
     Antiderivative
         Always; with ``route="numeric"`` when no route succeeds.
     """
-    if s not in (1, -1):
-        raise ValueError(f"branch s must be +1 or -1, got {s!r}")
+    return antiderivatives(curve, (s,), seconds=seconds, routes=routes)[s]
+
+
+def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SECONDS,
+                    routes=ROUTES) -> dict:
+    """:func:`antiderivative` of each branch in ``branches``, ``{s: Antiderivative}``.
+
+    Every route is tried on every branch still without a closed form, in the order of
+    ``routes``; the branches' attempts at one route run side by side (a child process each,
+    on cores of their own), so a curve whose routes all spend their budgets waits for them
+    once, not once per branch.
+    """
     unknown = set(routes) - set(ROUTES)
     if unknown:
         raise ValueError(f"unknown route(s) {sorted(unknown)}; known: {', '.join(ROUTES)}")
-    f = integrand(curve, s)
-    key = (sp.srepr(f), sp.srepr(curve.alpha), tuple(routes), seconds)
-    if key in _CACHE:
-        # The reference point depends on the domain: one integrand on (0.3, oo) and on
-        # (-oo, -0.3) shares the symbolic work but not q_ref.
-        return _with_q_ref(_CACHE[key], reference_point(curve), curve.q)
-    q = curve.q
-    attempts = []
-    result = None
-    for route in routes:
-        start = time.perf_counter()
-        if route == "sympy":
-            job, args = _job_sympy, (sp.srepr(f), q.name)
-        elif route == "split":
-            job, args = _job_split, (sp.srepr(f), q.name)
+    out, todo = {}, {}
+    for s in branches:
+        if s not in (1, -1):
+            raise ValueError(f"branch s must be +1 or -1, got {s!r}")
+        f = integrand(curve, s)
+        key = (sp.srepr(f), sp.srepr(curve.alpha), tuple(routes), seconds)
+        if key in _CACHE:
+            # The reference point depends on the domain: one integrand on (0.3, oo) and on
+            # (-oo, -0.3) shares the symbolic work but not q_ref.
+            out[s] = _with_q_ref(_CACHE[key], reference_point(curve), curve.q)
         else:
-            job, args = _job_tangent, (sp.srepr(f), sp.srepr(curve.alpha), sp.srepr(curve.h),
-                                       sp.srepr(curve.alphap), q.name, s)
-        outcome = budget.run(job, args, seconds=seconds)
-        if outcome.status == "timeout":
-            attempts.append(Attempt(route, f"timeout after {seconds:g} s", outcome.seconds))
-            continue
-        if outcome.status == "error":
-            attempts.append(Attempt(route, f"error: {outcome.value}", outcome.seconds))
-            continue
-        F = outcome.value
-        if F.has(sp.Integral) or F.has(sp.Piecewise):
-            attempts.append(Attempt(route, "no closed form", outcome.seconds))
-            continue
-        F = _tidy(F)
-        how = verify(F, f, curve)
-        elapsed = time.perf_counter() - start
-        if how is None:
-            attempts.append(Attempt(route, "rejected: derivative check failed", elapsed))
-            continue
-        F_reg, regular = regularize(F, q)
-        attempts.append(Attempt(route, f"closed form, verified {how}", elapsed))
-        result = Antiderivative(s=s, integrand=f, expr=F_reg, route=route, verification=how,
-                                attempts=tuple(attempts), q_ref=reference_point(curve), mu_regular=regular)
-        break
-    if result is None:
-        u = sp.Dummy("u", real=True)
-        q_ref = reference_point(curve)
-        result = Antiderivative(s=s, integrand=f, expr=sp.Integral(f.subs(q, u), (u, q_ref, q)),
-                                route="numeric", verification="quadrature", attempts=tuple(attempts),
-                                q_ref=q_ref)
-    _CACHE[key] = result
-    return result
+            todo[s] = (f, key, [])
+    q = curve.q
+    for route in routes:
+        waiting = [s for s in todo if s not in out]
+        if not waiting:
+            break
+        started = {s: (time.perf_counter(), budget.start(*_route_job(route, todo[s][0], curve, s), seconds=seconds))
+                   for s in waiting}
+        for s in waiting:
+            f, _, attempts = todo[s]
+            start, running = started[s]
+            outcome = budget.finish(running)
+            if outcome.status == "timeout":
+                attempts.append(Attempt(route, f"timeout after {seconds:g} s", outcome.seconds))
+                continue
+            if outcome.status == "error":
+                attempts.append(Attempt(route, f"error: {outcome.value}", outcome.seconds))
+                continue
+            F = outcome.value
+            if F.has(sp.Integral) or F.has(sp.Piecewise):
+                attempts.append(Attempt(route, "no closed form", outcome.seconds))
+                continue
+            F = _tidy(F)
+            how = verify(F, f, curve)
+            elapsed = time.perf_counter() - start
+            if how is None:
+                attempts.append(Attempt(route, "rejected: derivative check failed", elapsed))
+                continue
+            F_reg, regular = regularize(F, q)
+            attempts.append(Attempt(route, f"closed form, verified {how}", elapsed))
+            out[s] = Antiderivative(s=s, integrand=f, expr=F_reg, route=route, verification=how,
+                                    attempts=tuple(attempts), q_ref=reference_point(curve), mu_regular=regular)
+    for s, (f, key, attempts) in todo.items():
+        if s not in out:
+            u = sp.Dummy("u", real=True)
+            q_ref = reference_point(curve)
+            out[s] = Antiderivative(s=s, integrand=f, expr=sp.Integral(f.subs(q, u), (u, q_ref, q)),
+                                    route="numeric", verification="quadrature", attempts=tuple(attempts),
+                                    q_ref=q_ref)
+        _CACHE[key] = out[s]
+    return out
+
+
+def _route_job(route: str, f: sp.Expr, curve: Curve, s: int) -> tuple:
+    """``(job, args)`` of one closed-form route for the integrand ``f`` of branch ``s``."""
+    q = curve.q
+    if route == "sympy":
+        return _job_sympy, (sp.srepr(f), q.name)
+    if route == "split":
+        return _job_split, (sp.srepr(f), q.name)
+    return _job_tangent, (sp.srepr(f), sp.srepr(curve.alpha), sp.srepr(curve.h), sp.srepr(curve.alphap), q.name, s)
 
 
 def _with_q_ref(result: Antiderivative, q_ref: sp.Expr, q: sp.Symbol) -> Antiderivative:

@@ -225,7 +225,7 @@ def _poles(labels, fns, grid, flags) -> list:
     ok = flags == 0
     for label, fn in zip(labels, fns):
         v = _real(fn, grid)
-        change = np.flatnonzero(ok[:-1] & ok[1:] & (v[:-1] * v[1:] < 0.0))
+        change = np.flatnonzero(ok[:-1] & ok[1:] & (np.sign(v[:-1]) * np.sign(v[1:]) < 0.0))  # (no overflow)
         a, b = _bisect_sign_changes(fn, grid[change], grid[change + 1], v[change])
         ends_a, ends_b = _real(fn, a), _real(fn, b)
         size = np.maximum(np.maximum(np.abs(v[change]), np.abs(v[change + 1])), np.finfo(float).tiny)
@@ -470,9 +470,10 @@ def regular_interval(curve, values: dict, q0: float, domain: tuple, *, reach=())
         reason = f"{label} is {kind}"
         if a <= q0 <= b:
             return Regular(q0, q0, at_start=reason)
-        if left < b < q0:
+        # (a singular point at a declared end counts: a pole there ends the interval as one inside)
+        if left <= b < q0 and not (b == left and lo_reason):
             left, lo_reason = b, reason
-        if q0 < a < right:
+        if q0 < a <= right and not (a == right and hi_reason):
             right, hi_reason = a, reason
     return Regular(left, right, lo_reason, hi_reason)
 
@@ -550,17 +551,17 @@ def regular_shape(scene):
         if v is not None and not ok(v):
             raise SceneError(label, f"{v!r} is beyond a singular point of curve '{shape.name}' at {q} = {end!r} "
                                     f"({reason}): the particle cannot get there from {q} = {scene.q0!r}")
-    if (r.lo, r.hi) == (lo, hi):
+    if (r.lo, r.hi) == (lo, hi) and not (r.lo_reason or r.hi_reason):
         return shape
     # The run's ends stay EDGE_RTOL (of q_scale) inside the singular points, where the
     # kernels are still finite (the engine evaluates them at the ends of its domain).
     scale = float(curve.q_scale.subs({p: v for p, v in zip(curve.params, scene.param_values)}))
     margin = EDGE_RTOL * scale
-    ends = (r.lo if r.lo == lo else r.lo + margin * max(1.0, abs(r.lo)),
-            r.hi if r.hi == hi else r.hi - margin * max(1.0, abs(r.hi)))
+    ends = (r.lo + margin * max(1.0, abs(r.lo)) if r.lo_reason else r.lo,
+            r.hi - margin * max(1.0, abs(r.hi)) if r.hi_reason else r.hi)
     # The engine's quadrature panels are q_scale wide: near a singular point they must be
     # narrower, or Gauss-Legendre converges slowly there (times, friction work).
-    near = min([abs(scene.q0 - e) for e in (r.lo, r.hi) if math.isfinite(e) and e not in (lo, hi)] + [scale])
+    near = min([abs(scene.q0 - e) for e, why in ((r.lo, r.lo_reason), (r.hi, r.hi_reason)) if why] + [scale])
     narrow_scale = max(near, MIN_SCALE_RATIO * scale)
     domain = (_end_text(ends[0]), _end_text(ends[1]))
     changes = dict(domain=domain)
