@@ -293,21 +293,6 @@ def test_a_run_into_a_pole_ends_reached_singular_point_naming_it(z, q0, qdot, po
         assert [(e.kind, e.t, e.q) for e in before.events] == [(e.kind, e.t, e.q) for e in result.events]
 
 
-def test_a_pole_at_an_end_of_the_declared_domain_is_a_singular_point_too():
-    """domain = [-1, 0.3] with the pole at 0.3: the kernels were evaluated at the pole (a
-    ZeroDivisionError, status non_finite); the run's domain now stops short of it, as inside."""
-    from symvib.numeric.driver import simulate
-
-    scene = scene_from_dict({"curve": {"z": "x**2 + 1/(x - 0.3)", "domain": [-1, 0.3]},
-                             "physics": {"mu": 0.1, "restitution": 0.8}, "initial": {"q": 0.0, "qdot": 1.0},
-                             "run": {"t_max": 5.0}})
-    r = regular_interval(scene.shape.curve(), {}, 0.0, (-1.0, 0.3))
-    assert (r.lo, r.hi, r.lo_reason) == (-1.0, 0.3, "") and r.hi_reason == "z is not finite"
-    assert float(regular_shape(scene).domain[1]) < 0.3
-    result = simulate(scene, samples=False, backend="python")
-    assert result.status.value == "reached_singular_point" and "singular point x = 0.3 " in result.message
-
-
 def test_a_pole_that_repels_is_no_end():
     """z -> +oo at the pole: the particle turns before it, and the run is a success."""
     from symvib.numeric.driver import simulate

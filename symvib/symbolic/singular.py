@@ -470,10 +470,9 @@ def regular_interval(curve, values: dict, q0: float, domain: tuple, *, reach=())
         reason = f"{label} is {kind}"
         if a <= q0 <= b:
             return Regular(q0, q0, at_start=reason)
-        # (a singular point at a declared end counts: a pole there ends the interval as one inside)
-        if left <= b < q0 and not (b == left and lo_reason):
+        if left < b < q0:
             left, lo_reason = b, reason
-        if q0 < a <= right and not (a == right and hi_reason):
+        if q0 < a < right:
             right, hi_reason = a, reason
     return Regular(left, right, lo_reason, hi_reason)
 
@@ -551,7 +550,7 @@ def regular_shape(scene):
         if v is not None and not ok(v):
             raise SceneError(label, f"{v!r} is beyond a singular point of curve '{shape.name}' at {q} = {end!r} "
                                     f"({reason}): the particle cannot get there from {q} = {scene.q0!r}")
-    if (r.lo, r.hi) == (lo, hi) and not (r.lo_reason or r.hi_reason):
+    if (r.lo, r.hi) == (lo, hi):
         return shape
     # The run's ends stay EDGE_RTOL (of q_scale) inside the singular points, where the
     # kernels are still finite (the engine evaluates them at the ends of its domain).
