@@ -61,10 +61,14 @@ ENTRIES = [pytest.param(e.name, marks=_marks(e), id=e.name) for e in CORPUS]
 
 
 @pytest.fixture(scope="session")
-def corpus_cache(tmp_path_factory, worker_id):
-    """One kernel cache for the session, shared by the xdist workers (modules are written atomically)."""
+def corpus_cache(tmp_path_factory, request):
+    """One kernel cache for the session, shared by the xdist workers (modules are written atomically).
+
+    (Not xdist's ``worker_id`` fixture: ``pip install . && pip install pytest && python -m pytest``
+    runs without xdist, where that fixture does not exist.)"""
     base = tmp_path_factory.getbasetemp()
-    folder = (base if worker_id == "master" else base.parent) / "corpus-kernels"
+    worker = getattr(request.config, "workerinput", {}).get("workerid", "master")
+    folder = (base if worker == "master" else base.parent) / "corpus-kernels"
     folder.mkdir(exist_ok=True)
     return folder
 
