@@ -361,7 +361,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     elif singular is not None:
         point, reason = singular
         q = scene.shape.q
-        if float(out.q_bad) != float(out.q_bad):  # (nan: it stopped at the end of its regular interval)
+        if math.isnan(out.q_bad):  # it stopped at the end of its regular interval
             how = f"reached the singular point {q} = {point:.12g} of curve '{scene.shape.name}' ({reason}) at t = " \
                   f"{float(out.t):.12g} s"
         else:

@@ -299,11 +299,10 @@ def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SE
         waiting = [s for s in todo if s not in out]
         if not waiting:
             break
-        started = {s: (time.perf_counter(), budget.start(*_route_job(route, todo[s][0], curve, s), seconds=seconds))
-                   for s in waiting}
+        started = {s: budget.start(*_route_job(route, todo[s][0], curve, s), seconds=seconds) for s in waiting}
         for s in waiting:
             f, _, attempts = todo[s]
-            start, running = started[s]
+            running = started[s]
             outcome = budget.finish(running)
             if outcome.status == "timeout":
                 attempts.append(Attempt(route, f"timeout after {seconds:g} s", outcome.seconds))
@@ -317,7 +316,7 @@ def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SE
                 continue
             F = _tidy(F)
             how = verify(F, f, curve)
-            elapsed = time.perf_counter() - start
+            elapsed = time.perf_counter() - running.started
             if how is None:
                 attempts.append(Attempt(route, "rejected: derivative check failed", elapsed))
                 continue

@@ -491,21 +491,34 @@ def _end_text(v: float) -> str:
     return ("oo" if v > 0 else "-oo") if math.isinf(v) else repr(float(v))
 
 
-def singular_ends(scene) -> tuple:
-    """``((point, reason), (point, reason))``: the singular points at the left and right ends of the
-    regular interval around ``initial.q`` (:func:`regular_interval`; ``(None, "")`` where the end
-    is the declared domain's).  For the status ``reached_singular_point``."""
+def _scene_curve(scene):
+    """The symbolic curve of ``scene``'s shape (built once per shape source)."""
+    import json
+
+    source = json.dumps(scene.shape.source(), sort_keys=True)
+    return _CURVES.get(source) or _CURVES.setdefault(source, scene.shape.curve())
+
+
+def _scene_interval(scene) -> Regular:
+    """:func:`regular_interval` around ``initial.q`` for ``scene`` (found once per shape source,
+    parameters, start and limiters)."""
     import json
 
     from symvib.numeric.scene import declared_domain
 
-    source = json.dumps(scene.shape.source(), sort_keys=True)
-    key = (source, tuple(scene.params), scene.q0, scene.left, scene.right)
+    key = (json.dumps(scene.shape.source(), sort_keys=True), tuple(scene.params), scene.q0, scene.left, scene.right)
     if key not in _INTERVALS:
-        curve = _CURVES.get(source) or _CURVES.setdefault(source, scene.shape.curve())
         reach = [v for v in (scene.left, scene.right) if v is not None]
-        _INTERVALS[key] = regular_interval(curve, scene.param_dict, scene.q0, declared_domain(scene), reach=reach)
-    r = _INTERVALS[key]
+        _INTERVALS[key] = regular_interval(_scene_curve(scene), scene.param_dict, scene.q0, declared_domain(scene),
+                                           reach=reach)
+    return _INTERVALS[key]
+
+
+def singular_ends(scene) -> tuple:
+    """``((point, reason), (point, reason))``: the singular points at the left and right ends of the
+    regular interval around ``initial.q`` (:func:`regular_interval`; ``(None, "")`` where the end
+    is the declared domain's).  For the status ``reached_singular_point``."""
+    r = _scene_interval(scene)
     return ((r.lo, r.lo_reason) if r.lo_reason else (None, ""), (r.hi, r.hi_reason) if r.hi_reason else (None, ""))
 
 
@@ -533,14 +546,9 @@ def regular_shape(scene):
     from symvib.numeric.scene import SceneError, declared_domain
 
     shape = scene.shape
-    source = json.dumps(shape.source(), sort_keys=True)
-    key = (source, tuple(scene.params), scene.q0, scene.left, scene.right)
     lo, hi = declared_domain(scene)
-    curve = _CURVES.get(source) or _CURVES.setdefault(source, shape.curve())
-    if key not in _INTERVALS:
-        reach = [v for v in (scene.left, scene.right) if v is not None]
-        _INTERVALS[key] = regular_interval(curve, scene.param_dict, scene.q0, (lo, hi), reach=reach)
-    r = _INTERVALS[key]
+    curve = _scene_curve(scene)
+    r = _scene_interval(scene)
     q = shape.q
     if r.at_start:
         raise SceneError("initial.q", f"{scene.q0!r} is a singular point of curve '{shape.name}' "
@@ -566,4 +574,5 @@ def regular_shape(scene):
     changes = dict(domain=domain)
     if narrow_scale < scale:
         changes["q_scale"] = repr(narrow_scale)
+    source = json.dumps(shape.source(), sort_keys=True)
     return _NARROWED.setdefault((source, domain, changes.get("q_scale")), dataclasses.replace(shape, **changes))
