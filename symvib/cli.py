@@ -17,9 +17,13 @@ one line (exit status 130 and 143), after its child processes are stopped.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
+import logging
 import os
 import sys
+
+from symvib.shapes import CLOSED_FORMS
 
 __all__ = ["main", "one_line", "build_parser", "build_bench_parser", "bench_main", "build_sweep_parser", "sweep_main"]
 
@@ -213,6 +217,11 @@ def _cmd_run(args) -> int:
         changes["t_max"] = args.t_max
     if args.max_events is not None:
         changes["max_events"] = args.max_events
+    if args.closed_form is not None:
+        if scene.shape.in_catalogue:
+            raise ValueError(f"--closed-form: curve '{scene.shape.name}' is a catalogue shape, whose kernels are "
+                             f"generated already; the option is for a curve given by expressions")
+        changes["shape"] = dataclasses.replace(scene.shape, closed_form=args.closed_form)
     if changes:
         scene = scene.replace(**changes)
     result = simulate(scene, backend=args.backend, rtol=rtol, atol=atol, wall_time=wall_time)
@@ -371,6 +380,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--wall-time", type=float, default=None, metavar="SECONDS",
                    help="seconds the plain-Python engine may compute before the run ends with status "
                         "wall_time_limit (default 40; 0: no limit; the compiled engine has no limit)")
+    p.add_argument("--closed-form", choices=CLOSED_FORMS, default=None,
+                   help="override curve.closed_form of a curve given by expressions: how its F_sigma is found "
+                        "when its kernels are first generated (auto: closed-form routes briefly, else numeric; "
+                        "required: every route, fail without one; never: numeric at once)")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("generate", help="write the numeric kernel modules (generated/)")
@@ -592,6 +605,22 @@ def _one_line_warnings(command: str) -> None:
     warnings.formatwarning = fmt
 
 
+def _progress_on_terminal(command: str, stream=None) -> None:
+    """Show symvib's progress lines (``logging`` INFO of the ``symvib`` loggers: a new curve's
+    derivation) on ``stream`` (stderr) when it is a terminal; piped or captured output gets none,
+    so an error stays one line."""
+    stream = sys.stderr if stream is None else stream
+    logger = logging.getLogger("symvib")
+    if not getattr(stream, "isatty", lambda: False)() or any(getattr(h, "symvib_progress", False)
+                                                             for h in logger.handlers):
+        return
+    handler = logging.StreamHandler(stream)
+    handler.setFormatter(logging.Formatter(f"symvib {command}: %(message)s" if command else "symvib: %(message)s"))
+    handler.symvib_progress = True
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+
+
 def main(argv=None) -> int:
     """Entry point of the ``symvib`` command."""
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -609,6 +638,7 @@ def main(argv=None) -> int:
         run = lambda: args.func(args)  # noqa: E731
     from symvib.children import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated, terminate_as_exception
 
+    _progress_on_terminal(command)
     try:
         with terminate_as_exception():
             return run()

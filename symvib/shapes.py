@@ -18,7 +18,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["Shape", "CATALOGUE", "shape", "PAPER_SHAPES"]
+__all__ = ["Shape", "CATALOGUE", "shape", "PAPER_SHAPES", "CLOSED_FORMS"]
+
+#: How a user curve's ``F_sigma`` (the antiderivative of eq. 2) is found when its kernels are first
+#: generated (``curve.closed_form``): ``"auto"`` tries the closed-form routes on a short budget and
+#: takes the numeric ``F_sigma`` at once where they do not answer quickly; ``"required"`` gives every
+#: route its full budget and fails when none finds one; ``"never"`` takes the numeric ``F_sigma``
+#: at once (:func:`symvib.codegen.generate.route_plan`).
+CLOSED_FORMS = ("auto", "required", "never")
 
 
 @dataclass(frozen=True)
@@ -48,6 +55,9 @@ class Shape:
         Characteristic length of ``q``.
     doc : str
         One line for listings and generated-module headers.
+    closed_form : {"auto", "required", "never"}
+        How ``F_sigma`` is found when a user curve's kernels are generated (:data:`CLOSED_FORMS`);
+        part of the defining data only when not ``"auto"``.
     """
 
     name: str
@@ -63,6 +73,11 @@ class Shape:
     q_scale: str = "1"
     doc: str = ""
     q_unit: str = ""
+    closed_form: str = "auto"
+
+    def __post_init__(self):
+        if self.closed_form not in CLOSED_FORMS:
+            raise ValueError(f"curve.closed_form: {self.closed_form!r} is not one of {', '.join(CLOSED_FORMS)}")
 
     @property
     def unit(self) -> str:
@@ -92,9 +107,12 @@ class Shape:
 
     def source(self) -> dict:
         """The defining data, as plain strings (hashed by the code generator)."""
-        return {"name": self.name, "kind": self.kind, "q": self.q, "x": self.x, "z": self.z,
-                "params": dict(self.params), "domain": list(self.domain), "h": self.h,
-                "alpha": self.alpha, "q_scale": self.q_scale}
+        source = {"name": self.name, "kind": self.kind, "q": self.q, "x": self.x, "z": self.z,
+                  "params": dict(self.params), "domain": list(self.domain), "h": self.h,
+                  "alpha": self.alpha, "q_scale": self.q_scale}
+        if self.closed_form != "auto":   # (so a curve's hash, and its cached kernels, stay as they were)
+            source["closed_form"] = self.closed_form
+        return source
 
 
 CATALOGUE: dict[str, Shape] = {s.name: s for s in (

@@ -74,7 +74,7 @@ from symvib.symbolic.derive import Derivation, derive
 from symvib.symbolic.symbols import C, g, mu
 
 __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
-           "DIGEST_PREFIX"]
+           "DIGEST_PREFIX", "route_plan", "module_source", "AUTO_ROUTE_SECONDS"]
 
 #: Gauss-Legendre nodes per panel of a numeric-route antiderivative.
 QUAD_NODES = 16
@@ -577,19 +577,63 @@ def _resolved(curve, source, name):
     return curve, source, name
 
 
+#: Budget of one closed-form route (s) for a curve with ``closed_form = "auto"``: a closed form
+#: SymPy finds quickly is taken, and otherwise the numeric ``F_sigma`` at once, so that a new
+#: curve's first run waits seconds rather than every route's full budget
+#: (:data:`~symvib.symbolic.integrals.ROUTE_SECONDS` each).
+AUTO_ROUTE_SECONDS = 2.0
+
+
+def route_plan(closed_form: str = "auto") -> tuple:
+    """``(routes, seconds)`` of the derivation of a curve whose ``F_sigma`` is found as
+    ``closed_form`` says (:data:`symvib.shapes.CLOSED_FORMS`).
+
+    Examples
+    --------
+    >>> route_plan("never")[0]
+    ()
+    >>> route_plan("auto")[1] == AUTO_ROUTE_SECONDS
+    True
+    """
+    from symvib.shapes import CLOSED_FORMS
+    from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
+
+    if closed_form == "never":
+        return (), ROUTE_SECONDS
+    if closed_form == "required":
+        return ROUTES, ROUTE_SECONDS
+    if closed_form == "auto":
+        return ROUTES, AUTO_ROUTE_SECONDS
+    raise ValueError(f"curve.closed_form: {closed_form!r} is not one of {', '.join(CLOSED_FORMS)}")
+
+
 def module_source(curve, *, source: dict | None = None, seconds: float | None = None, routes=None,
-                  origin="<generated module>") -> str:
+                  closed_form: str | None = None, origin="<generated module>") -> str:
     """Derive ``curve`` and return the text of its kernel module, checked by the loader's whitelist.
 
     Arguments as :func:`generate`'s; ``origin`` names the module in errors.  Nothing is written.
+    ``closed_form`` (``"auto"``, ``"required"``, ``"never"``: :func:`route_plan`) chooses the routes
+    and their budget where ``routes`` and ``seconds`` are not given; ``"required"`` raises a
+    ValueError naming ``curve.closed_form`` when a branch has no closed form.
     """
     from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
     curve, source, _ = _resolved(curve, source, None)
     check_param_names(p.name for p in curve.params)  # before the derivation: fail in milliseconds
     _py_literal(source)
+    closed_form = source.get("closed_form") if closed_form is None else closed_form
+    if closed_form is not None:
+        plan_routes, plan_seconds = route_plan(closed_form)
+        routes = plan_routes if routes is None else routes
+        seconds = plan_seconds if seconds is None else seconds
     d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds,
                routes=ROUTES if routes is None else routes)
+    missing = [s for s, br in d.branches.items() if br.F.route == "numeric"]
+    if closed_form == "required" and missing:
+        tried = "; ".join(f"{a.route}: {a.outcome}" for a in d.branches[missing[0]].F.attempts)
+        raise ValueError(f"curve.closed_form: 'required', but F_sigma of branch {missing[0]:+d} has no closed "
+                         f"form within the routes' budgets ({tried}); give closed_form = \"auto\" (the numeric "
+                         f"F_sigma) or a longer budget (symvib generate --budget)")
     text = module_text(d, source)
     verify_text(text, origin)  # what a generator writes must pass what a loader checks
     return text

@@ -30,6 +30,7 @@ from __future__ import annotations
 import builtins
 import hashlib
 import importlib.util
+import logging
 import re
 import sys
 import warnings
@@ -38,6 +39,9 @@ from pathlib import Path
 from symvib import cachetrust, provenance, safeio
 from symvib.paths import UserPathError
 from symvib.shapes import CATALOGUE, Shape
+
+#: Progress of slow steps (a new curve's derivation): shown on a terminal by the command line.
+_log = logging.getLogger(__name__)
 
 __all__ = ["load", "load_generated", "generated_dir", "cache_dir", "check_text", "verify_text", "check_interface",
            "KernelError", "DIGEST_PREFIX"]
@@ -487,7 +491,9 @@ def _generate(curve: Shape, source: dict, want: str, folder: Path, name: str):
     from symvib.codegen import generate as codegen  # the bridge: imports SymPy, only for a curve not generated yet
 
     path = folder / f"{name}.py"
-    text = codegen.module_source(curve, source=source, origin=path)
+    _log.info("deriving the kernels of curve %r (first use; closed_form = %s), then caching them",
+              curve.name, curve.closed_form)
+    text = codegen.module_source(curve, source=source, closed_form=curve.closed_form, origin=path)
     check_text(text, path, want)
     try:
         module = _exec(text, path, name)

@@ -69,7 +69,7 @@ from pathlib import Path
 
 from symvib import expr as _expr
 from symvib.paths import UserPathError, read_user_toml, safe_stem
-from symvib.shapes import CATALOGUE, Shape
+from symvib.shapes import CATALOGUE, CLOSED_FORMS, Shape
 
 __all__ = ["Scene", "SceneError", "SceneNumbers", "Check", "CHECKS", "load_scene", "resolve_scene", "scene_from_dict",
            "declared_domain", "friction_coefficient", "check_numbers", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS",
@@ -96,7 +96,7 @@ MAX_NAME_LENGTH = 200
 MAX_DESCRIPTION_LENGTH = 10_000
 
 _SECTIONS = {
-    "curve": {"shape", "x", "z", "q", "name", "domain", "h", "alpha", "q_scale", "params"},
+    "curve": {"shape", "x", "z", "q", "name", "domain", "h", "alpha", "q_scale", "params", "closed_form"},
     "parameters": None,  # free names: the curve's symbols
     "physics": {"g", "m", "mu", "alpha0", "restitution", "contact"},
     "limiters": {"left", "right"},
@@ -133,7 +133,8 @@ FIELD_UNITS = {
     "run.max_events": "1",
 }
 #: Scene fields that are text or names, not quantities (they have no unit).
-TEXT_FIELDS = ("name", "description", "curve.shape", "curve.name", "curve.q", "curve.params", "physics.contact")
+TEXT_FIELDS = ("name", "description", "curve.shape", "curve.name", "curve.q", "curve.params", "curve.closed_form",
+               "physics.contact")
 #: Units a value may carry (``alpha0 = "3 deg"``), by the SI unit of its field: unit -> factor to SI.
 #: ``deg`` is ``pi/180`` rad.  Only angles (and angular rates) take units in values.
 VALUE_UNITS = {
@@ -155,7 +156,7 @@ class SceneError(ValueError):
 
 
 #: Keys of ``Shape.source()`` that a scene file's ``[curve]`` table takes (``kind`` is implied by ``x``).
-_CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params")
+_CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params", "closed_form")
 
 
 def _curve_dict(sh: Shape) -> dict:
@@ -781,6 +782,11 @@ def _shape(curve: dict) -> Shape:
     for key, value in curve.items():
         if key != "params" and key != "domain" and not isinstance(value, str):
             raise SceneError(f"curve.{key}", f"must be a string, got {type(value).__name__}")
+    closed_form = curve.get("closed_form", "auto")
+    if closed_form not in CLOSED_FORMS:
+        raise SceneError("curve.closed_form", f"must be one of {', '.join(map(repr, CLOSED_FORMS))} (how F_sigma is "
+                                              f"found: closed-form routes briefly, all of them, or none), "
+                                              f"not {closed_form!r}")
     kind = "parametric" if "x" in curve else "graph"
     q = curve.get("q", "q" if kind == "parametric" else "x")
     _check_identifier(q, "curve.q", "the coordinate")
@@ -816,7 +822,7 @@ def _shape(curve: dict) -> Shape:
               for i, end in enumerate(domain)]
     return Shape(name=curve.get("name", "user-curve"), kind=kind, q=q, z=curve["z"], x=curve.get("x"),
                  params=dict(params), domain=tuple(str(d) for d in domain), h=curve.get("h"),
-                 alpha=curve.get("alpha"), q_scale=str(curve.get("q_scale", "1")))
+                 alpha=curve.get("alpha"), q_scale=str(curve.get("q_scale", "1")), closed_form=closed_form)
 
 
 def _domain_end(end, field, params) -> None:
