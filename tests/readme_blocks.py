@@ -1,12 +1,14 @@
-"""What several test modules read: the README's Python examples (one reader for every section) and
-``derivations/nbtool.py`` (the notebooks' tool, imported from its file)."""
+"""What several test modules read: the Python examples of the README and of the documents in docs/
+(one reader for every section) and ``derivations/nbtool.py`` (the notebooks' tool, imported from its file)."""
 import importlib.util
 import re
 import sys
 from pathlib import Path
 
-README = Path(__file__).resolve().parents[1] / "README.md"
-NBTOOL = README.parent / "derivations" / "nbtool.py"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+DOCS = ROOT / "docs"
+NBTOOL = ROOT / "derivations" / "nbtool.py"
 
 
 def code_blocks(text: str) -> list:
@@ -14,22 +16,26 @@ def code_blocks(text: str) -> list:
     return re.findall(r"```python\n(.*?)```", text, re.S)
 
 
-def python_blocks(heading: str) -> list:
-    """The ```python blocks of the README section whose heading line starts with ``heading``
-    (``"## ..."`` or ``"### ..."``), up to the next ``## `` heading; fails the test when there are none."""
-    text = README.read_text(encoding="utf-8")
+def python_blocks(heading: str, path: Path = README) -> list:
+    """The ```python blocks of the section of ``path`` (the README unless given) whose heading line
+    starts with ``heading`` (``"## ..."`` or ``"### ..."``), up to the next ``## `` heading; fails the
+    test when there are none."""
+    text = path.read_text(encoding="utf-8")
+    where = path.relative_to(ROOT).as_posix()
     parts = re.split(rf"\n{re.escape(heading)}[^\n]*\n", text, maxsplit=1)
-    assert len(parts) == 2, f"README.md has no '{heading}' section"
+    assert len(parts) == 2, f"{where} has no '{heading}' section"
     blocks = code_blocks(parts[1].split("\n## ", 1)[0])
-    assert blocks, f"the README's '{heading}' section has no python code block"
+    assert blocks, f"the '{heading}' section of {where} has no python code block"
     return blocks
 
 
-def run_section(heading: str, name: str) -> dict:
-    """Run the section's blocks in order in one namespace (``__name__`` = ``name``); return it."""
+def run_section(heading: str, name: str, path: Path = README) -> dict:
+    """Run the blocks of the section of ``path`` (the README unless given) in order in one namespace
+    (``__name__`` = ``name``); return it."""
     namespace = {"__name__": name}
-    anchor = "README.md#" + re.sub(r"[^a-z0-9 -]", "", heading.lstrip("# ").lower()).replace(" ", "-")
-    for block in python_blocks(heading):
+    anchor = f"{path.relative_to(ROOT).as_posix()}#" + re.sub(
+        r"[^a-z0-9 -]", "", heading.lstrip("# ").lower()).replace(" ", "-")
+    for block in python_blocks(heading, path):
         exec(compile(block, anchor, "exec"), namespace)  # noqa: S102
     return namespace
 

@@ -2,7 +2,7 @@
 
 The GIF is opened with Pillow and its frame count compared with ``round(fps * duration)``;
 the interpolated state is exact at the events; bad paths and formats are refused before
-anything is simulated; the README's example runs.
+anything is simulated; the example of docs/derivations.md, "Notebooks and animation", runs.
 """
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
-from readme_blocks import run_section
+from readme_blocks import DOCS, run_section
 
 from symvib.numeric import animation, explorer
 from symvib.numeric.driver import simulate
@@ -126,9 +126,9 @@ def test_symvib_run_animate_refuses_bad_paths(tmp_path, target, message):
     assert out.stderr.count("\n") == 1 and "event" not in out.stdout   # refused before the run
 
 
-def test_readme_animation_example_runs(tmp_path, monkeypatch):
+def test_docs_animation_example_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    namespace = run_section("## Notebooks and animation", "readme_animation")
+    namespace = run_section("## Notebooks and animation", "docs_animation", DOCS / "derivations.md")
     with Image.open(tmp_path / "circle.gif") as gif:
         assert gif.n_frames == round(namespace["fps"] * namespace["duration"])
     assert namespace["result"].count(EventKind.IMPACT) >= 1

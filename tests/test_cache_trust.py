@@ -1,5 +1,5 @@
 """A cache others can write is code others run: the kernel cache and numba's are used only while
-they are the user's alone, checked before any file in them is read (symvib.cachetrust; README "Trust"),
+they are the user's alone, checked before any file in them is read (symvib.cachetrust; docs/trust.md),
 and a cached module may hold only what the generator writes (symvib.numeric.kernels.verify_text).
 """
 import hashlib

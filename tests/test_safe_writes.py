@@ -1,5 +1,5 @@
 """Every file symvib writes or deletes: never through a symbolic link, never outside the folder named,
-never a file symvib cannot prove it wrote (symvib.safeio, symvib.numeric.sweep.owned; README "Trust").
+never a file symvib cannot prove it wrote (symvib.safeio, symvib.numeric.sweep.owned; docs/trust.md).
 
 Each family keeps several hostile inputs; each test asserts what an attacker wanted untouched is
 untouched (the target's bytes, an empty folder elsewhere) and that a refusal is one line naming the file.

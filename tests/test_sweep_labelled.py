@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from readme_blocks import run_section
+from readme_blocks import DOCS, run_section
 
 from symvib.cli import sweep_main as main
 from symvib.numeric.layout import EVENT_COLUMNS, STATUSES, SUMMARY_COLUMNS
@@ -300,11 +300,11 @@ def test_maps_label_axes_with_names_symbols_and_units(tmp_path, monkeypatch):
     assert any(bar.startswith("arrest (or rest) time") and bar.endswith("[s]") for _, _, bar in labels)
 
 
-# --------------------------------------------------------------------- README
+# ------------------------------------------------------------ docs/sweeps.md
 
-def test_readme_labelled_sweep_example_runs(tmp_path, monkeypatch):
+def test_docs_labelled_sweep_example_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    namespace = run_section("### Sweeps as labelled data", "readme_labelled_sweep")
+    namespace = run_section("## Sweeps as labelled data", "docs_labelled_sweep", DOCS / "sweeps.md")
     ds, lazy, res = namespace["ds"], namespace["lazy"], namespace["res"]
     assert tuple(ds["impacts"].dims) == ("qdot0", "mu")
     xr.testing.assert_identical(lazy.compute(), ds)

@@ -571,7 +571,7 @@ def save_run_figures(result, out_dir, *, prefix: str | None = None, only=None, p
     """
     check_output_dir(out_dir, "figure folder")
     out = safeio.check_root(out_dir, "figure folder")   # a real folder of the user's, not a link
-    # File names from user text: a plain stem, and never outside ``out_dir`` (docs: README "Trust").
+    # File names from user text: a plain stem, and never outside ``out_dir`` (docs/trust.md).
     prefix = safe_stem(prefix or result.scene.name)
     paths = []
     for name, fig, _ in run_figures(result, only=only, paper=paper):
