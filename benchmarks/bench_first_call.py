@@ -13,6 +13,10 @@ start-up included, and reports the wall time beside issue 15's target:
 * the README's ``bowl`` curve, first run: derivation, generation and the run
   (target <= 10 s), and its first sweep (derivation, generation, compilation and
   20,000 scenes);
+* the first run of the four curves of the corpus whose ``F_sigma`` the symbolic routes
+  find late or never (``sine-track``, ``tilted-parabola``, ``tan-wall``, ``pole-well``),
+  with each ``curve.closed_form`` of ``--closed-form`` (default ``auto``; issue 28's target
+  <= 10 s each);
 * the first sweep of ``--sweep-scenes`` scenes of the paper parabola, compilation
   included (target <= 15 s for 200,000);
 * the main install's sweep speed (numba is a dependency): the same sweep again in a
@@ -33,6 +37,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
+#: Corpus curves whose closed form SymPy finds late (the tangent-angle route) or never.
+NEW_CURVES = ("sine-track", "tilted-parabola", "tan-wall", "pole-well")
 #: The README's own curve ("Your own curve"), as a scene file.
 BOWL = """
 [curve]
@@ -75,6 +81,22 @@ def timed(args: list, backend: str | None = None, caches: Path | None = None) ->
     return wall, out.stdout + out.stderr
 
 
+def toml_text(tables: dict) -> str:
+    """A scene's tables (strings, numbers, lists of them) as TOML text."""
+    def value(v):
+        if isinstance(v, str):
+            return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return repr(v)
+
+    lines = [f"{k} = {value(v)}" for k, v in tables.items() if not isinstance(v, dict)]
+    for name, table in tables.items():
+        if isinstance(table, dict) and table:
+            lines += ["", f"[{name}]", *(f"{k} = {value(v)}" for k, v in table.items())]
+    return "\n".join(lines) + "\n"
+
+
 def grid(n: int) -> tuple:
     """``--vary`` options for about ``n`` scenes of the paper parabola (phidot0 x mu)."""
     a = max(2, round(math.sqrt(n * 5 / 4)))
@@ -86,6 +108,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sweep-scenes", type=int, default=200_000)
     ap.add_argument("--plain-scenes", type=int, default=2_000)
+    ap.add_argument("--closed-form", default="auto", help="curve.closed_form of the new curves (or a comma list)")
+    ap.add_argument("--only-new-curves", action="store_true", help="time the new curves' first runs only")
     args = ap.parse_args(argv)
     try:
         import numba  # noqa: F401
@@ -95,6 +119,17 @@ def main(argv=None) -> int:
         fast = False
     print(f"# first calls, empty caches, fresh processes; numba installed: {fast}")
     print(f"{'what':48s} {'wall':>9s}   target")
+    from symvib.checks.corpus import entry
+
+    for choice in args.closed_form.split(","):
+        for name in NEW_CURVES:
+            with tempfile.TemporaryDirectory() as tmp:
+                path = Path(tmp) / f"{name}.toml"
+                path.write_text(toml_text(entry(name).scene()), encoding="utf-8")
+                wall, _ = timed(["run", str(path), "--closed-form", choice])
+            print(f"{f'symvib run {name} (closed_form {choice})':48s} {wall:8.2f}s   <= 10 s (issue 28)")
+    if args.only_new_curves:
+        return 0
     for name in SCENES:
         wall, _ = timed(["run", str(ROOT / "symvib" / "scenes" / f"{name}.toml")])
         print(f"{'symvib run ' + name:48s} {wall:8.2f}s   <= 2 s")
