@@ -116,7 +116,7 @@ def main(argv=None):
 
         threads = numba.get_num_threads()
         numba.set_num_threads(1)
-        t_one, _ = best(lambda: run_sweep(base, args), 1)
+        t_one, _ = best(lambda: run_sweep(base, args), args.repeat)
         numba.set_num_threads(threads)
     statuses = {s: int(np.sum(res.status_names() == s)) for s in set(res.status_names())}
     print(f"events: {events} ({events / n:.2f} per scene, {int(res['impacts'].sum())} impacts); status {statuses}")
