@@ -376,7 +376,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "(default 0)")
     p.add_argument("--backend", default="auto", choices=("auto", "numba", "python"),
                    help="auto (default): the compiled engine where it is on disk, else plain Python; "
-                        "numba: compile it on first use (about 7 s, once per curve)")
+                        "numba: compile it on first use (seconds, once per curve: docs/benchmarks.md)")
     p.add_argument("--wall-time", type=float, default=None, metavar="SECONDS",
                    help="seconds the plain-Python engine may compute before the run ends with status "
                         "wall_time_limit (default 40; 0: no limit; the compiled engine has no limit)")

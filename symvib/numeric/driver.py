@@ -150,8 +150,8 @@ def run_backend(shape, backend: str = "auto", entry: str = "simulate_bound") -> 
     for a run, ``"sample_bound"`` for its samples) is already on disk (compiled by an
     earlier ``backend="numba"`` run; :func:`symvib.numeric.engine.bind.is_compiled`),
     and the plain-Python engine otherwise (milliseconds per paper scene, where a
-    first compilation takes about 15 s).  ``$SYMVIB_BACKEND`` and an explicit
-    backend are obeyed.  Sweeps compile (:func:`sweep_function`).
+    first compilation takes seconds: docs/benchmarks.md, "The driver and first
+    calls").  ``$SYMVIB_BACKEND`` and an explicit backend are obeyed.  Sweeps compile (:func:`sweep_function`).
     """
     if backend != "auto" or os.environ.get(BACKEND_ENV):
         return resolve_backend(backend)
@@ -259,7 +259,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         computes them on first use, so a run costs its events only.
     backend : {"auto", "numba", "python"}
         ``"auto"``: the compiled engine where it is on disk already, else the plain one
-        (:func:`run_backend`); ``"numba"`` compiles it on first use (about 20 s, once).
+        (:func:`run_backend`); ``"numba"`` compiles it on first use (once per curve; its
+        time: docs/benchmarks.md, "The driver and first calls").
     samples_per_interval : int, optional
         Samples per motion interval, at least (each logged interval is cut into
         :func:`sample_pieces` equal pieces in ``q``, each with its Gauss nodes,

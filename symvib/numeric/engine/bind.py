@@ -71,11 +71,11 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
 
     On numba, the default is an engine specialized to the curve (its kernels
     inlined; compiled on first use and cached on disk under the curve's module
-    and input hash: for the parabola 0.9 s of CPU for the kernels, then 6.7 s
-    for a sweep or a single run, 2 s for a second entry point in the same
-    process).  ``shared=True`` takes the engine compiled once per number of
-    curve parameters (12 s), with the kernels as first-class functions (a new
-    curve then costs its kernels only, 0.5-1.1 s; runs are about 12 % slower).
+    and input hash; the kernels first, then the entry point, a second entry
+    point costing less in the same process).  ``shared=True`` takes the engine
+    compiled once per number of curve parameters, with the kernels as
+    first-class functions (a new curve then costs its kernels only; runs are
+    slower).  Compile times and the runs' speed: docs/benchmarks.md.
     """
     if backend == "python":
         from symvib.numeric.engine.plain import plain_entries
