@@ -39,6 +39,7 @@ True
 """
 from __future__ import annotations
 
+import logging
 import math
 import os
 import time
@@ -60,6 +61,9 @@ __all__ = ["simulate", "NODES", "MAX_F_PANELS", "check_panels", "quiet_compiler"
            "backend_available", "resolve_backend", "run_backend", "checked_status",
            "guarded_sweep", "check_wall_time", "DEFAULT_WALL_TIME",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
+
+#: Progress of slow steps (preparing a user curve): shown on a terminal by the command line.
+_log = logging.getLogger(__name__)
 
 #: Gauss-Legendre nodes per quadrature panel (a panel's accuracy; the tolerance decides how many panels).
 NODES = 16
@@ -600,6 +604,8 @@ def _run_shape(scene):
     ``initial.q`` when a singular point lies inside it (:func:`symvib.symbolic.singular.regular_shape`)."""
     if scene.shape.in_catalogue:
         return scene.shape
+    # (seconds: SymPy's import, the singular points, and for a new curve its derivation)
+    _log.info("preparing curve %r: its singular points and kernels", scene.shape.name)
     from symvib.symbolic.singular import regular_shape
 
     return regular_shape(scene)
