@@ -31,12 +31,11 @@ import numpy as np
 
 from symvib.numeric.events import EventKind
 from symvib.numeric.scene import packaged_scene
+from symvib.shapes import PAPER_SCENES  # the scenes the claims are checked on
 
 __all__ = ["Claim", "Interval", "CLAIM_KEYS", "PAPER_SCENES", "ELASTIC_K", "DENSE_POINTS", "paper_runs", "intervals",
            "dense", "conclusions", "conclusions_markdown", "several_impacts_bounds"]
 
-#: The paper's scenes the claims are checked on (files in symvib/scenes).
-PAPER_SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
 #: The restitution of the paper's conclusions: the ideally elastic impact.
 ELASTIC_K = 1.0
 #: Samples of q per motion interval.

@@ -40,16 +40,15 @@ from pathlib import Path
 from symvib import safeio
 from symvib.errata import ALPHA0_READINGS, REMARK
 from symvib.numeric.scene import packaged_scene
+from symvib.shapes import PAPER_SCENES
 
 __all__ = ["SCENES", "LOW_K", "HIGH_K", "run_paper", "ALPHA0_READINGS", "main"]
 
-#: The paper's scenes (files in symvib/scenes) and the figure numbers they reproduce.
-SCENES = [
-    ("paper-parabola", "figs. 6-11"),
-    ("paper-cycloid", "figs. 13-18"),
-    ("paper-circle-3.8", "fig. 20"),
-    ("paper-circle-7", "figs. 21-26"),
-]
+#: The figure numbers each of the paper's scenes reproduces.
+SCENE_FIGURES = {"paper-parabola": "figs. 6-11", "paper-cycloid": "figs. 13-18", "paper-circle-3.8": "fig. 20",
+                 "paper-circle-7": "figs. 21-26"}
+#: The paper's scenes (:data:`symvib.shapes.PAPER_SCENES`, files in symvib/scenes) with the figures they reproduce.
+SCENES = [(name, SCENE_FIGURES[name]) for name in PAPER_SCENES]
 #: The paper's figure each of a scene's figures reproduces (by figure name of
 #: :data:`symvib.numeric.figures.FIGURE_NAMES`; absent: not in the paper).
 PAPER_FIGURES = {

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["Shape", "CATALOGUE", "shape", "PAPER_SHAPES", "CLOSED_FORMS"]
+__all__ = ["Shape", "CATALOGUE", "shape", "PAPER_SHAPES", "PAPER_SCENES", "CLOSED_FORMS"]
 
 #: How a user curve's ``F_sigma`` (the antiderivative of eq. 2) is found when its kernels are first
 #: generated (``curve.closed_form``): ``"auto"`` tries the closed-form routes on a short budget and
@@ -164,6 +164,9 @@ CATALOGUE: dict[str, Shape] = {s.name: s for s in (
 
 #: The shapes the paper treats, in its order.
 PAPER_SHAPES = ("parabola", "cycloid", "circle")
+#: The paper's scenes, in its order (files ``symvib/scenes/NAME.toml``): the one list the paper
+#: job (:mod:`symvib.paper`), its conclusions (:mod:`symvib.conclusions`) and the benchmarks read.
+PAPER_SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
 
 
 def shape(name: str) -> Shape:

@@ -68,13 +68,13 @@ from importlib.resources import files
 from pathlib import Path
 
 from symvib import safeio
+from symvib.shapes import PAPER_SCENES
 
 __all__ = ["Setting", "paper_scenes", "reference_events", "random_scenes", "run_setting",
            "ratio_at_equal_accuracy", "scene_key", "shipped", "work_precision", "stability", "references",
            "REFERENCE_NAME", "RANDOM_TRUTH_NAME"]
 
-#: The paper scenes of the work-precision diagram, each with k = 1 and k = 0.8.
-PAPER_SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
+#: The restitutions each paper scene (:data:`symvib.shapes.PAPER_SCENES`) of the work-precision diagram runs with.
 RESTITUTIONS = (1.0, 0.8)
 #: Gauss nodes per panel of symvib's driver (its accuracy knob).
 SYMVIB_NODES = (1, 2, 3, 4, 6, 8, 12, 16, 24)
