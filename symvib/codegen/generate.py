@@ -598,13 +598,10 @@ def route_plan(closed_form: str = "auto") -> tuple:
     from symvib.shapes import CLOSED_FORMS
     from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
-    if closed_form == "never":
-        return (), ROUTE_SECONDS
-    if closed_form == "required":
-        return ROUTES, ROUTE_SECONDS
-    if closed_form == "auto":
-        return ROUTES, AUTO_ROUTE_SECONDS
-    raise ValueError(f"curve.closed_form: {closed_form!r} is not one of {', '.join(CLOSED_FORMS)}")
+    plans = {"auto": (ROUTES, AUTO_ROUTE_SECONDS), "required": (ROUTES, ROUTE_SECONDS), "never": ((), ROUTE_SECONDS)}
+    if closed_form not in plans:
+        raise ValueError(f"curve.closed_form: {closed_form!r} is not one of {', '.join(CLOSED_FORMS)}")
+    return plans[closed_form]
 
 
 def module_source(curve, *, source: dict | None = None, seconds: float | None = None, routes=None,
@@ -628,8 +625,8 @@ def module_source(curve, *, source: dict | None = None, seconds: float | None = 
         seconds = plan_seconds if seconds is None else seconds
     d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds,
                routes=ROUTES if routes is None else routes)
-    missing = [s for s, br in d.branches.items() if br.F.route == "numeric"]
-    if closed_form == "required" and missing:
+    missing = [s for s, br in d.branches.items() if br.F.route == "numeric"] if closed_form == "required" else []
+    if missing:
         tried = "; ".join(f"{a.route}: {a.outcome}" for a in d.branches[missing[0]].F.attempts)
         raise ValueError(f"curve.closed_form: 'required', but F_sigma of branch {missing[0]:+d} has no closed "
                          f"form within the routes' budgets ({tried}); give closed_form = \"auto\" (the numeric "
