@@ -195,3 +195,15 @@ def test_reserved_parameter_names():
 
     with pytest.raises(CurveError, match="reserved in kernel modules"):
         codegen.module_text(derive(graph("x**2/numpy")), {"name": "bad"})
+
+
+def test_a_kernel_takes_each_sine_and_cosine_once_and_its_tangent_from_them():
+    """The paper's parabola in ``phi``: a node of the time quadrature needs ``tan(phi)`` and
+    ``cos(phi)**3``; the kernel computes one sine and one cosine (a tangent costs about both)."""
+    import ast
+
+    tree = ast.parse((GENERATED / "parabola.py").read_text())
+    for fn in (f for f in tree.body if isinstance(f, ast.FunctionDef) and f.name in ("node_p_scalar", "node_m_scalar")):
+        calls = [ast.unparse(c.func) for c in ast.walk(fn) if isinstance(c, ast.Call)]
+        assert calls.count("math.sin") == 1 and calls.count("math.cos") == 1, (fn.name, calls)
+        assert "math.tan" not in calls, fn.name

@@ -189,6 +189,34 @@ class _Math(_NoConditionals, _BigNumbers, PythonCodePrinter):
         return f"math.copysign(1.0, {self.doprint(expr.args[0])})"
 
 
+def _shared_trig(pre: list, exprs: list) -> tuple:
+    """The sines and cosines of a kernel computed once, its tangents from them: ``(prelude, pre, exprs)``.
+
+    Where a kernel takes ``tan(a)`` and also ``cos(a)`` or ``sin(a)``, the prelude assigns
+    ``_sin0 = sin(a)``, ``_cos0 = cos(a)``, ``_tan0 = _sin0 / _cos0`` and the expressions take those
+    symbols: a sine and a cosine cost about what a tangent alone does (the paper's parabola in
+    ``phi``: a node of the time quadrature took ``tan(phi)`` and ``cos(phi)**3``).
+
+    >>> a = sp.Symbol("a")
+    >>> prelude, _, exprs = _shared_trig([], [sp.tan(a) ** 2 * sp.cos(a) ** 3, sp.tan(2 * a)])
+    >>> prelude, exprs
+    ([(_sin0, sin(a)), (_cos0, cos(a)), (_tan0, _sin0/_cos0)], [_cos0**3*_tan0**2, tan(2*a)])
+    """
+    everything = [e for _, e in pre] + exprs
+    found = set().union(*(e.atoms(sp.tan, sp.sin, sp.cos) for e in everything)) if everything else set()
+    shared = {f.args[0] for f in found if isinstance(f, (sp.sin, sp.cos))}
+    angles = sorted({f.args[0] for f in found if isinstance(f, sp.tan) and f.args[0] in shared},
+                    key=sp.default_sort_key)
+    prelude, swap = [], {}
+    for i, angle in enumerate(angles):
+        sin, cos, tan = (sp.Symbol(f"_{f}{i}") for f in ("sin", "cos", "tan"))
+        prelude += [(sin, sp.sin(angle)), (cos, sp.cos(angle)), (tan, sin / cos)]
+        swap.update({sp.sin(angle): sin, sp.cos(angle): cos, sp.tan(angle): tan})
+    if not swap:
+        return [], pre, exprs
+    return prelude, [(sym, e.xreplace(swap)) for sym, e in pre], [e.xreplace(swap) for e in exprs]
+
+
 def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
     """Source of one kernel: cse'd assignments, then the return (a tuple for an ``sp.Tuple``).
 
@@ -200,6 +228,7 @@ def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
         pre = sorted(expr[0].items(), key=lambda kv: kv[0].name)
         expr = expr[1]
     exprs = list(expr) if isinstance(expr, sp.Tuple) else [expr]
+    prelude, pre, exprs = _shared_trig(pre, exprs)
     replacements, reduced = sp.cse([e for _, e in pre] + exprs, symbols=sp.numbered_symbols("_t"),
                                    order="canonical")
     pre_reduced, reduced = reduced[:len(pre)], reduced[len(pre):]
@@ -211,16 +240,18 @@ def _function(name: str, args: tuple, expr, doc: str, printer) -> str:
         except CurveError as err:
             raise CurveError(f"kernel {name}: {err}") from None
 
+    for sym, sub in prelude:
+        lines.append(f"    {sym} = {text(sub)}")
     for sym, sub in replacements:
         lines.append(f"    {sym} = {text(sub)}")
     for (sym, _), red in zip(pre, pre_reduced):
         lines.append(f"    {sym} = {text(red)}")
     bodies = []
-    placeholders = {str(sym) for sym, _ in pre}
+    placeholders = {str(sym) for sym, _ in pre + prelude}
     for part, red in zip(exprs, reduced):
         body = text(red)
         used = {str(s) for s in part.free_symbols} | _called_args(part)
-        for sym, value in pre:
+        for sym, value in pre + prelude[::-1]:
             if str(sym) in used:
                 used |= {str(x) for x in value.free_symbols}
         used -= placeholders
