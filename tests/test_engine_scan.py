@@ -68,3 +68,24 @@ def test_a_full_row_stops_the_scan_where_it_was(scan):
     assert grown.shape[1] == 2 * roots.shape[1]
     for row in range(roots.shape[0]):
         assert np.array_equal(grown[row, :count[row]], roots[row, :count[row]])
+
+
+def test_the_turn_of_a_scan_step_is_never_below_the_angle_and_exact_beyond_45_degrees():
+    """The scan's steps are sized by the angle between the tangents at their ends: its tangent where
+    it is small (cheaper than atan2; a little more, so a step comes out shorter, never longer)."""
+    from symvib.numeric.engine.scan import turn_angle
+
+    rng = np.random.default_rng(3)
+    for _ in range(20000):
+        theta = rng.uniform(-math.pi, math.pi) * 10 ** rng.uniform(-6, 0)
+        size = 10 ** rng.uniform(-8, 8)
+        cross, dot = size * math.sin(theta), size * math.cos(theta)
+        angle = abs(math.atan2(cross, dot))
+        got = turn_angle(cross, dot)
+        assert angle * (1 - 1e-15) <= got <= angle * 4 / math.pi * (1 + 1e-15) + 1e-300
+        if angle > math.pi / 4 * (1 + 1e-12):
+            assert got == angle
+        if angle < 1 / 16:
+            assert got <= angle * (1 + angle * angle / 3 * 1.01 + 1e-14)  # (and rounding)
+    assert turn_angle(0.0, 0.0) == 0.0 and turn_angle(1.0, 0.0) == math.pi / 2
+    assert math.isnan(turn_angle(math.nan, 1.0))

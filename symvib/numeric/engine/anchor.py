@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, EPS, dF_edge, node
+from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, EPS, dF_edge, dFs, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, ROOT_RTOL
 
 __all__ = ["crit_near", "dF_best", "anchored_G", "root_anchored", "PANEL_Q"]
@@ -55,11 +55,12 @@ def dF_best(s, base, u, S, K, cp, roots, count):
     has lost its relative accuracy next to a known critical point (as the time quadrature takes it)."""
     mu = S.mu
     x = base + u
+    qc = crit_near(roots, count, s, x, EDGE_REACH * S.scale)
+    if qc != qc:
+        return dFs(s, x, mu, K, cp)  # no edge near: the kernel (cheaper than the node's)
     dF, hh, ex, _, _ = node(s, x, mu, K, cp)
     if abs(dF) < EDGE_SHARE * ex * ex * hh * (1.0 + mu):
-        qc = crit_near(roots, count, s, x, EDGE_REACH * S.scale)
-        if qc == qc:
-            return dF_edge(s, qc, (base - qc) + u, mu, K, cp)
+        return dF_edge(s, qc, (base - qc) + u, mu, K, cp)
     return dF
 
 

@@ -114,9 +114,13 @@ HOT_INLINE = ("cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
 NO_REFCOUNT = ("panel", "quad", "anchored_G", "root_anchored", "tail_time", "turn_departure", "time_excess",
                "root_time", "locate", "walk", "map_extend", "extend_side", "crossing", "branch_cut", "add_root",
                "room")
+#: numba's error model of the compiled engine and kernels: a division by zero gives inf or NaN (as
+#: numpy does; the run then ends ``non_finite``), not a Python exception, so no division carries a
+#: test and a branch to raise it (a few per cent of a sweep's time; docs/benchmarks.md).
+ERRORS = {"error_model": "numpy"}
 #: numba options of an engine function only compiled code calls: no Python or C wrapper
 #: to build (about 2.5 s of the parabola engine's compile).
-INNER = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
+INNER = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True, **ERRORS}
 
 
 def _signatures(ncp: int) -> dict:
@@ -186,7 +190,7 @@ def _compiled_kernels(module, ncp: int) -> tuple:
     wanted = {fname for fname, _, _ in KERNEL_INTERFACE.values()}
     # Every function the interface kernels may call: the module's float-only functions.
     compiled = _compiled_functions([module], lambda n: n.endswith("_scalar") or n in wanted,
-                                   options={f: {"cache": True} for f in wanted})
+                                   options={f: {"cache": True, **ERRORS} for f in wanted}, default=ERRORS)
     out = []
     for name, (fname, _, _) in KERNEL_INTERFACE.items():
         dispatcher = compiled[fname]
@@ -198,7 +202,8 @@ def _compiled_kernels(module, ncp: int) -> tuple:
 
 @cache
 def engine_digest() -> str:
-    """SHA-256 (hex, 20 digits) of the engine's source files, for cache invalidation (read once)."""
+    """SHA-256 (hex, 20 digits) of the engine's source files and compile options, for cache invalidation
+    (read once)."""
     from symvib.numeric import layout
     from symvib.numeric.engine import compiled, state
 
@@ -206,6 +211,8 @@ def engine_digest() -> str:
     # (the layout too: its codes and columns are compile-time constants of the engine)
     for mod in (*ENGINE_MODULES, state, compiled, layout):
         digest.update(Path(mod.__file__).read_bytes())
+    # (and the compile options, which numba's cache does not key on either)
+    digest.update(repr((INNER, HOT_INLINE, NO_REFCOUNT)).encode())
     return digest.hexdigest()[:20]
 
 
@@ -250,8 +257,8 @@ def _compiled_engine(ncp: int) -> dict:
     vec, mat = f64[::1], f64[:, ::1]
     rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat, vec, vec, f64, f64], Rules)
 
-    options = {name: {"cache": True} for name in ENTRY_POINTS}
-    options["sweep_block"] = {"cache": True, "nogil": True}
+    options = {name: {"cache": True, **ERRORS} for name in ENTRY_POINTS}
+    options["sweep_block"] = {"cache": True, "nogil": True, **ERRORS}
     # (not NO_REFCOUNT here: the kernels' structure is itself reference counted)
     compiled = _compiled_functions(ENGINE_MODULES, lambda n: not n.endswith("_bound") and n != "params_of",
                                    names={"params_of": _params_of(ncp)}, options=options, default=INNER)
@@ -327,10 +334,10 @@ def _specialized_engine(module, ncp: int) -> dict:
     from symvib.numeric.kernels import cache_dir
 
     tag = _tag(module)
-    options = {name: {"cache": True} for name in BOUND_ENTRIES}
+    options = {name: {"cache": True, **ERRORS} for name in BOUND_ENTRIES}
     # Threads of Python over blocks of scenes (threaded_sweep), not numba's parallel loop (prange):
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
-    options["sweep_bound"] = {"cache": True, "nogil": True}
+    options["sweep_bound"] = {"cache": True, "nogil": True, **ERRORS}
     options.update({name: {"inline": "always", **INNER}
                     for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE)})
     options.update({name: {"_nrt": False, **INNER} for name in NO_REFCOUNT})

@@ -27,7 +27,8 @@ from symvib.numeric.engine.laws import EPS, Fs
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update, root_G
 
 __all__ = ["End", "Region", "scratch", "map_new", "room", "grown_roots", "locate", "curve_scale", "branch_cut",
-           "next_cut", "CRIT_STEP", "CRIT_TURN", "WINDOW", "CHUNK", "DIP_ITER", "SCALE_POINTS", "SCALE_TURN"]
+           "next_cut", "turn_angle", "CRIT_STEP", "CRIT_TURN", "WINDOW", "CHUNK", "DIP_ITER", "SCALE_POINTS",
+           "SCALE_TURN"]
 
 #: Search window where no limiter bounds the motion, in units of q_scale.
 WINDOW = 2.0
@@ -268,6 +269,21 @@ def map_extend(region, roots, count, target, mu, K, cp, step):
     elif target < region[X_LO]:
         extend_side(region, roots, count, target, mu, K, cp, step, -1.0)
 
+def turn_angle(cross, dot):
+    """The angle between two tangents from their cross and dot products, ``|atan2(cross, dot)|``; where
+    it is at most 45 degrees (the scan's steps turn by about :data:`CRIT_TURN`) its tangent
+    ``|cross| / dot`` instead, which exceeds it by a factor of about ``1 + theta^2 / 3`` (at most
+    ``4 / pi``): the scan's steps come out shorter by that, never longer, and ``atan2`` had been
+    2 % of a sweep's time.
+
+    >>> round(turn_angle(1 / 32, 1.0) / math.atan(1 / 32) - 1, 6), turn_angle(1.0, -1.0), turn_angle(0.0, 0.0)
+    (0.000325, 2.356194490192345, 0.0)
+    """
+    if 0.0 < dot < math.inf and abs(cross) <= dot:
+        return abs(cross) / dot
+    return abs(math.atan2(cross, dot))
+
+
 def extend_side(region, roots, count, target, mu, K, cp, step, up):
     """Scan up (``up = 1``) or down (``up = -1``) until target is covered (or the domain ends), in
     steps over which the tangent turns by at most about :data:`CRIT_TURN` (:func:`scan_step`, the
@@ -291,7 +307,7 @@ def extend_side(region, roots, count, target, mu, K, cp, step, up):
             if (x - edge) * up > 0.0:
                 x = edge
             zp, xp = K.dz(x, *cp), K.dx(x, *cp)
-            turned = abs(math.atan2(xp_old * zp - zp_old * xp, xp_old * xp + zp_old * zp))
+            turned = turn_angle(xp_old * zp - zp_old * xp, xp_old * xp + zp_old * zp)
             dx = abs(x - x_old)
             turn = turned / dx if math.isfinite(turned) and dx > 0.0 else 0.0
             if turned <= 2.0 * CRIT_TURN or dx <= EDGE_RTOL * max(1.0, abs(x)) or turn == 0.0:

@@ -54,10 +54,17 @@ __all__ = ["quad", "panel", "zero_ratio", "ellipse_ratio", "tail_time", "turn_de
 #: closer than ROOT_RATIO times the half's length.
 ROOT_RATIO = 1.0
 #: Panels are graded geometrically from ``r = sqrt(delta)`` only where that is at least this
-#: fraction of the half's ``r`` span: a root closer than that is real and simple (a turning point
-#: stopped on the double before it, ``G`` of rounding size), and the integrand is analytic in ``r``
-#: far around it; error control refines whatever else needs it.
+#: fraction of the half's ``r`` span: a root closer than that is real and simple, and the
+#: integrand is analytic in ``r`` far around it; error control refines whatever else needs it
+#: (and a root within :data:`VIRTUAL_ROOT_RTOL`, a turning point stopped on the double before it,
+#: is where the half starts).
 ROOT_GRADE = 1e-3
+#: A root half whose (virtual) root lies at most this many length scales behind its anchor starts
+#: on the root with the weighted rule and takes the stretch to the anchor away in closed form (``G``
+#: linear over it: exact to about this, relative): a turning point is stopped on the double before
+#: it, where ``G`` is of rounding size, and the plain rule from there would halve its first panel
+#: down towards the root.
+VIRTUAL_ROOT_RTOL = 1e3 * EPS
 #: Smallest positive double, used to keep 1/sqrt(G) finite at a node on a root.
 TINY = np.finfo(float).tiny
 #: Rows of the quadrature's scratch array, one after the other in one flat array of
@@ -396,6 +403,15 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
             delta = Ge / gamma if Ge > 0.0 else 0.0
             r_lo = math.sqrt(delta)
             r_hi = math.sqrt(delta + half)
+            if 0.0 < delta <= VIRTUAL_ROOT_RTOL * scale:
+                # G of rounding size (a turning point stopped on the double before it): the half
+                # starts on the root itself with the weighted rule, and the time of the stretch from
+                # the root to the anchor, where G is linear, is taken away in closed form (tail_time).
+                _, hh, ex, _, _ = node(s, e, S.mu, K, cp)
+                tau0 = -2.0 * hh * ex * sqrt(Ge) / gamma
+                T += tau0
+                r_lo = 0.0
+                Gstart = 0.0
         else:
             delta = 0.0
             r_lo = 0.0
@@ -444,7 +460,8 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                     flag = QUAD_NEGATIVE
                     q_neg = q_min
                     if kh == 0:
-                        q_ok, G_ok = e + d * ((r1 * r1 - delta) if root else r1), Gstart
+                        x1 = max(r1 * r1 - delta, 0.0) if root else r1  # (a root before the anchor: 0)
+                        q_ok, G_ok = e + d * x1, Gstart if x1 > 0.0 else Ge
                     else:
                         q_ok, G_ok = 0.5 * (qa + qb), G_mid_a
                     return T, Wf, err, flag, o, q_ok, G_ok, q_neg
