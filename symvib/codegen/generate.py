@@ -68,7 +68,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from symvib import provenance, safeio
 from symvib.codegen import gauss
-from symvib.numeric.kernels import DIGEST_PREFIX, verify_text
+from symvib.kernelformat import DIGEST_PREFIX, verify_text
 from symvib.symbolic.curve import CurveError, generic_branch, removable_form
 from symvib.symbolic.derive import Derivation, derive
 from symvib.symbolic.symbols import C, g, mu

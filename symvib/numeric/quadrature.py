@@ -27,12 +27,12 @@ from functools import cache
 
 import numpy as np
 
+from symvib.quadrature_rules import MAX_NODES  # (no mpmath at import)
+
 __all__ = ["GaussRule", "rule", "MAX_NODES"]
 
 #: Name of the table module in the generated folder (as :data:`symvib.codegen.gauss.TABLE_MODULE`).
 TABLE_MODULE = "gauss_rules"
-#: Largest node count of a rule (as :data:`symvib.codegen.gauss.MAX_NODES`).
-MAX_NODES = 64
 
 
 @dataclass(frozen=True)
@@ -51,9 +51,9 @@ def rule(n: int) -> GaussRule:
     """The :class:`GaussRule` with ``n`` nodes (cached; arrays read-only).
 
     Nodes, weights and both integration matrices are correctly rounded (see
-    :mod:`symvib.codegen.gauss` for why the last ulp matters): read from the generated
+    :mod:`symvib.quadrature_rules` for why the last ulp matters): read from the generated
     table ``symvib.generated.gauss_rules`` for the tabulated ``n``, computed
-    with mpmath on first use otherwise.
+    with mpmath on first use otherwise (:func:`symvib.quadrature_rules.rule_mp`).
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_NODES:
         raise ValueError(f"nodes: must be an integer in [1, {MAX_NODES}], got {n!r}")
@@ -62,7 +62,7 @@ def rule(n: int) -> GaussRule:
 
     data = load_generated(TABLE_MODULE).RULES.get(n)
     if data is None:
-        from symvib.codegen.gauss import rule_mp
+        from symvib.quadrature_rules import rule_mp  # imports mpmath
 
         data = rule_mp(n)
     x, weights, cumulative, weighted = (np.array(a, dtype=float) for a in data)

@@ -7,6 +7,8 @@ Python reads them as any tuple.
 :data:`KERNEL_INTERFACE` is the contract between the code generator and the
 engine: for each kernel the engine calls, the function of a generated module
 that provides it and the arguments that come before the curve's parameters.
+It is declared with the rest of a generated module's format in
+:mod:`symvib.kernelformat` and named here too.
 :func:`symvib.codegen.generate.generate` checks every module it writes
 against it, and :func:`symvib.numeric.kernels.load` every module it loads.
 
@@ -21,29 +23,9 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno"]
+from symvib.kernelformat import KERNEL_INTERFACE  # declared with the format of a generated module
 
-#: engine name -> (function of the generated module, arguments before the curve's
-#: parameters, number of floats returned).
-KERNEL_INTERFACE = {
-    "F_p": ("F_p_scalar", ("q", "mu"), 1),
-    "F_m": ("F_m_scalar", ("q", "mu"), 1),
-    "dF_p": ("dF_p_scalar", ("q", "mu"), 1),
-    "dF_m": ("dF_m_scalar", ("q", "mu"), 1),
-    "ddF_p": ("ddF_p_scalar", ("q", "mu"), 1),
-    "ddF_m": ("ddF_m_scalar", ("q", "mu"), 1),
-    "node_p": ("node_p_scalar", ("q", "mu"), 5),
-    "node_m": ("node_m_scalar", ("q", "mu"), 5),
-    "z": ("z_scalar", ("q",), 1),
-    "h": ("h_scalar", ("q",), 1),
-    "dx": ("dx_scalar", ("q",), 1),
-    "dz": ("dz_scalar", ("q",), 1),
-    "alpha": ("alpha_scalar", ("q",), 1),
-    "kappa": ("kappa_scalar", ("q",), 1),
-    "N_w": ("N_w_scalar", ("q", "w", "g"), 1),
-    "q_scale": ("q_scale_scalar", (), 1),
-    "domain": ("domain", (), 2),
-}
+__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno"]
 
 
 class Kernels(NamedTuple):
