@@ -5,6 +5,7 @@ import pkgutil
 from pathlib import Path
 
 import pytest
+from import_names import imported_module, own_and_package
 
 import symvib
 
@@ -36,19 +37,12 @@ def _sources():
 def _private_imports(path: Path, root: Path = PACKAGE) -> list:
     """``(line, imported module, name)`` of every ``from M import _name`` in ``path`` (a file of the
     package folder ``root``) with M another module."""
-    rel = path.relative_to(root)
-    own = ".".join(("symvib", *rel.with_suffix("").parts)).removesuffix(".__init__")
-    package = own if rel.name == "__init__.py" else own.rpartition(".")[0]
+    own, package = own_and_package(path, root)
     out = []
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
         if not isinstance(node, ast.ImportFrom) or node.module == "__future__":
             continue
-        if node.level:
-            base = package.split(".")
-            base = base[:len(base) - node.level + 1]
-            module = ".".join(base + ([node.module] if node.module else []))
-        else:
-            module = node.module or ""
+        module = imported_module(node, package)
         if module == own:
             continue
         for alias in node.names:

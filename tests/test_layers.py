@@ -10,6 +10,7 @@ import ast
 from pathlib import Path
 
 import pytest
+from import_names import imported_module, own_and_package
 
 import symvib
 
@@ -35,9 +36,7 @@ def _imports(path: Path, root: Path | None = None) -> list:
     """``(imported module, enclosing function or None, line)`` of every import in ``path`` (a file
     of the package folder ``root``), relative imports resolved; ``from M import name`` also yields
     ``M.name`` (it may be a submodule)."""
-    rel = path.relative_to(root or PACKAGE)
-    own = ".".join(("symvib", *rel.with_suffix("").parts))
-    package = own.removesuffix(".__init__") if rel.name == "__init__.py" else own.rpartition(".")[0]
+    _, package = own_and_package(path, root or PACKAGE)
     tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     out = []
 
@@ -49,12 +48,7 @@ def _imports(path: Path, root: Path | None = None) -> list:
             if isinstance(child, ast.Import):
                 out.extend((alias.name, function, child.lineno) for alias in child.names)
             elif isinstance(child, ast.ImportFrom):
-                if child.level:
-                    base = package.split(".")
-                    base = base[:len(base) - child.level + 1]
-                    module = ".".join(base + ([child.module] if child.module else []))
-                else:
-                    module = child.module or ""
+                module = imported_module(child, package)
                 out.append((module, function, child.lineno))
                 out.extend((f"{module}.{alias.name}", function, child.lineno) for alias in child.names)
             visit(child, function)

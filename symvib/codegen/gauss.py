@@ -10,11 +10,10 @@ computes other node counts with the same function on first use).
 
 Examples
 --------
->>> x, w, S, SW = rule_mp(3)
->>> x[1], round(w[1] * 9, 15)             # nodes 0, +-sqrt(3/5); weights 5/9, 8/9
-(0.0, 8.0)
->>> round(sum(S[2]), 15) == round(x[2] + 1, 15)  # integral of 1 from -1 to x_3
+>>> 16 in TABULATED and max(TABULATED) <= MAX_NODES   # the driver's default rule is in the table
 True
+>>> [round(v * 3 ** 0.5, 15) for v in rule_mp(2)[0]]   # the 2-point rule's nodes, -+1/sqrt(3)
+[-1.0, 1.0]
 """
 from __future__ import annotations
 
