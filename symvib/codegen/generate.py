@@ -203,7 +203,7 @@ def _shared_trig(pre: list, exprs: list) -> tuple:
     ([(_sin0, sin(a)), (_cos0, cos(a)), (_tan0, _sin0/_cos0)], [_cos0**3*_tan0**2, tan(2*a)])
     """
     everything = [e for _, e in pre] + exprs
-    found = set().union(*(e.atoms(sp.tan, sp.sin, sp.cos) for e in everything)) if everything else set()
+    found = set().union(*(e.atoms(sp.tan, sp.sin, sp.cos) for e in everything))
     shared = {f.args[0] for f in found if isinstance(f, (sp.sin, sp.cos))}
     angles = sorted({f.args[0] for f in found if isinstance(f, sp.tan) and f.args[0] in shared},
                     key=sp.default_sort_key)

@@ -406,9 +406,8 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
             if 0.0 < delta <= VIRTUAL_ROOT_RTOL * scale:
                 # G of rounding size (a turning point stopped on the double before it): the half
                 # starts on the root itself with the weighted rule, and the time of the stretch from
-                # the root to the anchor, where G is linear, is taken away in closed form (tail_time).
-                _, hh, ex, _, _ = node(s, e, S.mu, K, cp)
-                tau0 = -2.0 * hh * ex * sqrt(Ge) / gamma
+                # the root to the anchor, where G is linear, is taken away in closed form.
+                tau0 = -tail_time(e, Ge, s, S, K, cp, roots, count)
                 T += tau0
                 r_lo = 0.0
                 Gstart = 0.0
