@@ -3,14 +3,14 @@
 Each takes a scene in any form a user has at hand: a :class:`~symvib.numeric.scene.Scene`,
 the path of a scene file, the name of a packaged scene (``"paper-parabola"``)
 or a dict of a scene file's tables, and hands it to the numeric wing
-(:func:`symvib.numeric.driver.simulate`, :func:`symvib.numeric.sweep.sweep`).
+(:func:`symvib.numeric.driver.simulate`, :func:`symvib.numeric.sweep.sweep`) with its
+curve prepared (:func:`symvib.prepare.prepare`).
 ``symvib.derive`` is the symbolic wing's :func:`symvib.symbolic.derive.derive`.
 
 This module imports nothing heavy: the driver and the sweep are imported when
-called, and neither imports SymPy for a curve whose kernels exist (a catalogue
-shape, or a user curve already generated); a new user curve's kernels are
-generated with SymPy once, and a user curve's singular points are searched with
-SymPy on each run (:func:`symvib.symbolic.singular.regular_shape`).
+called, and none of them imports SymPy for a curve already prepared (a catalogue
+shape, or a user curve whose kernels and singular points are on record); a new
+user curve is derived and searched with SymPy once (:mod:`symvib.prepare`).
 
 Examples
 --------
@@ -73,13 +73,19 @@ def simulate(scene, **options):
         (``result.events_frame()``) and energy budget.
     """
     from symvib.numeric.driver import simulate as _simulate
+    from symvib.prepare import prepare
 
-    return _simulate(load_scene(scene), **options)
+    scene = load_scene(scene)
+    options.setdefault("prepared", prepare(scene))
+    return _simulate(scene, **options)
 
 
 def sweep(scene, vary: dict, **options):
     """Sweep a scene given in any form :func:`load_scene` takes over the ``vary`` fields;
     ``options`` are :func:`symvib.numeric.sweep.sweep`'s (``random``, ``out``, ``backend``, ...)."""
     from symvib.numeric.sweep import sweep as _sweep
+    from symvib.prepare import prepare
 
-    return _sweep(load_scene(scene), vary, **options)
+    scene = load_scene(scene)
+    options.setdefault("prepared", prepare(scene))
+    return _sweep(scene, vary, **options)

@@ -224,7 +224,10 @@ def _cmd_run(args) -> int:
         changes["shape"] = dataclasses.replace(scene.shape, closed_form=args.closed_form)
     if changes:
         scene = scene.replace(**changes)
-    result = simulate(scene, backend=args.backend, rtol=rtol, atol=atol, wall_time=wall_time)
+    from symvib.prepare import prepare
+
+    result = simulate(scene, backend=args.backend, rtol=rtol, atol=atol, wall_time=wall_time,
+                      prepared=prepare(scene))
     print(f"scene {scene.name}: {scene.shape.name}, mu = {scene.mu:.6g}, k = {scene.k:g}, "
           f"limiters {scene.left} .. {scene.right}, {scene.shape.q}0 = {scene.q0:.6g}, "
           f"{scene.shape.q}dot0 = {scene.qdot0:.6g}")
@@ -559,8 +562,11 @@ def _cmd_sweep(args) -> int:
         value = getattr(args, name)
         return value if value is not None else conf.get(name, default)
 
-    res = sweep(scene, vary, random=pick("random", None), seed=pick("seed", 0), chunk=pick("chunk", DEFAULT_CHUNK),
-                log_events=pick("log_events", 0), nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite,
+    from symvib.prepare import prepare
+
+    res = sweep(scene, vary, prepared=prepare(scene), random=pick("random", None), seed=pick("seed", 0),
+                chunk=pick("chunk", DEFAULT_CHUNK), log_events=pick("log_events", 0),
+                nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite,
                 scheduler=args.scheduler, progress=not args.quiet, backend=args.backend,
                 storage=pick("format", "npz"))
     names = res.status_names()

@@ -93,17 +93,18 @@ def _kernels(name):
     from symvib import provenance
     from symvib.codegen import generate as codegen
     from symvib.numeric import kernels
+    from symvib.prepare import prepare
     from symvib.symbolic.integrals import ROUTES
-    from symvib.symbolic.singular import regular_shape
 
     e = entry(name)
-    shape = regular_shape(_scene(name))
+    shape = _scene(name).shape
     source = shape.source()
     stem = f"{kernels.module_name(shape.module)}_{provenance.input_hash(source)[:16]}"
     if not (kernels.cache_dir() / f"{stem}.py").exists():
         routes = () if "numeric" in e.tags else ROUTES_OF.get(name, ROUTES)
         codegen.generate(shape, kernels.cache_dir(), name=stem, source=source, routes=routes, seconds=ROUTE_BUDGET)
     mod = kernels.load(shape)
+    prepare(_scene(name))   # its singular points on record, for the numeric driver
     text = Path(mod.__file__).read_text(encoding="utf-8")
     kernels.check_text(text, mod.__file__, provenance.input_hash(source))   # the loader's check, again
     return shape, mod, text
@@ -192,10 +193,10 @@ SHORT_METRES, LONG_METRES = 1e-2, 1e2
 TAG_POINTS = 4001
 
 
-def _range(scene, c, values):
-    """The interval of ``q`` a run of the scene can use: between its limiters, else the curve's
-    (regular) domain, cut at 64 ``q_scale`` from the start where it is infinite."""
-    lo, hi = (float(end.subs(values)) for end in c.domain)
+def _range(scene, c, values, run):
+    """The interval of ``q`` a run of the scene can use: between its limiters, else its regular
+    domain (``run``, the prepare step's), cut at 64 ``q_scale`` from the start where it is infinite."""
+    lo, hi = run.lo, run.hi
     reach = 64.0 * float(c.q_scale.subs(values))
     lo = scene.left if scene.left is not None else max(lo, scene.q0 - reach)
     hi = scene.right if scene.right is not None else min(hi, scene.q0 + reach)
@@ -207,19 +208,19 @@ def test_tags_say_what_the_entry_exercises(name):
     import numpy as np
     import sympy as sp
 
-    from symvib.symbolic.singular import regular_shape
+    from symvib.prepare import prepare
 
     e = entry(name)
     scene = _scene(name)
-    shape = regular_shape(scene)
-    c = shape.curve()
+    c = scene.shape.curve()
+    run = prepare(scene).domain
     tags = set(e.tags)
     assert ("graph" in tags) == ("x" not in e.curve)
     assert ("hint" in tags) == bool({"h", "alpha", "q_scale"} & set(e.curve))
     carries_abs = any(x.has(sp.Abs, sp.sign) for x in (c.x, c.z, c.xp, c.zp, c.h, c.alpha, c.hp, c.kappa))
     assert ("abs" in tags) == carries_abs
     values = {p: scene.param_dict[p.name] for p in c.params}
-    lo, hi = _range(scene, c, values)
+    lo, hi = _range(scene, c, values, run)
     q = np.linspace(lo, hi, TAG_POINTS)[1:-1]
     with np.errstate(all="ignore"):
         kappa = np.broadcast_to(sp.lambdify([c.q], c.kappa.subs(values), "numpy")(q), q.shape)

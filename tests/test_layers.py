@@ -2,9 +2,11 @@
 
 Every import of every module under ``symvib/numeric/`` and ``symvib/codegen/`` is read with
 :mod:`ast` (inside functions too) and checked against the layers; the few known climbs are listed
-here, each with its reason, so that a new one fails.  What both wings share (the format of a
-generated module, :mod:`symvib.kernelformat`; the Gauss-Legendre computation,
-:mod:`symvib.quadrature_rules`) lives on the ground floor, ``symvib/``.
+here, each with its reason, so that a new one fails; the numeric wing has none (the prepare step,
+:mod:`symvib.prepare`, above both wings, makes what it receives).  What both wings share (the
+format of a generated module, :mod:`symvib.kernelformat`; the Gauss-Legendre computation,
+:mod:`symvib.quadrature_rules`; a run's regular domain from singular pieces, :mod:`symvib.regular`)
+lives on the ground floor, ``symvib/``.
 """
 import ast
 from pathlib import Path
@@ -16,17 +18,6 @@ import symvib
 
 PACKAGE = Path(symvib.__file__).resolve().parent
 
-#: Imports of ``symvib.codegen`` by the numeric wing: ``(file, function) -> reason``.
-NUMERIC_TO_CODEGEN = {
-    ("numeric/kernels.py", "_generate"): "the bridge: a user curve not generated yet is derived and generated",
-}
-#: Imports of ``symvib.symbolic`` by the numeric wing: ``(file, function) -> reason``.
-#: The prepare step (issue 25) removes these.
-NUMERIC_TO_SYMBOLIC = {
-    ("numeric/driver.py", "_singular_end"): "a singular end of the domain is found symbolically",
-    ("numeric/driver.py", "_run_shape"): "a singular end of the domain is found symbolically",
-    ("numeric/sweep/runner.py", "_refuse_singular_domain"): "a sweep refuses a singular domain symbolically",
-}
 #: Function-level imports of ``symvib.numeric`` by the code generator: ``(file, function) -> reason``
 #: (none at module level, ever).
 CODEGEN_TO_NUMERIC: dict = {}
@@ -81,16 +72,29 @@ def test_the_scan_sees_imports_in_functions_and_relative_ones(tmp_path):
     assert ("symvib.codegen", "f", 5) in found
 
 
-@pytest.mark.parametrize(("target", "known"), [("symvib.codegen", NUMERIC_TO_CODEGEN),
-                                               ("symvib.symbolic", NUMERIC_TO_SYMBOLIC)])
-def test_the_numeric_wing_climbs_only_where_known(target, known):
-    found = _climbs("numeric", target)
-    new = [f"symvib/{rel}:{line}: import of {target} in {function or 'the module'}"
-           for rel, function, line in found if (rel, function) not in known]
-    assert not new, (f"the numeric wing imports {target} (put what both need on the ground floor, symvib/):\n"
-                     + "\n".join(new))
-    gone = set(known) - {(rel, function) for rel, function, _ in found}
-    assert not gone, f"known climbs no longer there (remove them from the list): {sorted(gone)}"
+@pytest.mark.parametrize("target", ["symvib.codegen", "symvib.symbolic", "symvib.prepare", "sympy"])
+def test_the_numeric_wing_never_climbs(target):
+    """The numeric wing receives a prepared curve (symvib.prepare, above both wings, derives and
+    searches it): no import of the code generator, the symbolic wing or SymPy, not even in a function."""
+    found = _climbs("numeric", target) if target.startswith("symvib.") else _climbs_any("numeric", target)
+    assert not found, (f"the numeric wing imports {target} (what both need goes on the ground floor, symvib/; "
+                       "what needs SymPy goes through symvib.prepare):\n"
+                       + "\n".join(f"symvib/{rel}:{line} in {fn or 'the module'}" for rel, fn, line in found))
+
+
+def test_the_symbolic_wing_imports_nothing_numeric():
+    found = _climbs("symbolic", "symvib.numeric")
+    assert not found, "symvib/symbolic imports symvib.numeric:\n" + "\n".join(f"symvib/{r}:{ln}" for r, _, ln in found)
+
+
+def _climbs_any(folder: str, target: str) -> list:
+    """As :func:`_climbs`, for a module outside the package (``sympy``)."""
+    found = set()
+    for path in sorted((PACKAGE / folder).rglob("*.py")):
+        rel = path.relative_to(PACKAGE).as_posix()
+        found |= {(rel, function, line) for module, function, line in _imports(path)
+                  if module == target or module.startswith(target + ".")}
+    return sorted(found, key=lambda f: (f[0], f[2]))
 
 
 def test_the_code_generator_imports_nothing_numeric_at_module_level():
@@ -103,7 +107,7 @@ def test_the_code_generator_imports_nothing_numeric_at_module_level():
     assert not new, "symvib/codegen imports symvib.numeric in a function not listed:\n" + "\n".join(new)
 
 
-@pytest.mark.parametrize("name", ["kernelformat", "quadrature_rules"])
+@pytest.mark.parametrize("name", ["kernelformat", "quadrature_rules", "regular"])
 def test_the_ground_floor_imports_no_wing(name):
     found = [module for module, _, _ in _imports(PACKAGE / f"{name}.py")
              if module.split(".")[:2] in (["symvib", "numeric"], ["symvib", "codegen"], ["symvib", "symbolic"])

@@ -11,9 +11,10 @@ import math
 import pytest
 
 from symvib.numeric.scene import SceneError, scene_from_dict
+from symvib.prepare import prepare
 from symvib.shapes import CATALOGUE
 from symvib.symbolic.curve import graph, parametric
-from symvib.symbolic.singular import regular_interval, regular_shape
+from symvib.symbolic.singular import regular_interval
 
 INF = math.inf
 #: Agreement of a located singular point with the exact one (bisection to adjacent doubles).
@@ -109,9 +110,9 @@ def test_corners_of_parametric_curves(x, z, want, reason):
 
 def test_a_corner_is_a_singular_initial_position_and_bounds_the_limiters():
     with pytest.raises(SceneError, match="initial.q.*z' is discontinuous"):
-        regular_shape(_scene("abs(x)", 0.0))
+        prepare(_scene("abs(x)", 0.0))
     with pytest.raises(SceneError, match="limiters.left.*beyond a singular point"):
-        regular_shape(_scene("abs(x) + x**2", 0.5, limiters={"left": -0.2}))
+        prepare(_scene("abs(x) + x**2", 0.5, limiters={"left": -0.2}))
 
 
 @pytest.mark.parametrize("x, z, q0, want", [
@@ -137,7 +138,7 @@ def test_cusps_of_parametric_curves_bound_the_interval(x, z, q0, want):
 def test_singular_initial_position_is_a_scene_error(z, q0, params):
     scene = _scene(z, q0, params=params)
     with pytest.raises(SceneError) as err:
-        regular_shape(scene)
+        prepare(scene)
     assert err.value.field == "initial.q"
     assert "singular point" in str(err.value) and "\n" not in str(err.value)
 
@@ -152,28 +153,31 @@ def test_singular_initial_position_is_a_scene_error(z, q0, params):
 def test_limiter_beyond_a_singular_point_is_a_scene_error(z, q0, limiters, field):
     scene = _scene(z, q0, limiters=limiters)
     with pytest.raises(SceneError) as err:
-        regular_shape(scene)
+        prepare(scene)
     assert err.value.field == field
     assert "beyond a singular point" in str(err.value)
 
 
 def test_limiters_inside_the_regular_interval_are_accepted():
     scene = _scene("x**2 + 1/(x - 0.3)", 0.5, limiters={"left": 0.35, "right": 2.0})
-    shape = regular_shape(scene)
-    assert float(shape.domain[0]) > 0.3 and shape.domain[1] == "oo"
+    run = prepare(scene).domain
+    assert run.lo > 0.3 and run.hi == INF and run.narrowed
 
 
-def test_regular_user_curve_keeps_its_shape():
-    """No singular point in the domain: the run uses the scene's own shape (same module, same events)."""
+def test_regular_user_curve_keeps_its_module():
+    """No singular point in the domain: the run uses the curve's module as it is (same events)."""
+    from symvib.numeric.kernels import load
+
     scene = _scene("x**2/(2*p)", 0.5, params={"p": 1.0})
-    assert regular_shape(scene) is scene.shape
+    p = prepare(scene)
+    assert p.kernels is load(scene.shape) and not p.domain.narrowed and p.ends == (None, None)
 
 
 def test_narrowed_domain_stays_inside_the_pole():
-    shape = regular_shape(_scene("x**2 + 1/(x - a)", 0.5, params={"a": 0.3}))
-    lo = float(shape.domain[0])
-    assert 0.3 < lo < 0.3 + 1e-9
-    assert float(shape.q_scale) <= 0.2 + 1e-12  # panels no wider than the distance to the pole
+    run = prepare(_scene("x**2 + 1/(x - a)", 0.5, params={"a": 0.3})).domain
+    assert 0.3 < run.lo < 0.3 + 1e-9
+    assert run.scale <= 0.2 + 1e-12  # panels no wider than the distance to the pole
+    assert run.lo < run.q_ref < 0.5 + 1e-9   # a numeric F_sigma is integrated from inside the interval
 
 
 @pytest.mark.slow
@@ -223,7 +227,7 @@ def _reference_reversals(a, mu, g, x0, xd0, n):
 @pytest.mark.slow
 def test_pole_example_gives_the_reversals_of_an_independent_integration():
     """Issue 13, class 3: z = x^2 + 1/(x - 0.3) ran to t_max with 0 events; it has reversals."""
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     scene = _scene("x**2 + 1/(x - 0.3)", 0.5, qdot=1.0, mu=0.1)
     result = simulate(scene, samples=False)
@@ -245,12 +249,12 @@ def test_crashing_curves_run_without_a_traceback(z, q0):
     regular interval and, when it reaches a singular point, ends there with status
     reached_singular_point (success False), its message naming the point; never a success that
     does not close."""
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     scene = _scene(z, q0)
-    shape = regular_shape(scene)
+    run = prepare(scene).domain
     result = simulate(scene, samples=False)
-    lo, hi = (float(e) if e.strip("-") != "oo" else float(e.replace("oo", "inf")) for e in shape.domain)
+    lo, hi = run.lo, run.hi
     assert lo < result.q_final < hi or result.q_final in (lo, hi)
     assert result.status.value in ("reached_singular_point", "arrested", "t_max")
     assert math.isfinite(result.t_final)
@@ -280,7 +284,7 @@ POLES = [("x**2 + 1/(x - 0.3)", 0.0, 1.0, 0.3), ("x**2 + 1/(x - 0.3)", 0.0, -0.5
 @pytest.mark.parametrize("z, q0, qdot, pole", POLES)
 def test_a_run_into_a_pole_ends_reached_singular_point_naming_it(z, q0, qdot, pole):
     """It ended energy_budget_mismatch (E = -3440 J) or tolerance_not_met, which name no point."""
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     result = simulate(_scene(z, q0, qdot=qdot, t_max=5.0), samples=False, backend="python")
     assert result.status.value == "reached_singular_point" and not result.success
@@ -295,7 +299,7 @@ def test_a_run_into_a_pole_ends_reached_singular_point_naming_it(z, q0, qdot, po
 
 def test_a_pole_that_repels_is_no_end():
     """z -> +oo at the pole: the particle turns before it, and the run is a success."""
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     result = simulate(_scene("x**2 - 1/(x - 0.3)", 0.0, qdot=3.0, t_max=5.0), samples=False, backend="python")
     assert result.status.value == "t_max" and result.success
@@ -305,7 +309,7 @@ def test_a_pole_that_repels_is_no_end():
 def test_a_sweep_refuses_a_user_curve_with_a_singular_point_in_its_domain(tmp_path):
     """A sweep runs one kernel module for all rows: it names the regular domain to declare
     instead of integrating across the pole (simulate narrows; a sweep once bypassed that)."""
-    from symvib.numeric.sweep import sweep
+    from symvib import sweep
 
     scene = _scene("x**2 + 1/(x - 0.3)", 0.5)
     with pytest.raises(SceneError, match=r"curve\.domain.*singular point.*declare domain = \[\"0\.3") as info:
@@ -319,4 +323,5 @@ def test_a_sweep_refuses_a_user_curve_with_a_singular_point_in_its_domain(tmp_pa
 
     lo, hi = re.search(r'domain = \["([^"]+)", "([^"]+)"\]', str(info.value)).groups()
     assert 0.3 < float(lo) < 0.3 + 1e-9 and hi == "oo"
-    _refuse_singular_domain(scene.replace(shape=dataclasses.replace(scene.shape, domain=(lo, hi))))  # accepted
+    declared = scene.replace(shape=dataclasses.replace(scene.shape, domain=(lo, hi)))
+    _refuse_singular_domain(declared, prepare(declared))  # accepted

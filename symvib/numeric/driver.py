@@ -39,7 +39,7 @@ True
 """
 from __future__ import annotations
 
-import logging
+import importlib.util
 import math
 import os
 import time
@@ -53,7 +53,9 @@ from symvib.numeric.engine.state import Rules
 from symvib.numeric.events import EnergyBudget, Event, Result, Samples, Status, ZenoInfo, kind_of, status_of
 from symvib.numeric.kernels import load
 from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, SceneRow, StatusCode, Summary
+from symvib.numeric.prepared import Prepared, prepared_of
 from symvib.numeric.quadrature import rule
+from symvib.shapes import Shape
 
 __all__ = ["simulate", "NODES", "MAX_F_PANELS", "check_panels", "quiet_compiler",
            "RTOL", "ATOL", "check_tolerances", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET",
@@ -61,9 +63,6 @@ __all__ = ["simulate", "NODES", "MAX_F_PANELS", "check_panels", "quiet_compiler"
            "backend_available", "resolve_backend", "run_backend", "checked_status",
            "guarded_sweep", "check_wall_time", "DEFAULT_WALL_TIME",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
-
-#: Progress of slow steps (preparing a user curve): shown on a terminal by the command line.
-_log = logging.getLogger(__name__)
 
 #: Gauss-Legendre nodes per quadrature panel (a panel's accuracy; the tolerance decides how many panels).
 NODES = 16
@@ -108,7 +107,7 @@ BACKEND_ENV = "SYMVIB_BACKEND"
 #: point, a branch flip, a normal-force zero) or an overflow leaves a residual of the order of
 #: the energy it mislays.  A run beyond it ends with status ``energy_budget_mismatch``.
 BUDGET_RTOL = 1e-9
-#: (shape, kernel module, bound engine) by the shape's identity and the backend asked for.
+#: (kernels, bound engine) by the identity of the kernels (a module, or a prepared view) and the backend.
 _BOUND: dict = {}
 
 
@@ -117,11 +116,8 @@ def backend_available(name: str) -> bool:
     if name == "python":
         return True
     if name == "numba":
-        try:
-            import numba  # noqa: F401
-        except ImportError:
-            return False
-        return True
+        # Found, not imported: importing numba takes a few tenths of a second a plain run does not need.
+        return importlib.util.find_spec("numba") is not None
     raise ValueError(f"unknown backend {name!r}; use 'numba', 'python' or 'auto'")
 
 
@@ -137,17 +133,23 @@ def resolve_backend(backend: str) -> str:
     return backend
 
 
-def bound_engine(shape, backend: str = "auto"):
-    """``(kernel module, engine)`` of a shape on a backend (:func:`symvib.numeric.engine.bind`), cached."""
-    entry = _BOUND.get((id(shape), backend))
-    if entry is None or entry[0] is not shape or backend == "auto" and os.environ.get(BACKEND_ENV):
-        mod = load(shape)
-        entry = (shape, mod, bind(mod, resolve_backend(backend)))
-        _BOUND[(id(shape), backend)] = entry
-    return entry[1], entry[2]
+def _kernels(curve):
+    """The kernel module of ``curve``: a module (or a prepared view) as it is, a shape's from disk."""
+    return load(curve) if isinstance(curve, (Shape, str)) else curve
 
 
-def run_backend(shape, backend: str = "auto", entry: str = "simulate_bound") -> str:
+def bound_engine(curve, backend: str = "auto"):
+    """``(kernel module, engine)`` of a curve's kernels (a module, a prepared view, or a shape whose
+    module is on disk) on a backend (:func:`symvib.numeric.engine.bind`), cached."""
+    mod = _kernels(curve)
+    entry = _BOUND.get((id(mod), backend))
+    if entry is None or entry[0] is not mod or backend == "auto" and os.environ.get(BACKEND_ENV):
+        entry = (mod, bind(mod, resolve_backend(backend)))
+        _BOUND[(id(mod), backend)] = entry
+    return entry
+
+
+def run_backend(curve, backend: str = "auto", entry: str = "simulate_bound") -> str:
     """The backend one run of ``shape`` takes: a single scene never waits for a compiler.
 
     ``"auto"`` is numba only where the curve's compiled ``entry`` (``"simulate_bound"``
@@ -163,7 +165,7 @@ def run_backend(shape, backend: str = "auto", entry: str = "simulate_bound") -> 
         return "python"
     from symvib.numeric.engine.bind import is_compiled
 
-    return "numba" if is_compiled(load(shape), entry) else "python"
+    return "numba" if is_compiled(_kernels(curve), entry) else "python"
 
 
 #: Entries of the compiled engine whose disk-cache markers :func:`quiet_compiler` removes.
@@ -250,7 +252,7 @@ def check_tolerances(rtol, atol) -> tuple:
 
 def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = "auto",
              samples_per_interval: int | None = None, rtol: float = RTOL, atol: float = ATOL,
-             wall_time: float | None = None) -> Result:
+             wall_time: float | None = None, prepared: Prepared | None = None) -> Result:
     """Simulate ``scene`` event by event until arrest, rest, ``t_max`` or ``max_events``.
 
     Parameters
@@ -286,6 +288,11 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         ``wall_time_limit``, its events so far right and its message naming the time reached.
         The compiled engine has no clock and ignores it (it runs the largest ``max_events``
         in minutes).  Default: no limit (``symvib run`` sets one: ``--wall-time``).
+    prepared : Prepared, optional
+        The curve's kernels and the run's regular domain (:func:`symvib.prepare.prepare`,
+        which ``symvib.simulate`` calls).  Default: what is on disk
+        (:func:`~symvib.numeric.prepared.prepared_of`): a catalogue shape always is, a user
+        curve once prepared (else :class:`~symvib.numeric.prepared.NotPrepared`).
 
     Returns
     -------
@@ -298,9 +305,9 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
                          f"not {spi!r}")
     rtol, atol = check_tolerances(rtol, atol)
     wall_time = check_wall_time(wall_time)
-    shape = _run_shape(scene)
-    requested, backend = backend, run_backend(shape, backend)
-    mod, eng = bound_engine(shape, backend)
+    prep = prepared_of(scene) if prepared is None else prepared
+    requested, backend = backend, run_backend(prep.kernels, backend)
+    mod, eng = bound_engine(prep.kernels, backend)
     R = rules(nodes, rtol, atol)
     cp = tuple(float(v) for v in scene.param_values)
     check_panels(scene, mod, cp)
@@ -319,8 +326,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     # steps into a pole lose the budget or the interval into it cannot be timed, with those errors.
     singular, reached = None, {StatusCode.LEFT_DOMAIN: out.q, StatusCode.ENERGY_BUDGET_MISMATCH: out.q,
                                StatusCode.TOLERANCE_NOT_MET: out.q_bad}.get(status)
-    if reached is not None and shape is not scene.shape:
-        singular = _singular_end(scene, float(reached))
+    if reached is not None and prep.domain.narrowed:
+        singular = _singular_end(prep, scene, float(reached))
         if singular is not None:
             status = int(StatusCode.REACHED_SINGULAR_POINT)
     detail = "plastic" if scene.k == 0.0 else ""
@@ -346,7 +353,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
                                            f"{spi} would give about {wanted:,} samples, more than {MAX_SAMPLES:,}; "
                                            "ask for fewer (samples_per_interval) or a shorter run (run.max_events)")
         else:
-            sampler = partial(_lazy_samples, partial(_sample_engine, shape, requested, backend), cp, row,
+            sampler = partial(_lazy_samples, partial(_sample_engine, mod, requested, backend), cp, row,
                               out.intervals, out.n_intervals, R, scene, mod, pieces)
         interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], R)
     stats = {"intervals": int(out.n_intervals) if samples else None, "backend": backend, "t_err": float(out.t_err)}
@@ -392,7 +399,7 @@ def _no_samples(message):
     return None, message
 
 
-def _sample_engine(shape, requested: str, backend: str):
+def _sample_engine(mod, requested: str, backend: str):
     """The engine that computes the samples of a run on ``backend`` (asked for as ``requested``).
 
     The run's own, except where ``"auto"`` took the compiled engine and its samples
@@ -400,8 +407,8 @@ def _sample_engine(shape, requested: str, backend: str):
     run's interval log (the same quadrature; a run never waits for a compiler).
     """
     if backend == "numba" and requested == "auto":
-        backend = run_backend(shape, requested, "sample_bound")
-    return bound_engine(shape, backend)[1]
+        backend = run_backend(mod, requested, "sample_bound")
+    return bound_engine(mod, backend)[1]
 
 
 def _lazy_samples(engine_of, cp, row, ivs, ni, R, scene, mod, pieces):
@@ -587,28 +594,13 @@ def check_panels(scene, mod, cp) -> None:
                                           "on which the curve turns, or leave it out")
 
 
-def _singular_end(scene, q: float):
+def _singular_end(prep: Prepared, scene, q: float):
     """``(point, reason)`` of the singular point that ends the regular interval a run of ``scene``
-    stopped next to, at ``q`` (:func:`symvib.symbolic.singular.singular_ends`); None elsewhere."""
-    from symvib.symbolic.singular import singular_ends
-
-    for point, reason in singular_ends(scene):
-        if point is not None and abs(q - point) <= SINGULAR_REACH * abs(point - scene.q0):
-            return point, reason
+    stopped next to, at ``q`` (:attr:`Prepared.ends`); None elsewhere."""
+    for end in prep.ends:
+        if end is not None and abs(q - end[0]) <= SINGULAR_REACH * abs(end[0] - scene.q0):
+            return end
     return None
-
-
-def _run_shape(scene):
-    """The shape whose kernels run ``scene``: a catalogue shape as it is (regular on its
-    domain), a user curve with its domain narrowed to the regular interval around
-    ``initial.q`` when a singular point lies inside it (:func:`symvib.symbolic.singular.regular_shape`)."""
-    if scene.shape.in_catalogue:
-        return scene.shape
-    # (seconds: SymPy's import, the singular points, and for a new curve its derivation)
-    _log.info("preparing curve %r: its singular points and kernels", scene.shape.name)
-    from symvib.symbolic.singular import regular_shape
-
-    return regular_shape(scene)
 
 
 def plain_nodes(nodes: int) -> int:

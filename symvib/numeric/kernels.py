@@ -4,10 +4,12 @@
   ``symvib.generated``).
 * A user curve (its defining data: the same fields as a
   :class:`~symvib.shapes.Shape`) is looked up by its input hash in the cache
-  folder (``$SYMVIB_CACHE``, default ``~/.cache/symvib/kernels``); only when it
-  is missing is the code generator imported, which imports SymPy, and the
-  module is written there once, atomically (checked and imported before it is
-  renamed into place).
+  folder (``$SYMVIB_CACHE``, default ``~/.cache/symvib/kernels``).  When it is
+  missing, the caller's ``generate`` makes its text (the prepare step,
+  :func:`symvib.prepare.load_kernels`, passes the code generator's; this module
+  imports neither it nor SymPy), and the module is written there once,
+  atomically (checked and imported before it is renamed into place); without
+  ``generate`` a missing module is a :class:`KernelError`.
 
 Before any module runs, its text is read once and checked (:func:`~symvib.kernelformat.check_text`,
 the format of a generated module: :mod:`symvib.kernelformat`):
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import importlib.util
 import logging
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -136,7 +139,7 @@ def load_generated(name: str):
     return _import(path, name)
 
 
-def load(curve, *, check: bool = True):
+def load(curve, *, check: bool = True, generate=None):
     """The kernel module of ``curve``.
 
     Parameters
@@ -147,6 +150,9 @@ def load(curve, *, check: bool = True):
     check : bool
         Warn when a catalogue module's input hash differs from the current one
         (the shape or the generator changed since it was generated).
+    generate : callable, optional
+        ``generate(shape, source, origin) -> str``: the text of a user curve's module
+        when the cache has none (or a damaged one); without it that is a :class:`KernelError`.
 
     Returns
     -------
@@ -162,20 +168,21 @@ def load(curve, *, check: bool = True):
         curve = Shape(**curve)
     if not isinstance(curve, Shape):
         raise TypeError(f"load() needs a shape name, a Shape or its data, not {type(curve).__name__}")
-    key = repr(curve.source())
+    # (a user curve's module by its cache folder too: $SYMVIB_CACHE may change within a process)
+    key = repr(curve.source()) if curve.in_catalogue else (repr(curve.source()), os.environ.get(CACHE_ENV))
     module = _LOADED.get(key)
     if module is not None:
         return module
-    module = _load(curve, check)
+    module = _load(curve, check, generate)
     _LOADED[key] = module
     return module
 
 
-#: Modules already loaded in this process, by their shape's defining data.
+#: Modules already loaded in this process, by their shape's defining data (and a user curve's cache folder).
 _LOADED: dict = {}
 
 
-def _load(curve: Shape, check: bool):
+def _load(curve: Shape, check: bool, generate):
     source = curve.source()
     want = provenance.input_hash(source)
     if curve.in_catalogue:
@@ -207,19 +214,20 @@ def _load(curve: Shape, check: bool):
         except KernelError as err:
             # Tampered, truncated or from a broken generator: made again below.
             warnings.warn(f"{err}; regenerating it", stacklevel=3)
-    return _generate(curve, source, want, folder, name)
+    if generate is None:
+        raise KernelError(f"curve {curve.name!r} has no generated kernels in {folder} (symvib.prepare.load_kernels "
+                          "generates them)")
+    return _generate(curve, source, want, folder, name, generate)
 
 
-def _generate(curve: Shape, source: dict, want: str, folder: Path, name: str):
-    """Generate a user curve's module: derived, checked and imported from its text, and only then
-    written into the cache (whole, never through a link: :func:`symvib.safeio.write_text`); any
-    failure leaves nothing in the cache."""
-    from symvib.codegen import generate as codegen  # the bridge: imports SymPy, only for a curve not generated yet
-
+def _generate(curve: Shape, source: dict, want: str, folder: Path, name: str, generate):
+    """Generate a user curve's module: its text from ``generate``, checked and imported, and only
+    then written into the cache (whole, never through a link: :func:`symvib.safeio.write_text`);
+    any failure leaves nothing in the cache."""
     path = folder / f"{name}.py"
     _log.info("deriving the kernels of curve %r (first use; closed_form = %s), then caching them",
               curve.name, curve.closed_form)
-    text = codegen.module_source(curve, source=source, closed_form=curve.closed_form, origin=path)
+    text = generate(curve, source, path)
     check_text(text, path, want)
     try:
         module = _exec(text, path, name)

@@ -3,8 +3,8 @@
 physics.md ("Assumptions", regular curve) asks for ``x``, ``z`` twice
 differentiable and ``h > 0`` on the open interval the particle uses, bounded
 by the singular points (poles, cusps, the ends of a ``sqrt``).  A run must
-never integrate ``F_sigma`` or the time across such a point, so the driver
-asks this module for the largest open interval around the initial position
+never integrate ``F_sigma`` or the time across such a point, so the prepare
+step (:mod:`symvib.prepare`) asks this module for the largest open interval around the initial position
 on which ``x, z, x', z', h, 1/h, alpha`` and ``kappa`` are all finite and
 real, *with the scene's parameter values* (a pole of ``1/(x - a)`` moves with
 ``a``).
@@ -34,29 +34,22 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 import sympy as sp
 
+from symvib.regular import CORNER, CUSP, NOT_FINITE, NOT_REAL, SCAN_HALF_WIDTH, Regular, interval_in, scan_window
 from symvib.symbolic import budget
 
 __all__ = ["Regular", "regular_interval", "singular_pieces", "geometry", "corners"]
 
 #: Wall-clock budget (seconds) of the symbolic search (continuous_domain of every function).
 SYMBOLIC_SECONDS = 5.0
-#: Half width, in units of q_scale, of the searched window where the domain is infinite.
-SCAN_HALF_WIDTH = 64.0
 #: Points of the numeric scan over the window.
 SCAN_POINTS = 4097
 #: Bisection steps locating the edge of a region where the geometry is not finite and real.
 BISECT_STEPS = 60
-#: What a piece of a singular set is (its reason in messages).
-NOT_FINITE, NOT_REAL, CUSP = "not finite", "not finite and real", "zero (a cusp)"
-#: A corner: the argument of an ``Abs`` or ``sign`` in the first-order geometry changes sign and
-#: ``x', z', h`` or ``alpha`` jumps there.
-CORNER = "discontinuous (a corner)"
 #: The first-order geometry, where an ``Abs``/``sign`` whose argument changes sign may make a corner.
 FIRST_ORDER_LABELS = ("x'", "z'", "h", "alpha")
 #: One-sided values of a first-order function that differ by more than this (relative to ``h``,
@@ -64,11 +57,6 @@ FIRST_ORDER_LABELS = ("x'", "z'", "h", "alpha")
 CORNER_RTOL = 1e-8
 #: A corner within this distance (relative to ``max(1, |q|)``) of a piece found otherwise is that piece.
 MERGE_RTOL = 1e-9
-#: Distance, relative to q_scale (and to |q| beyond 1), kept between a run's domain end and a
-#: singular point, so that the kernels are finite at the end.
-EDGE_RTOL = 1e-12
-#: Smallest q_scale of a narrowed run, relative to the curve's (bounds the engine's work).
-MIN_SCALE_RATIO = 1 / 64
 #: Relative imaginary part above which a value counts as not real.
 IMAG_RTOL = 1e-12
 #: A sign change is a pole when the function, bisected to adjacent doubles, exceeds its
@@ -84,22 +72,6 @@ CUSP_RTOL = 1e-6
 CUSP_DIP = 0.9
 #: Functions of the geometry searched symbolically (the others only numerically: SymPy is slow on them).
 SYMBOLIC_LABELS = ("x", "z", "x'", "z'")
-
-
-@dataclass(frozen=True)
-class Regular:
-    """The open interval ``(lo, hi)`` around a point on which the curve is regular.
-
-    ``lo_reason``/``hi_reason`` say which function fails at a singular end
-    (``""`` where the end is the declared domain's).  ``at_start`` is set
-    instead when the point itself is singular.
-    """
-
-    lo: float
-    hi: float
-    lo_reason: str = ""
-    hi_reason: str = ""
-    at_start: str = ""
 
 
 def geometry(curve) -> tuple:
@@ -459,120 +431,5 @@ def regular_interval(curve, values: dict, q0: float, domain: tuple, *, reach=())
     """
     lo, hi = (float(v) for v in domain)
     scale = float(curve.q_scale.subs({p: values[p.name] for p in curve.params}))
-    width = SCAN_HALF_WIDTH * scale
-    points = [q0, *reach]
-    wlo = lo if math.isfinite(lo) else min(-width, min(points) - width)
-    whi = hi if math.isfinite(hi) else max(width, max(points) + width)
     key = tuple((p.name, float(values[p.name])) for p in curve.params)
-    pieces = singular_pieces(curve, key, wlo, whi)
-    left, right, lo_reason, hi_reason = lo, hi, "", ""
-    for a, b, label, kind in pieces:
-        reason = f"{label} is {kind}"
-        if a <= q0 <= b:
-            return Regular(q0, q0, at_start=reason)
-        if left < b < q0:
-            left, lo_reason = b, reason
-        if q0 < a < right:
-            right, hi_reason = a, reason
-    return Regular(left, right, lo_reason, hi_reason)
-
-
-#: Narrowed shapes already built, by (shape source, narrowed domain): the same object each time,
-#: so the driver's per-shape engine cache holds.
-_NARROWED: dict = {}
-#: Symbolic curves already built, by shape source.
-_CURVES: dict = {}
-#: Regular intervals already found, by (shape source, parameter values, q0, limiters).
-_INTERVALS: dict = {}
-
-
-def _end_text(v: float) -> str:
-    """A domain end as the text a Shape holds (exact: the shortest repr of the double)."""
-    return ("oo" if v > 0 else "-oo") if math.isinf(v) else repr(float(v))
-
-
-def _scene_curve(scene):
-    """The symbolic curve of ``scene``'s shape (built once per shape source)."""
-    import json
-
-    source = json.dumps(scene.shape.source(), sort_keys=True)
-    return _CURVES.get(source) or _CURVES.setdefault(source, scene.shape.curve())
-
-
-def _scene_interval(scene) -> Regular:
-    """:func:`regular_interval` around ``initial.q`` for ``scene`` (found once per shape source,
-    parameters, start and limiters)."""
-    import json
-
-    from symvib.numeric.scene import declared_domain
-
-    key = (json.dumps(scene.shape.source(), sort_keys=True), tuple(scene.params), scene.q0, scene.left, scene.right)
-    if key not in _INTERVALS:
-        reach = [v for v in (scene.left, scene.right) if v is not None]
-        _INTERVALS[key] = regular_interval(_scene_curve(scene), scene.param_dict, scene.q0, declared_domain(scene),
-                                           reach=reach)
-    return _INTERVALS[key]
-
-
-def singular_ends(scene) -> tuple:
-    """``((point, reason), (point, reason))``: the singular points at the left and right ends of the
-    regular interval around ``initial.q`` (:func:`regular_interval`; ``(None, "")`` where the end
-    is the declared domain's).  For the status ``reached_singular_point``."""
-    r = _scene_interval(scene)
-    return ((r.lo, r.lo_reason) if r.lo_reason else (None, ""), (r.hi, r.hi_reason) if r.hi_reason else (None, ""))
-
-
-def regular_shape(scene):
-    """The shape a run of ``scene`` uses: its own, or a copy with the domain narrowed
-    to the regular interval around ``initial.q`` (physics.md, "Events" 4).
-
-    A curve regular on its whole declared domain keeps its shape (and its kernel
-    module, so its events are unchanged).  Where a singular point lies inside the
-    declared domain, the run's domain ends there: the particle reaching it ends
-    the run with status ``left_domain`` (or ``energy_budget_mismatch`` when the steps
-    into the point lose the energy budget), and the numeric ``F_sigma`` is integrated
-    from a reference point inside the interval, never across the point.
-
-    Raises
-    ------
-    SceneError
-        ``initial.q`` when the initial position is itself singular;
-        ``limiters.left``/``limiters.right`` when a limiter lies beyond a singular
-        point (the particle cannot reach it).
-    """
-    import dataclasses
-    import json
-
-    from symvib.numeric.scene import SceneError, declared_domain
-
-    shape = scene.shape
-    lo, hi = declared_domain(scene)
-    curve = _scene_curve(scene)
-    r = _scene_interval(scene)
-    q = shape.q
-    if r.at_start:
-        raise SceneError("initial.q", f"{scene.q0!r} is a singular point of curve '{shape.name}' "
-                                      f"({r.at_start} at {q} = {scene.q0!r}); start inside a regular interval")
-    for label, v, ok, end, reason in (("limiters.left", scene.left, lambda v: v > r.lo, r.lo, r.lo_reason),
-                                      ("limiters.right", scene.right, lambda v: v < r.hi, r.hi, r.hi_reason)):
-        if v is not None and not ok(v):
-            raise SceneError(label, f"{v!r} is beyond a singular point of curve '{shape.name}' at {q} = {end!r} "
-                                    f"({reason}): the particle cannot get there from {q} = {scene.q0!r}")
-    if (r.lo, r.hi) == (lo, hi):
-        return shape
-    # The run's ends stay EDGE_RTOL (of q_scale) inside the singular points, where the
-    # kernels are still finite (the engine evaluates them at the ends of its domain).
-    scale = float(curve.q_scale.subs({p: v for p, v in zip(curve.params, scene.param_values)}))
-    margin = EDGE_RTOL * scale
-    ends = (r.lo + margin * max(1.0, abs(r.lo)) if r.lo_reason else r.lo,
-            r.hi - margin * max(1.0, abs(r.hi)) if r.hi_reason else r.hi)
-    # The engine's quadrature panels are q_scale wide: near a singular point they must be
-    # narrower, or Gauss-Legendre converges slowly there (times, friction work).
-    near = min([abs(scene.q0 - e) for e, why in ((r.lo, r.lo_reason), (r.hi, r.hi_reason)) if why] + [scale])
-    narrow_scale = max(near, MIN_SCALE_RATIO * scale)
-    domain = (_end_text(ends[0]), _end_text(ends[1]))
-    changes = dict(domain=domain)
-    if narrow_scale < scale:
-        changes["q_scale"] = repr(narrow_scale)
-    source = json.dumps(shape.source(), sort_keys=True)
-    return _NARROWED.setdefault((source, domain, changes.get("q_scale")), dataclasses.replace(shape, **changes))
+    return interval_in(singular_pieces(curve, key, *scan_window(lo, hi, scale, [q0, *reach])), q0, lo, hi)

@@ -204,15 +204,16 @@ def _compiled_kernels(module, ncp: int) -> tuple:
 def engine_digest() -> str:
     """SHA-256 (hex, 20 digits) of the engine's source files and compile options, for cache invalidation
     (read once)."""
-    from symvib import kernelformat
-    from symvib.numeric import layout
-    from symvib.numeric.engine import compiled, state
+    import importlib.util
 
     digest = hashlib.sha256()
     # (the layout too: its codes and columns are compile-time constants of the engine; and the
-    # kernel interface, declared in kernelformat)
-    for mod in (*ENGINE_MODULES, state, compiled, layout, kernelformat):
-        digest.update(Path(mod.__file__).read_bytes())
+    # kernel interface, declared in kernelformat).  Found, not imported: the compiled binding
+    # imports numba, which a plain run asking "is it compiled?" does not need.
+    names = ("symvib.numeric.engine.state", "symvib.numeric.engine.compiled", "symvib.numeric.layout",
+             "symvib.kernelformat")
+    for origin in (*(mod.__file__ for mod in ENGINE_MODULES), *(importlib.util.find_spec(n).origin for n in names)):
+        digest.update(Path(origin).read_bytes())
     # (and the compile options, which numba's cache does not key on either)
     digest.update(repr((INNER, HOT_INLINE, NO_REFCOUNT)).encode())
     return digest.hexdigest()[:20]

@@ -18,6 +18,7 @@ Examples
 """
 from __future__ import annotations
 
+import math
 import sys
 import time
 
@@ -25,6 +26,7 @@ import numpy as np
 
 from symvib.numeric.driver import sweep_function
 from symvib.numeric.layout import Summary
+from symvib.numeric.prepared import prepared_of
 from symvib.numeric.scene import Scene, SceneError
 from symvib.numeric.sweep import limits
 from symvib.numeric.sweep.limits import SweepError
@@ -65,23 +67,24 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
 
 
 
-def _refuse_singular_domain(scene: Scene) -> None:
+def _end_text(v: float) -> str:
+    """A domain end as a scene file writes it (exact: the shortest repr of the double)."""
+    return ("oo" if v > 0 else "-oo") if math.isinf(v) else repr(float(v))
+
+
+def _refuse_singular_domain(scene: Scene, prepared=None) -> None:
     """Refuse a user curve with a singular point inside its declared domain.
 
-    :func:`symvib.numeric.driver.simulate` narrows such a run's domain to the regular
-    interval around ``initial.q`` (:func:`symvib.symbolic.singular.regular_shape`); a sweep
-    runs one kernel module for all its rows, so it asks for that domain to be
-    declared instead of integrating across the point.  A catalogue shape is
-    regular on its domain.  Rows that vary the curve's parameters are not
+    :func:`symvib.numeric.driver.simulate` runs such a scene on the regular interval
+    around ``initial.q`` (:class:`~symvib.numeric.prepared.Prepared`, from the prepare
+    step's record); a sweep runs one kernel module for all its rows, so it asks for
+    that domain to be declared instead of integrating across the point.  A catalogue
+    shape is regular on its domain.  Rows that vary the curve's parameters are not
     re-checked one by one; their energy budget is (``energy_budget_mismatch``).
     """
-    if scene.shape.in_catalogue:
-        return
-    from symvib.symbolic.singular import regular_shape
-
-    narrowed = regular_shape(scene)
-    if narrowed is not scene.shape:
-        lo, hi = narrowed.domain
+    prep = prepared_of(scene) if prepared is None else prepared
+    if prep.domain.narrowed:
+        lo, hi = _end_text(prep.domain.lo), _end_text(prep.domain.hi)
         raise SceneError("curve.domain", f"curve '{scene.shape.name}' has a singular point inside its domain; "
                                          f"a sweep needs a regular one: declare domain = [\"{lo}\", \"{hi}\"] "
                                          f"(the regular interval around initial.q) or narrower")
@@ -89,7 +92,7 @@ def _refuse_singular_domain(scene: Scene) -> None:
 
 def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0, chunk: int = limits.DEFAULT_CHUNK,
           log_events: int = 0, nodes: int = limits.DEFAULT_NODES, out=None, overwrite: bool = False, scheduler=None,
-          progress: bool = False, backend: str = "auto", storage: str = "npz") -> SweepResult:
+          progress: bool = False, backend: str = "auto", storage: str = "npz", prepared=None) -> SweepResult:
     """Run ``scene`` for every combination (or random sample) of the ``vary`` fields.
 
     Parameters
@@ -118,6 +121,9 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
         How ``out`` stores the chunks: NumPy ``.npz`` files, or one Zarr store
         that ``xarray.open_zarr`` opens (extra ``symvib[xarray]``;
         :mod:`~symvib.numeric.sweep.zarrstore`).
+    prepared : Prepared, optional
+        The base scene's prepared curve (:func:`symvib.prepare.prepare`, which ``symvib.sweep``
+        calls); default: what is on disk (:func:`~symvib.numeric.prepared.prepared_of`).
 
     Returns
     -------
@@ -131,7 +137,7 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
         cannot be written.
     """
     check_storage(storage)
-    _refuse_singular_domain(scene)
+    _refuse_singular_domain(scene, prepared)
     spec = make_spec(scene, vary, random=random, seed=seed, chunk=chunk, log_events=log_events, nodes=nodes)
     definition = spec.to_dict()
     ident = sweep_id(definition)
