@@ -1,10 +1,13 @@
 """symvib: vibro-impact dynamics of a heavy particle on rough curves.
 
-Two wings meet only at the code generator:
+Two wings, and the prepare step above them:
 
-* :mod:`symvib.symbolic` (SymPy): curves, antiderivatives, the derivation, the audit;
+* :mod:`symvib.symbolic` (SymPy): curves, antiderivatives, the derivation, the audit, singular points;
 * :mod:`symvib.codegen`: the one bridge, derived expressions -> generated kernel modules;
-* :mod:`symvib.numeric` (NumPy only): kernels, the engine, the driver, sweeps, figures;
+* :mod:`symvib.numeric` (NumPy only): kernels, the engine, the driver, sweeps, figures; it receives
+  a prepared curve and imports neither SymPy nor the two modules above;
+* :mod:`symvib.prepare`: a curve's kernels generated and its singular points searched once,
+  recorded beside the kernels, so a later run needs no SymPy;
 * :mod:`symvib.checks`: references, peer integrators, the stability suite, benchmarks.
 
 ``import symvib`` imports neither SymPy nor NumPy; the names below load their

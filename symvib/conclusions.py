@@ -117,7 +117,7 @@ class Interval:
 
 def paper_runs(results=None) -> dict:
     """``{scene name: Result}`` of the paper's scenes with ``k = 1`` (simulated unless given)."""
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     results = dict(results or {})
     for name in PAPER_SCENES:
@@ -297,7 +297,7 @@ def conclusions(results=None) -> tuple:
 
 def _several_impacts(runs, quote) -> Claim:
     """The circle's condition ``phi0 < delta`` and the bounds on ``phidot0``, against a scan of ``phidot0``."""
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     rows, findings = {}, []
     for name in ("paper-circle-3.8", "paper-circle-7"):

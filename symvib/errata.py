@@ -68,7 +68,7 @@ def _with_physics(data: dict, physics: dict):
 
 def alpha0_readings() -> tuple:
     """``(readings, rejection)``: each :class:`Reading` simulated, and symvib's message for ``mu = tan 3``."""
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
     from symvib.numeric.scene import SceneError
 
     data = packaged_scene(ALPHA0_SCENE).to_dict()

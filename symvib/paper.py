@@ -264,9 +264,9 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
               progress=None) -> dict:
     """Write the report, figures and results into ``out_dir`` (and ``report.pdf`` with ``pdf``);
     returns what was written."""
+    from symvib import simulate
     from symvib.conclusions import conclusions, conclusions_markdown
     from symvib.errata import alpha0_row
-    from symvib.numeric.driver import simulate
     from symvib.symbolic.audit import errata_markdown
 
     say = progress or (lambda msg: None)

@@ -11,9 +11,9 @@ import math
 import mpmath
 import pytest
 
+from symvib import simulate
 from symvib.checks import stability
 from symvib.checks.reference_time import time_reference
-from symvib.numeric.driver import simulate
 from symvib.numeric.events import EventKind, Status
 from symvib.numeric.scene import SceneError, scene_from_dict
 

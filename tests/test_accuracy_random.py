@@ -13,6 +13,7 @@ from typing import NamedTuple
 
 import pytest
 
+from symvib import simulate
 from symvib.checks.accuracy import (
     ACCURACY_REFERENCE_NAME,
     CATEGORIES,
@@ -35,7 +36,6 @@ from symvib.checks.accuracy import (
 from symvib.checks.arclength import ReferenceRun, curve_frame, reference_run, scene_scales
 from symvib.checks.bench import shipped
 from symvib.cli import build_bench_parser
-from symvib.numeric.driver import simulate
 from symvib.numeric.events import EventKind, Status
 from symvib.numeric.scene import scene_from_dict
 

@@ -15,8 +15,8 @@ import pytest
 from PIL import Image
 from readme_blocks import DOCS, run_section
 
+from symvib import simulate
 from symvib.numeric import animation, explorer
-from symvib.numeric.driver import simulate
 from symvib.numeric.events import EventKind
 from symvib.numeric.scene import load_scene, scene_from_dict
 from symvib.paths import UserPathError

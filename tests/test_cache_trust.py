@@ -15,6 +15,7 @@ import pytest
 from symvib import cachetrust
 from symvib.cachetrust import CacheTrustWarning
 from symvib.numeric import kernels
+from symvib.prepare import load_kernels
 
 BOWL = {"kind": "graph", "q": "x", "z": "x**2/(2*p)", "params": {"p": "positive"}, "name": "bowl"}
 PLANTED_PANEL = 0.123
@@ -42,7 +43,7 @@ def _good_module(tmp_path, monkeypatch):
     """The text and file name of BOWL's module, made in a private cache of its own."""
     private = tmp_path / "maker"
     monkeypatch.setenv(cachetrust.CACHE_ENV, str(private))
-    module = kernels.load(BOWL)
+    module = load_kernels(BOWL)
     path = Path(module.__file__)
     text = path.read_text()
     kernels._LOADED.clear()
@@ -81,7 +82,7 @@ def test_a_module_planted_in_an_untrusted_cache_never_runs(fresh, monkeypatch, h
     planted = (cache / name).read_bytes()
     monkeypatch.setenv(cachetrust.CACHE_ENV, str(cache))
     with pytest.warns(CacheTrustWarning, match=re.escape(says)) as caught:
-        module = kernels.load(BOWL)
+        module = load_kernels(BOWL)
     assert module.PANEL != PLANTED_PANEL and str(cache) not in module.__file__
     assert (cache / name).read_bytes() == planted                       # not read, not replaced
     message = str(caught[0].message)
@@ -106,7 +107,7 @@ def test_a_cache_owned_by_another_user_is_not_used(fresh, monkeypatch):
     monkeypatch.setattr(os, "lstat", lstat)
     monkeypatch.setenv(cachetrust.CACHE_ENV, str(cache))
     with pytest.warns(CacheTrustWarning, match=r"owned by another user \(uid \d+\)"):
-        module = kernels.load(BOWL)
+        module = load_kernels(BOWL)
     assert module.PANEL != PLANTED_PANEL
 
 
@@ -134,7 +135,7 @@ def test_a_new_cache_is_private_and_its_modules_too(fresh, monkeypatch):
     monkeypatch.setenv(cachetrust.CACHE_ENV, str(cache))
     with warnings.catch_warnings():
         warnings.simplefilter("error", CacheTrustWarning)
-        module = kernels.load(BOWL)
+        module = load_kernels(BOWL)
     assert _mode(cache) == 0o700 and _mode(cache.parent) == 0o700 and _mode(module.__file__) == 0o600
 
 
@@ -161,11 +162,11 @@ def test_a_cached_module_that_is_not_the_users_alone_is_not_read(fresh, monkeypa
     monkeypatch.setenv(cachetrust.CACHE_ENV, str(cache))
     if how == "a folder":   # not read, not removed: the run goes on with the module uncached
         with pytest.warns(UserWarning, match="not a regular file"):
-            module = kernels.load(BOWL)
+            module = load_kernels(BOWL)
         assert module.PANEL != PLANTED_PANEL and (cache / name).is_dir()
         return
     with pytest.warns(UserWarning, match=says):
-        module = kernels.load(BOWL)
+        module = load_kernels(BOWL)
     assert module.PANEL != PLANTED_PANEL and other.read_bytes() == before
     assert not (cache / name).is_symlink() and _mode(cache / name) == 0o600   # made again, private
 
@@ -182,7 +183,7 @@ def test_generating_never_writes_through_a_link_at_a_temporary_name(fresh, monke
                     f"{name}.{os.getpid()}.part"):
         (cache / planted).symlink_to(victim)
     monkeypatch.setenv(cachetrust.CACHE_ENV, str(cache))
-    module = kernels.load(BOWL)
+    module = load_kernels(BOWL)
     assert victim.read_text() == "precious"
     assert not (cache / name).is_symlink() and (cache / name).read_text() == text
     assert module.__file__ == str(cache / name)
@@ -211,7 +212,7 @@ def test_numba_is_always_given_a_checked_folder(fresh, monkeypatch):
     monkeypatch.delenv(cachetrust.NUMBA_CACHE_ENV, raising=False)
     with warnings.catch_warnings():
         warnings.simplefilter("error", CacheTrustWarning)
-        kernels.load("circle")   # any load configures numba first
+        load_kernels("circle")   # any load configures numba first
     chosen = Path(os.environ[cachetrust.NUMBA_CACHE_ENV])
     assert chosen == Path(os.environ["HOME"]) / ".cache" / "symvib" / "numba" and _mode(chosen) == 0o700
 
@@ -298,6 +299,6 @@ def test_a_cached_module_rebinding_math_isfinite_is_regenerated_and_never_runs(f
     monkeypatch.setenv(cachetrust.CACHE_ENV, str(cache))
     real = math.isfinite
     with pytest.warns(UserWarning, match="regenerating it"):
-        kernels.load(BOWL)
+        load_kernels(BOWL)
     assert math.isfinite is real and not math.isfinite(float("nan"))
     assert (cache / name).read_text() == text

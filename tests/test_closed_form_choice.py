@@ -79,7 +79,7 @@ def test_required_fails_naming_the_field_when_no_route_finds_a_closed_form():
 
 @pytest.mark.slow
 def test_never_and_required_give_the_same_events():
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     runs = [simulate(scene(closed_form=c), backend="python", samples=False) for c in ("never", "required")]
     assert [e.kind for e in runs[0].events] == [e.kind for e in runs[1].events] and runs[0].events
@@ -123,14 +123,15 @@ def test_the_option_refuses_a_catalogue_curve(tmp_path, capsys):
     assert err.count("\n") == 1 and "--closed-form" in err and "catalogue" in err
 
 
-def test_a_user_curve_says_it_is_being_prepared_and_a_catalogue_curve_says_nothing(caplog):
+def test_a_user_curve_says_it_is_being_prepared_and_a_catalogue_curve_says_nothing(caplog, tmp_path, monkeypatch):
     """The first progress line comes before SymPy is imported (the singular points of a user curve),
     so a terminal sees it at once; a catalogue curve has nothing to prepare."""
     from symvib.numeric.scene import resolve_scene
     from symvib.prepare import prepare
 
+    monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))   # its first time, whatever ran before
     with caplog.at_level(logging.INFO, logger="symvib"):
         prepare(resolve_scene("paper-parabola"))
         assert not caplog.records
-        prepare(scene(z="a*x**2/2 + x**4/1237"))   # a curve no other test prepares: its first time
+        prepare(scene())
     assert [r.getMessage() for r in caplog.records][:1] == ["preparing curve 'cup': its singular points and kernels"]

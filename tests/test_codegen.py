@@ -11,6 +11,7 @@ import sympy as sp
 
 from symvib.codegen import generate as codegen
 from symvib.numeric import kernels
+from symvib.prepare import load_kernels
 from symvib.shapes import CATALOGUE, shape
 from symvib.symbolic.derive import derive
 from symvib.symbolic.integrals import ROUTES
@@ -24,7 +25,7 @@ POINTS = 12
 
 
 def _derivation_like_module(name):
-    mod = kernels.load(name)
+    mod = load_kernels(name)
     numeric = mod.F_ROUTES[1] == "numeric"
     return mod, derive(name, routes=() if numeric else ROUTES)
 
@@ -116,19 +117,19 @@ def _quad_value(expr, args, symbols, point):
 
 
 def test_domain_kernels():
-    assert kernels.load("cycloid").domain(0.05) == pytest.approx((-np.pi, np.pi))
-    assert kernels.load("circle").domain(0.5) == (-np.inf, np.inf)
+    assert load_kernels("cycloid").domain(0.05) == pytest.approx((-np.pi, np.pi))
+    assert load_kernels("circle").domain(0.5) == (-np.inf, np.inf)
 
 
 def test_kernels_broadcast_over_scenes():
-    k = kernels.load("parabola")
+    k = load_kernels("parabola")
     q = np.linspace(-1, 1, 7)[:, None]
     p = np.array([0.5, 1.0, 2.0])[None, :]
     assert k.w_p(q, 50.0, 9.81, 0.05, p).shape == (7, 3)
     assert k.h(q, p).shape == (7, 3)
-    c = kernels.load("circle")
+    c = load_kernels("circle")
     assert c.h(q, 0.5).shape == (7, 1)  # constant in q, still one value per q
-    assert kernels.load("catenary").F_p(q, 0.1, p).shape == (7, 3)
+    assert load_kernels("catenary").F_p(q, 0.1, p).shape == (7, 3)
 
 
 def test_numeric_layer_imports_no_sympy():
@@ -151,7 +152,7 @@ def test_generation_is_deterministic(tmp_path):
     b = codegen.generate("cycloid", tmp_path / "b")
     assert a.read_bytes() == b.read_bytes()
     committed = GENERATED / "cycloid.py"
-    if kernels.load("cycloid").SYMPY_VERSION == sp.__version__:
+    if load_kernels("cycloid").SYMPY_VERSION == sp.__version__:
         assert a.read_bytes() == committed.read_bytes(), "generated/ differs from a fresh generation"
 
 
@@ -181,13 +182,13 @@ def test_generate_check_detects_edits_and_missing_files(tmp_path):
 def test_user_curve_generated_once_and_cached(tmp_path, monkeypatch):
     monkeypatch.setenv(kernels.CACHE_ENV, str(tmp_path))
     source = {"name": "bowl", "kind": "graph", "q": "x", "z": "x**2/(2*b)", "params": {"b": "positive"}}
-    k = kernels.load(source)
+    k = load_kernels(source)
     assert k.PARAMS == ("b",) and k.h_scalar(1.0, 1.0) == pytest.approx(np.sqrt(2))
     files = list(tmp_path.glob("bowl_*.py"))
     assert len(files) == 1
     # A second load must not run the generator again.
     monkeypatch.setattr(codegen, "generate", lambda *a, **k: (_ for _ in ()).throw(AssertionError("regenerated")))
-    assert kernels.load(dict(source)).INPUT_HASH == k.INPUT_HASH
+    assert load_kernels(dict(source)).INPUT_HASH == k.INPUT_HASH
 
 
 def test_reserved_parameter_names():

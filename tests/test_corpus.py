@@ -131,7 +131,7 @@ def _check(result, name=None):
 
 @pytest.mark.parametrize("name", ENTRIES)
 def test_entry_derives_generates_loads_and_runs(name, cache):
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     e = entry(name)
     shape, mod, text = _kernels(name)

@@ -173,7 +173,7 @@ def test_the_kernel_module_says_whether_alpha_has_a_branch_cut():
 def test_the_circle_across_its_top_is_not_arrested_at_pi():
     # With atan2 the tangent angle jumped by 2 pi at q = pi, so exp(-2 s mu alpha) did: a spurious
     # turning point and arrest there.  alpha = q now: it bounces between the limiters.
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
     from symvib.numeric.scene import scene_from_dict
 
     scene = scene_from_dict({"curve": {"x": "R*sin(q)", "z": "R*(1 - cos(q))"}, "parameters": {"R": 0.5},

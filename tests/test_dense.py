@@ -9,9 +9,9 @@ import zlib
 import numpy as np
 import pytest
 
+from symvib import simulate
 from symvib.checks import bench
 from symvib.checks.reference_time import time_reference_states
-from symvib.numeric.driver import simulate
 from symvib.numeric.scene import scene_from_dict
 
 #: The issue's bar: the dense output agrees with the 30-digit reference to 1e-12.

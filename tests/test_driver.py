@@ -6,8 +6,8 @@ from pathlib import Path
 import mpmath
 import pytest
 
+from symvib import simulate
 from symvib.checks.reference import phase_reference
-from symvib.numeric.driver import simulate
 from symvib.numeric.events import EventKind, Status
 from symvib.numeric.scene import load_scene, scene_from_dict
 

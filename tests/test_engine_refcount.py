@@ -26,7 +26,7 @@ PROBE = textwrap.dedent("""
     from symvib.numeric.engine.bind import NO_REFCOUNT, bind
     from symvib.numeric.kernels import load
     from symvib.numeric.scene import scene_from_dict
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
     scene = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
                              "physics": {"mu": 0.05, "restitution": 0.8},
                              "limiters": {"left": -0.5, "right": 0.7},

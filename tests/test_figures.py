@@ -8,8 +8,8 @@ import mpmath
 import numpy as np
 import pytest
 
+from symvib import simulate
 from symvib.numeric import driver
-from symvib.numeric.driver import simulate
 from symvib.numeric.events import EventKind
 from symvib.numeric.figures import FIGURE_NAMES, equilibrium_arcs, run_figures
 from symvib.numeric.kernels import load

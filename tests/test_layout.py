@@ -21,8 +21,8 @@ import pytest
 matplotlib.use("Agg")
 
 import symvib
+from symvib import simulate
 from symvib.numeric import layout
-from symvib.numeric.driver import simulate
 from symvib.numeric.events import Event, EventKind, Status, kind_of, status_of
 from symvib.numeric.figures import event_style, phase_portrait
 from symvib.numeric.scene import resolve_scene
@@ -81,7 +81,7 @@ def test_a_new_event_kind_needs_only_the_vocabulary(tmp_path):
         import symvib
         assert symvib.__file__.startswith({str(tmp_path)!r}), symvib.__file__
         from symvib.numeric import layout
-        from symvib.numeric.driver import simulate
+        from symvib import simulate
         from symvib.numeric.events import Event, EventKind, kind_of
         from symvib.numeric.figures import phase_portrait
         from symvib.numeric.scene import resolve_scene

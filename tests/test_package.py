@@ -46,7 +46,7 @@ def test_figures_leave_the_callers_matplotlib_backend_alone(tmp_path):
         import matplotlib
         matplotlib.use("svg")
         import symvib.numeric.figures, symvib.numeric.sweepmaps
-        from symvib.numeric.driver import simulate
+        from symvib import simulate
         from symvib.numeric.scene import load_scene
         import symvib
         from pathlib import Path
@@ -62,7 +62,7 @@ def test_simulate_and_sweep_of_a_catalogue_curve_import_neither_sympy_nor_mpmath
     # wing runs a curve whose kernels exist without the symbolic wing.
     assert _run(f"""
         import sys
-        from symvib.numeric.driver import simulate
+        from symvib import simulate
         from symvib.numeric.scene import resolve_scene
         from symvib.numeric.sweep import sweep
         scene = resolve_scene("paper-circle-7")

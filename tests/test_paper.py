@@ -6,8 +6,7 @@ import sys
 
 import pytest
 
-from symvib import paper
-from symvib.numeric.driver import simulate
+from symvib import paper, simulate
 from symvib.numeric.events import EventKind
 
 #: Smallest plausible size of a figure file, bytes, and the pixel sizes allowed.

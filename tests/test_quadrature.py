@@ -4,9 +4,9 @@ from pathlib import Path
 import mpmath
 import pytest
 
+from symvib import simulate
 from symvib.checks.reference import phase_reference
 from symvib.codegen import gauss
-from symvib.numeric.driver import simulate
 from symvib.numeric.quadrature import MAX_NODES, rule
 from symvib.numeric.scene import load_scene
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from readme_blocks import python_blocks, run_section
 
+from symvib import simulate
 from symvib.numeric import kernels
-from symvib.numeric.driver import simulate
 from symvib.numeric.events import EventKind
 from symvib.numeric.scene import resolve_scene
 

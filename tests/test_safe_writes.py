@@ -387,7 +387,7 @@ def test_run_json_replaces_the_file_whole(tmp_path, scene_file, capsys):
 
 
 def test_figures_never_write_through_a_link_at_a_figure_name(tmp_path, elsewhere):
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
     from symvib.numeric.figures import save_run_figures
 
     result = simulate(parabola(), backend="python")

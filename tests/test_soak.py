@@ -26,7 +26,7 @@ import pytest
 matplotlib.use("Agg")
 
 from symvib import expr as _expr
-from symvib.numeric.driver import simulate
+from symvib import simulate
 from symvib.numeric.events import EventKind, Status
 from symvib.numeric.figures import FIGURE_NAMES, run_figures
 from symvib.numeric.scene import SceneError, scene_from_dict

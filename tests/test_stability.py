@@ -3,10 +3,10 @@ import math
 
 import pytest
 
+from symvib import simulate
 from symvib.checks import stability as st
 from symvib.checks.reference import phase_reference
 from symvib.checks.reference_time import time_reference
-from symvib.numeric.driver import simulate
 
 #: Cases whose right outcome takes more than a few seconds to compute.
 SLOW_CASES = {"thousands", "zeno-parabola"}

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from symvib import simulate
 from symvib.cli import sweep_main as main
-from symvib.numeric.driver import simulate
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.numeric.scene import resolve_scene as _resolve_scene
 from symvib.numeric.sweep import FORMAT, Progress, load_sweep, make_spec, run_chunk, sweep

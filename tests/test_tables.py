@@ -9,7 +9,7 @@ import pytest
 from readme_blocks import code_blocks, run_section
 
 import symvib
-from symvib.numeric.driver import simulate
+from symvib import simulate
 from symvib.numeric.events import EventKind, Samples
 from symvib.numeric.layout import EVENT_KINDS, EventCode
 from symvib.numeric.scene import resolve_scene

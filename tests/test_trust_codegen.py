@@ -17,6 +17,7 @@ from symvib.codegen import generate as codegen
 from symvib.expr import ExpressionError
 from symvib.numeric import kernels
 from symvib.numeric.driver import backend_available
+from symvib.prepare import load_kernels
 from symvib.symbolic.curve import CurveError
 
 #: Whether the numba backend can run here (the numba tests skip otherwise).
@@ -87,7 +88,7 @@ def test_hostile_name_module_imports_and_defines_nothing_else(label, bowl, tmp_p
 def test_hostile_name_through_the_cache_never_runs(cache, tmp_path):
     marker = tmp_path / MARKER_NAME
     name = HOSTILE_NAMES["closes_docstring"].format(marker=str(marker))
-    module = kernels.load({**BOWL, "name": name})
+    module = load_kernels({**BOWL, "name": name})
     assert module.NAME == name
     assert float(module.z_scalar(2.0, 1.0)) == 2.0
     assert not marker.exists()
@@ -100,7 +101,7 @@ SHADOWING_PARAMS = ["float", "F_p", "SOURCE", "z_scalar", "numpy", "domain", "pr
 @pytest.mark.parametrize("param", SHADOWING_PARAMS)
 def test_parameter_names_that_would_shadow_kernel_names_are_refused(param, cache):
     with pytest.raises(CurveError, match=rf"^curve\.params: parameter name '{param}' is reserved"):
-        kernels.load({**BOWL, "name": "shadow", "params": {"p": "positive", param: "positive"}})
+        load_kernels({**BOWL, "name": "shadow", "params": {"p": "positive", param: "positive"}})
     assert not list(cache.glob("*.py"))
 
 
@@ -118,7 +119,7 @@ def test_check_param_names_refuses_non_identifiers(param, why):
 ])
 def test_hostile_expressions_are_refused_or_harmless(field, value, cache):
     try:
-        module = kernels.load({**BOWL, "name": "expr", field: value})
+        module = load_kernels({**BOWL, "name": "expr", field: value})
     except (ExpressionError, CurveError) as err:
         assert "\n" not in str(err) and field in str(err)
         assert not list(cache.glob("*.py"))
@@ -230,7 +231,7 @@ TAMPERINGS = {
 @pytest.mark.parametrize("label", sorted(TAMPERINGS))
 def test_tampered_cached_module_is_detected_and_regenerated(label, cache, tmp_path):
     marker = tmp_path / MARKER_NAME
-    module = kernels.load({**BOWL, "name": "bowl"})
+    module = load_kernels({**BOWL, "name": "bowl"})
     path = Path(module.__file__)
     good = path.read_text(encoding="utf-8")
     bad = TAMPERINGS[label](good, marker)
@@ -238,7 +239,7 @@ def test_tampered_cached_module_is_detected_and_regenerated(label, cache, tmp_pa
     path.write_text(bad, encoding="utf-8")
     _forget(module)
     with pytest.warns(UserWarning, match=r"regenerating it"):
-        again = kernels.load({**BOWL, "name": "bowl"})
+        again = load_kernels({**BOWL, "name": "bowl"})
     assert not marker.exists()
     assert path.read_text(encoding="utf-8") == good
     assert again.PANEL == codegen.PANEL and float(again.z_scalar(2.0, 1.0)) == 2.0
@@ -257,7 +258,7 @@ def test_tampered_committed_module_is_refused(label, tmp_path, monkeypatch):
     monkeypatch.setattr(kernels, "_LOADED", {})
     monkeypatch.delitem(sys.modules, "symvib.generated.circle", raising=False)
     with pytest.raises(kernels.KernelError, match=rf"^{re.escape(str(path))}: .*run `symvib generate`$"):
-        kernels.load("circle")
+        load_kernels("circle")
     assert not marker.exists()
 
 
@@ -283,10 +284,10 @@ def test_failed_generation_leaves_nothing_in_the_cache(broken, cache, monkeypatc
     real = codegen.module_text
     monkeypatch.setattr(codegen, "module_text", lambda d, source: _redigest(real(d, source) + broken))
     with pytest.raises(kernels.KernelError, match=r"bowl_[0-9a-f]{16}\.py: "):
-        kernels.load({**BOWL, "name": "bowl"})
+        load_kernels({**BOWL, "name": "bowl"})
     assert list(cache.iterdir()) == []
     monkeypatch.setattr(codegen, "module_text", real)
-    assert float(kernels.load({**BOWL, "name": "bowl"}).z_scalar(2.0, 1.0)) == 2.0
+    assert float(load_kernels({**BOWL, "name": "bowl"}).z_scalar(2.0, 1.0)) == 2.0
 
 
 @pytest.mark.parametrize("expr, numpy_text", [
@@ -323,7 +324,7 @@ BIG_INT_CURVES = {"x*10**30": None, "x**2*(10**30 + 1)/10**30": "x**2"}
 
 @pytest.mark.parametrize("z", sorted(BIG_INT_CURVES))
 def test_big_integer_curve_simulates_on_python(z, cache):
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     result = simulate(_scene(z, "big"), backend="python")
     assert result.events or result.status.value == "t_max"
@@ -340,7 +341,7 @@ def test_big_integer_curve_simulates_on_python(z, cache):
 @pytest.mark.skipif(not NUMBA, reason="no numba")
 @pytest.mark.parametrize("z", sorted(BIG_INT_CURVES))
 def test_big_integer_curve_simulates_on_numba(z, cache):
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     a = simulate(_scene(z, "big"), backend="python")
     b = simulate(_scene(z, "big"), backend="numba")
@@ -391,10 +392,10 @@ HALF_INFINITE = [("sqrt(x)", ["0.3", "oo"], 1.0, {"left": 0.5}), ("x**4", ["0.3"
 def test_half_infinite_domain_gives_a_working_module(z, domain, q0, limiters, cache):
     import mpmath
 
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
     from symvib.numeric.scene import scene_from_dict
 
-    module = kernels.load({"name": "half", "kind": "graph", "q": "x", "z": z, "domain": domain})
+    module = load_kernels({"name": "half", "kind": "graph", "q": "x", "z": z, "domain": domain})
     assert "numeric" in module.F_ROUTES.values()  # the route that integrates from Q_REF
     assert np.isfinite(module.Q_REF) and module.domain()[0] < module.Q_REF < module.domain()[1]
     mu, a, b = 0.05, q0, q0 + 0.7 * np.sign(q0)
@@ -446,7 +447,7 @@ EXPRESSION_CURVES = {
 @pytest.mark.parametrize("label", sorted(EXPRESSION_CURVES))
 def test_curves_with_abs_and_sign_generate_no_conditional(label, cache):
     source = {"name": label, **EXPRESSION_CURVES[label]}
-    mod = kernels.load(source)
+    mod = load_kernels(source)
     text = Path(mod.__file__).read_text(encoding="utf-8")
     assert " if " not in text and "==" not in text and "select" not in text
     # The scalar twins agree with the array kernels, finite at 0 too (removable values, sign(0)).
@@ -485,7 +486,7 @@ def test_a_removable_value_is_finite_in_both_twins(z, at_zero, tmp_path):
 @pytest.mark.slow  # derives the curve twice: as given, and on its regular interval (about 15 s)
 def test_the_paper_parabola_in_expressions_runs():
     # The reproduction of the report: derive, print, whitelist (no Compare node any more).
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
     from symvib.numeric.scene import scene_from_dict
 
     scene = scene_from_dict({"curve": {"x": "tan(phi)", "z": "tan(phi)**2/2", "q": "phi"},

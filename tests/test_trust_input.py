@@ -542,7 +542,7 @@ HOSTILE_SCENE_NAMES = ["../../x", "/abs/path", "..", "$", "a$b$$c", "$\\frac{", 
 
 @pytest.mark.parametrize("name", HOSTILE_SCENE_NAMES, ids=range(len(HOSTILE_SCENE_NAMES)))
 def test_figures_of_hostile_names_stay_in_their_folder(name, tmp_path):
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
     from symvib.numeric.figures import save_run_figures
 
     work = tmp_path / "work"

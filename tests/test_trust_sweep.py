@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
+from symvib import simulate
 from symvib.cli import EXIT_RUN_FAILED
 from symvib.cli import sweep_main as main
-from symvib.numeric.driver import simulate
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.numeric.sweep import sweep
 from symvib.shapes import CATALOGUE

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from symvib import simulate
 from symvib.numeric import scene as scene_mod
-from symvib.numeric.driver import simulate
 from symvib.numeric.scene import (
     FIELD_UNITS,
     TEXT_FIELDS,

@@ -14,8 +14,8 @@ import pytest
 
 matplotlib.use("Agg")
 
+from symvib import simulate
 from symvib.cli import main
-from symvib.numeric.driver import simulate
 from symvib.numeric.figures import FIGURE_NAMES, run_figures
 from symvib.numeric.scene import scene_from_dict
 

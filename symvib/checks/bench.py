@@ -136,7 +136,7 @@ class Setting:
 def run_setting(setting: Setting, scene, *, budget: float = PEER_BUDGET, backend: str = "auto"):
     """Run one method on one scene: ``(status, events, message)``, events as ``(kind, t, q, qdot_before)``."""
     if setting.method == "symvib":
-        from symvib.numeric.driver import simulate
+        from symvib import simulate
 
         r = simulate(scene, nodes=int(setting.value), samples=False, backend=backend)
         return r.status.value, [(e.kind.value, e.t, e.q, e.qdot_before) for e in r.events], ""
@@ -411,7 +411,7 @@ def _backend():
 
 def _warm_up(scenes, backend) -> dict:
     """Compile (or load) the driver for each curve once: CPU seconds of each first call."""
-    from symvib.numeric.driver import simulate
+    from symvib import simulate
 
     out = {}
     for _, scene in scenes:
