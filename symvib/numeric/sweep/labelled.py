@@ -37,13 +37,15 @@ from __future__ import annotations
 
 import importlib
 import json
+from pathlib import Path
 
 import numpy as np
 
+from symvib import __version__
 from symvib.numeric.layout import EVENT_COLUMNS, STATUSES, SUMMARY_COLUMNS
-from symvib.numeric.sweep.labels import axis_name, column_attrs, field_attrs
+from symvib.numeric.sweep.labels import column_attrs, field_attrs
 from symvib.numeric.sweep.limits import EVENT_WIDTH
-from symvib.numeric.sweep.result import impact_share
+from symvib.numeric.sweep.schema import FORMAT, column_dtype, column_tail, impact_share, variable_names
 
 __all__ = ["EXTRA", "require", "variable_names", "dataset", "dataframe", "dataset_attrs", "open_sweep",
            "impact_share"]
@@ -62,19 +64,8 @@ def require(module: str, what: str):
         raise ImportError(f"{what} needs {module.split('.')[0]}: pip install \"symvib[{EXTRA}]\"") from None
 
 
-def variable_names(spec) -> dict:
-    """Column name (``initial.qdot``, ``impacts``, ...) -> variable name (``qdot0``, ``impacts``, ...)."""
-    from symvib.numeric.sweep.store import column_names
-
-    axes = {a.field for a in spec.axes}
-    return {c: axis_name(spec.scene, c) if c in axes else c for c in column_names(spec)}
-
-
 def dataset_attrs(spec, ident: str) -> dict:
     """The Dataset attributes naming the sweep: identity, definition (JSON), layout, curve."""
-    from symvib import __version__
-    from symvib.numeric.sweep.store import FORMAT
-
     return {"title": f"symvib sweep of {spec.scene.name}", "sweep_id": ident, "sweep_format": FORMAT,
             "mode": spec.mode, "count": spec.count, "chunk": spec.chunk, "seed": spec.seed,
             "nodes": spec.nodes, "log_events": spec.log_events, "curve": spec.scene.shape.name,
@@ -180,8 +171,6 @@ def open_sweep(out):
     :class:`~symvib.numeric.sweep.limits.SweepError` naming its file then.
     ``open_sweep(out).compute()`` equals ``load_sweep(out).to_xarray()``.
     """
-    from pathlib import Path
-
     from symvib.numeric.sweep.store import missing_chunks, read_manifest, reader
 
     dask = require("dask", "opening a sweep folder lazily")
@@ -192,16 +181,13 @@ def open_sweep(out):
     reader(out, manifest, spec, ident)          # the storage is checked now (a Zarr store's identity)
     read = _ChunkReader(out, manifest, spec, ident)
     token = f"symvib-sweep-{ident[:12]}"
-    tails = {"event_log": (spec.log_events, EVENT_WIDTH)}
-    from symvib.numeric.sweep.result import INTEGER_COLUMNS
-
     pieces = {name: [] for name in variable_names(spec)}
     for i in range(spec.chunks):
         part = dask.delayed(read, name=f"{token}-reader")(i, dask_key_name=f"{token}-chunk-{i}")
         n = len(spec.rows(i)[0])
         for name in pieces:
-            dtype = np.int64 if name == "row" or name in INTEGER_COLUMNS else np.float64
-            pieces[name].append(da.from_delayed(part[name], shape=(n,) + tails.get(name, ()), dtype=dtype))
+            pieces[name].append(da.from_delayed(part[name], shape=(n,) + column_tail(spec, name),
+                                                dtype=column_dtype(name)))
     columns = {name: da.concatenate(p) for name, p in pieces.items()}
     columns["row"] = da.arange(spec.count, dtype=np.int64, chunks=spec.chunk)
     return dataset(spec, columns, ident)

@@ -25,25 +25,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from symvib.numeric.layout import ERROR_CODES, EVENT_KINDS, STATUSES, SUMMARY_COLUMNS, Summary
+from symvib.numeric.layout import ERROR_CODES, EVENT_KINDS, STATUSES
+from symvib.numeric.sweep.schema import INTEGER_COLUMNS, impact_share, sweep_id
 
 if TYPE_CHECKING:
     from symvib.numeric.sweep.spec import SweepSpec
 
 __all__ = ["SweepResult", "INTEGER_COLUMNS", "join_chunks"]
-
-#: Summary columns stored as integers (codes and counts); the others are float64.
-INTEGER_COLUMNS = tuple(SUMMARY_COLUMNS[c] for c in (Summary.status, Summary.events, Summary.impacts,
-                                                      Summary.reversals, Summary.normal_sign_changes))
-
-
-def impact_share(friction_work, impact_loss):
-    """``W_impacts / (W_friction + W_impacts)``, NaN where nothing was lost (NumPy or xarray operands)."""
-    total = friction_work + impact_loss
-    if isinstance(total, np.ndarray):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(total > 0, impact_loss / total, np.nan)
-    return (impact_loss / total).where(total > 0)
 
 
 @dataclass(frozen=True)
@@ -113,9 +101,7 @@ class SweepResult:
 
     @property
     def sweep_id(self) -> str:
-        """The sweep's identity (:func:`symvib.numeric.sweep.store.sweep_id` of its definition)."""
-        from symvib.numeric.sweep.store import sweep_id
-
+        """The sweep's identity (:func:`symvib.numeric.sweep.schema.sweep_id` of its definition)."""
         return sweep_id(self.spec.to_dict())
 
     def to_xarray(self):
