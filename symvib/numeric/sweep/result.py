@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from symvib.numeric.layout import ERROR_CODES, EVENT_KINDS, STATUSES
+from symvib.numeric.sweep.frames import dataframe, dataset
 from symvib.numeric.sweep.schema import INTEGER_COLUMNS, impact_share, sweep_id
 
 if TYPE_CHECKING:
@@ -114,17 +115,13 @@ class SweepResult:
         the summary columns, ``impact_share`` and ``event_log`` (if logged),
         each with ``units`` (SI), ``long_name`` and ``latex`` attributes; the
         Dataset's attributes hold ``sweep_id`` and the definition
-        (:func:`symvib.numeric.sweep.labelled.dataset`).
+        (:func:`symvib.numeric.sweep.frames.dataset`).
         """
-        from symvib.numeric.sweep.labelled import dataset
-
         return dataset(self.spec, self.columns, self.sweep_id)
 
     def to_dataframe(self):
         """The sweep as a ``pandas.DataFrame``, one row per scene (index ``row``), columns named as in
         :meth:`to_xarray`, ``status`` a categorical of the status names (extra ``symvib[xarray]``)."""
-        from symvib.numeric.sweep.labelled import dataframe
-
         return dataframe(self.spec, self.columns, self.sweep_id)
 
     to_pandas = to_dataframe

@@ -4,7 +4,10 @@ What every module that holds a sweep's columns shares, and the bottom of them:
 the result (:mod:`~symvib.numeric.sweep.result`), the chunk files
 (:mod:`~symvib.numeric.sweep.store`), the Zarr store
 (:mod:`~symvib.numeric.sweep.zarrstore`) and the labelled data
-(:mod:`~symvib.numeric.sweep.labelled`) import it, and it imports none of them.
+(:mod:`~symvib.numeric.sweep.frames`, :mod:`~symvib.numeric.sweep.labelled`)
+import it, and it imports none of them, nor the definition: a ``spec`` here is
+any :class:`~symvib.numeric.sweep.spec.SweepSpec`, read by its ``axes``,
+``log_events``, ``scene`` and ``rows``.
 
 * The columns (:func:`column_names`), one row per scene: ``row`` (the scene's
   number in the sweep), each varied field by its dotted name (``initial.qdot``),
@@ -37,16 +40,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from symvib.numeric.layout import STATUSES, SUMMARY_COLUMNS, Summary
 from symvib.numeric.sweep.labels import axis_name
 from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
-
-if TYPE_CHECKING:
-    from symvib.numeric.sweep.spec import SweepSpec
 
 __all__ = ["FORMAT", "OLD_FORMATS", "ID_DIGITS", "INTEGER_COLUMNS", "sweep_id", "column_names", "column_dtype",
            "column_tail", "variable_names", "impact_share", "bad_chunk", "check_rows"]
@@ -75,7 +74,7 @@ def sweep_id(definition: dict) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:ID_DIGITS]
 
 
-def column_names(spec: SweepSpec) -> list:
+def column_names(spec) -> list:
     """The sweep's columns in their order: ``row``, the varied fields, the summary columns, ``event_log``."""
     return ["row"] + [a.field for a in spec.axes] + list(SUMMARY_COLUMNS) + (["event_log"] if spec.log_events else [])
 
@@ -85,12 +84,12 @@ def column_dtype(name: str) -> np.dtype:
     return np.dtype(np.int64 if name == "row" or name in INTEGER_COLUMNS else np.float64)
 
 
-def column_tail(spec: SweepSpec, name: str) -> tuple:
+def column_tail(spec, name: str) -> tuple:
     """The shape of one row of column ``name``: ``(log_events, EVENT_WIDTH)`` for ``event_log``, else ``()``."""
     return (spec.log_events, EVENT_WIDTH) if name == "event_log" else ()
 
 
-def variable_names(spec: SweepSpec) -> dict:
+def variable_names(spec) -> dict:
     """Column name (``initial.qdot``, ``impacts``, ...) -> variable name (``qdot0``, ``impacts``, ...)."""
     axes = {a.field for a in spec.axes}
     return {c: axis_name(spec.scene, c) if c in axes else c for c in column_names(spec)}
@@ -110,7 +109,7 @@ def bad_chunk(where, reason: str) -> SweepError:
     return SweepError(str(where), f"{reason}; run the same sweep again to recompute it")
 
 
-def check_rows(where, spec: SweepSpec, index: int, columns: dict) -> None:
+def check_rows(where, spec, index: int, columns: dict) -> None:
     """Refuse (naming ``where``) a chunk whose rows or varied values are not chunk ``index``'s, or whose
     status codes are out of range."""
     rows, values = spec.rows(index)

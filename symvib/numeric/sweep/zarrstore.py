@@ -1,7 +1,7 @@
 """A sweep's chunks in one Zarr store (``symvib sweep --format zarr``), checked like the ``.npz`` chunks.
 
 Layout: ``OUT/sweep.zarr`` is a Zarr group that ``xarray.open_zarr`` opens in
-one call: one array per column, named as :func:`symvib.numeric.sweep.labelled.dataset`
+one call: one array per column, named as :func:`symvib.numeric.sweep.frames.dataset`
 names them (``qdot0``, ``mu``, ``impacts``, ...), along the dimension ``row``,
 with their ``units``, ``long_name`` and ``latex`` and the sweep's identity
 (``sweep_id``) in the group's attributes.  A Zarr chunk of every array is one
@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from symvib import safeio
+from symvib.numeric.sweep.frames import dataset, require
 from symvib.numeric.sweep.limits import SweepError
 from symvib.numeric.sweep.owned import STORE, remove_store
 from symvib.numeric.sweep.schema import bad_chunk, check_rows, column_dtype, column_tail, variable_names
@@ -61,8 +62,6 @@ def marker_path(out: Path, index: int) -> Path:
 
 
 def _zarr():
-    from symvib.numeric.sweep.labelled import require
-
     return require("zarr", "a sweep stored as Zarr")
 
 
@@ -84,8 +83,6 @@ def remove(out: Path) -> None:
 
 def create(out: Path, spec, ident: str) -> None:
     """Create the empty store of the sweep (its arrays' metadata, attributes and identity; no data)."""
-    from symvib.numeric.sweep.labelled import dataset, require
-
     da = require("dask.array", "a sweep stored as Zarr")
     remove(out)
     lazy = {}
