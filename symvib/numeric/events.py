@@ -20,6 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from symvib.numeric import tables
 from symvib.numeric.layout import ERROR_CODES, EventCode, StatusCode
 
 __all__ = ["Status", "EventKind", "Event", "EnergyBudget", "Samples", "ZenoInfo", "Result", "MESSAGES",
@@ -120,6 +121,9 @@ class Event(NamedTuple):
         if self.detail:
             out["detail"] = self.detail
         return out
+
+
+assert set(tables.EVENT_FRAME_COLUMNS) == set(Event._fields), "every field of an Event needs its column"
 
 
 @dataclass(frozen=True)
@@ -355,20 +359,14 @@ class Result:
 
     def events_frame(self):
         """The events as a pandas DataFrame (columns and dtypes: :mod:`symvib.numeric.tables`)."""
-        from symvib.numeric import tables
-
         return tables.events_frame(self)
 
     def samples_frame(self):
         """The samples as a pandas DataFrame, one column per field of :class:`Samples`."""
-        from symvib.numeric import tables
-
         return tables.samples_frame(self)
 
     def to_pandas(self):
         """``(events_frame(), samples_frame())``."""
-        from symvib.numeric import tables
-
         return tables.to_pandas(self)
 
     def to_dict(self, *, samples: bool = False) -> dict:
@@ -393,9 +391,7 @@ class Result:
             out["zeno"] = {k: getattr(self.zeno, k) for k in self.zeno.__dataclass_fields__}
         if kept is not None:
             out["samples"] = {k: getattr(kept, k).tolist() for k in kept.__dataclass_fields__}
-        from symvib.numeric.tables import result_units
-
-        out["units"] = result_units(self, samples=kept is not None)
+        out["units"] = tables.result_units(self, samples=kept is not None)
         return out
 
     def to_json(self, **kwargs) -> str:

@@ -1,7 +1,11 @@
 """A run's results as tables: pandas DataFrames of the events and the samples, and their units.
 
 pandas is an optional dependency (``pip install "symvib[pandas]"``), imported
-only when a table is asked for; everything else here is plain NumPy.
+only when a table is asked for; everything else here is plain NumPy.  A result
+is read by its attributes (``events``, ``samples``, ``scene``): this module
+stands below :mod:`symvib.numeric.events`, whose ``Result`` methods
+(``events_frame``, ``samples_frame``, ``to_pandas``, the units of ``to_dict``)
+call it.
 
 Columns and dtypes (``frame.attrs["units"]`` maps every column to its unit):
 
@@ -31,7 +35,6 @@ import dataclasses
 
 import numpy as np
 
-from symvib.numeric.events import Event
 from symvib.numeric.layout import EVENT_KINDS
 from symvib.numeric.scene import FIELD_UNITS, field_unit
 
@@ -110,10 +113,9 @@ def _sample_fields(samples) -> list:
     return [f.name for f in dataclasses.fields(samples)]
 
 
-#: Columns of :func:`events_frame`: the fields of an :class:`~symvib.numeric.events.Event`, the
-#: estimated error of the time beside the time.
+#: Columns of :func:`events_frame`: the fields of an :class:`~symvib.numeric.events.Event` (checked
+#: where it is defined), the estimated error of the time beside the time.
 EVENT_FRAME_COLUMNS = ("kind", "t", "t_err", "q", "qdot_before", "qdot_after", "energy", "detail")
-assert set(EVENT_FRAME_COLUMNS) == set(Event._fields), "every field of an Event needs its column"
 
 
 def events_frame(result):

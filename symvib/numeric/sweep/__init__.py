@@ -28,12 +28,15 @@ The modules, one concept each:
 * :mod:`~symvib.numeric.sweep.axes` - the fields a sweep can vary, ``--vary`` values;
 * :mod:`~symvib.numeric.sweep.spec` - the definition (:func:`make_spec`, :class:`SweepSpec`);
 * :mod:`~symvib.numeric.sweep.rows` - a chunk's scene rows, checked by the scene's own checks;
-* :mod:`~symvib.numeric.sweep.store` - folder, manifest, chunk files, :func:`load_sweep`;
-* :mod:`~symvib.numeric.sweep.zarrstore` - the chunks in one Zarr store (``storage="zarr"``);
 * :mod:`~symvib.numeric.sweep.labels` - readable names, units (SI), LaTeX symbols of the columns;
-* :mod:`~symvib.numeric.sweep.labelled` - ``to_xarray``, ``to_dataframe``, :func:`open_sweep` (lazy);
+* :mod:`~symvib.numeric.sweep.schema` - the columns' names and kinds, the layout :data:`FORMAT`,
+  :func:`sweep_id`, the check of a chunk's rows: what the result, the stores and the labelled data share;
+* :mod:`~symvib.numeric.sweep.frames` - the columns as an xarray Dataset or a pandas DataFrame;
+* :mod:`~symvib.numeric.sweep.result` - :class:`SweepResult` (``to_xarray``, ``to_dataframe``);
+* :mod:`~symvib.numeric.sweep.zarrstore` - the chunks in one Zarr store (``storage="zarr"``);
+* :mod:`~symvib.numeric.sweep.store` - folder, manifest, chunk files, :func:`load_sweep`;
+* :mod:`~symvib.numeric.sweep.labelled` - :func:`open_sweep` (a folder as a lazy Dataset);
 * :mod:`~symvib.numeric.sweep.lock` - the one writer of a folder (:class:`WriterLock`);
-* :mod:`~symvib.numeric.sweep.result` - :class:`SweepResult`;
 * :mod:`~symvib.numeric.sweep.progress` - the progress bar;
 * :mod:`~symvib.numeric.sweep.runner` - :func:`sweep`, :func:`run_chunk` (locally or on Dask).
 
@@ -72,8 +75,9 @@ from symvib.numeric.sweep.lock import LOCK_GRACE, WriterLock
 from symvib.numeric.sweep.progress import Progress
 from symvib.numeric.sweep.result import SweepResult
 from symvib.numeric.sweep.runner import run_chunk, sweep
+from symvib.numeric.sweep.schema import FORMAT, sweep_id
 from symvib.numeric.sweep.spec import SweepSpec, make_spec
-from symvib.numeric.sweep.store import FORMAT, STORAGES, load_sweep, sweep_id
+from symvib.numeric.sweep.store import STORAGES, load_sweep
 
 __all__ = ["SweepSpec", "SweepResult", "SweepError", "WriterLock", "Progress", "make_spec", "sweep", "load_sweep",
            "open_sweep", "STORAGES",

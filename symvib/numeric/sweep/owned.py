@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from symvib import safeio
+from symvib.numeric.sweep.limits import SweepError
+from symvib.numeric.sweep.schema import ID_DIGITS
 from symvib.paths import UserPathError
 
 __all__ = ["FILES", "STORE", "CHUNK_NAME", "Survey", "survey", "zarr_entry", "store_identity", "remove_store"]
@@ -44,8 +46,6 @@ FILES = {"manifest": "manifest.json", "lock": "sweep.lock", "chunks": "chunks/ch
 STORE = "sweep.zarr"
 #: Largest marker or Zarr metadata file read to prove it is symvib's, in bytes.
 MAX_PROOF_BYTES = 2**20
-#: Hex digits of a sweep identity (:func:`symvib.numeric.sweep.store.sweep_id`).
-ID_DIGITS = 32
 
 #: A chunk file or marker of any sweep.
 CHUNK_NAME = re.compile(r"chunk-\d{6}\.(npz|json)")
@@ -164,8 +164,6 @@ def remove_store(out, field_name: str = "out") -> None:
     SweepError
         Naming the store when it cannot be proven symvib's (nothing is removed then).
     """
-    from symvib.numeric.sweep.limits import SweepError
-
     where = Path(out) / STORE
     if STORE not in safeio.entries(out):
         return

@@ -25,25 +25,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from symvib.numeric.layout import ERROR_CODES, EVENT_KINDS, STATUSES, SUMMARY_COLUMNS, Summary
+from symvib.numeric.layout import ERROR_CODES, EVENT_KINDS, STATUSES
+from symvib.numeric.sweep.frames import dataframe, dataset
+from symvib.numeric.sweep.schema import INTEGER_COLUMNS, impact_share, sweep_id
 
 if TYPE_CHECKING:
     from symvib.numeric.sweep.spec import SweepSpec
 
 __all__ = ["SweepResult", "INTEGER_COLUMNS", "join_chunks"]
-
-#: Summary columns stored as integers (codes and counts); the others are float64.
-INTEGER_COLUMNS = tuple(SUMMARY_COLUMNS[c] for c in (Summary.status, Summary.events, Summary.impacts,
-                                                      Summary.reversals, Summary.normal_sign_changes))
-
-
-def impact_share(friction_work, impact_loss):
-    """``W_impacts / (W_friction + W_impacts)``, NaN where nothing was lost (NumPy or xarray operands)."""
-    total = friction_work + impact_loss
-    if isinstance(total, np.ndarray):
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(total > 0, impact_loss / total, np.nan)
-    return (impact_loss / total).where(total > 0)
 
 
 @dataclass(frozen=True)
@@ -113,9 +102,7 @@ class SweepResult:
 
     @property
     def sweep_id(self) -> str:
-        """The sweep's identity (:func:`symvib.numeric.sweep.store.sweep_id` of its definition)."""
-        from symvib.numeric.sweep.store import sweep_id
-
+        """The sweep's identity (:func:`symvib.numeric.sweep.schema.sweep_id` of its definition)."""
         return sweep_id(self.spec.to_dict())
 
     def to_xarray(self):
@@ -128,17 +115,13 @@ class SweepResult:
         the summary columns, ``impact_share`` and ``event_log`` (if logged),
         each with ``units`` (SI), ``long_name`` and ``latex`` attributes; the
         Dataset's attributes hold ``sweep_id`` and the definition
-        (:func:`symvib.numeric.sweep.labelled.dataset`).
+        (:func:`symvib.numeric.sweep.frames.dataset`).
         """
-        from symvib.numeric.sweep.labelled import dataset
-
         return dataset(self.spec, self.columns, self.sweep_id)
 
     def to_dataframe(self):
         """The sweep as a ``pandas.DataFrame``, one row per scene (index ``row``), columns named as in
         :meth:`to_xarray`, ``status`` a categorical of the status names (extra ``symvib[xarray]``)."""
-        from symvib.numeric.sweep.labelled import dataframe
-
         return dataframe(self.spec, self.columns, self.sweep_id)
 
     to_pandas = to_dataframe

@@ -30,7 +30,6 @@ Examples
 """
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import zipfile
@@ -39,42 +38,34 @@ from pathlib import Path
 
 import numpy as np
 
-from symvib import safeio
-from symvib.numeric.layout import EVENT_COLUMNS, EVENT_KINDS, STATUSES, SUMMARY_COLUMNS
+from symvib import __version__, safeio
+from symvib.numeric.layout import EVENT_COLUMNS, EVENT_KINDS, STATUSES
 from symvib.numeric.scene import SceneError
-from symvib.numeric.sweep import limits
-from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
+from symvib.numeric.sweep import limits, zarrstore
+from symvib.numeric.sweep.limits import SweepError
 from symvib.numeric.sweep.owned import CHUNK_NAME, FILES, STORE, remove_store, survey
-from symvib.numeric.sweep.result import INTEGER_COLUMNS, SweepResult, join_chunks
+from symvib.numeric.sweep.result import SweepResult, join_chunks
+from symvib.numeric.sweep.schema import (
+    FORMAT,
+    OLD_FORMATS,
+    bad_chunk,
+    check_rows,
+    column_dtype,
+    column_names,
+    column_tail,
+    sweep_id,
+)
 from symvib.numeric.sweep.spec import SweepSpec
+from symvib.numeric.sweep.zarrstore import marker_path
 from symvib.paths import UserPathError
 
 __all__ = ["FORMAT", "OLD_FORMATS", "STORAGES", "sweep_id", "load_sweep", "manifest", "read_manifest",
            "column_names", "chunk_path", "chunk_files", "write_chunk", "read_chunk", "check_rows", "check_out",
            "check_storage", "prepare", "reader", "missing_chunks"]
 
-#: Identifier of the on-disk layout (manifest key ``format``).  Version 2 added the
-#: sweep identity (``sweep_id``) to the manifest and to every chunk.
-FORMAT = "symvib-sweep/2"
-#: Layouts this version recognizes but does not read (their chunks carry no sweep identity).
-OLD_FORMATS = ("symvib-sweep/1",)
-#: Hex digits of the sweep identity (a SHA-256 of the format and definition).
-_ID_DIGITS = 32
 #: How the chunks are stored (manifest key ``storage``; a manifest without it is ``npz``):
 #: NumPy ``.npz`` files (no extra dependency), or one Zarr store (extra ``symvib[xarray]``).
 STORAGES = ("npz", "zarr")
-
-
-def sweep_id(definition: dict) -> str:
-    """The identity of a sweep: a hash of the layout :data:`FORMAT` and its definition.
-
-    Written in the manifest and in every chunk; a chunk is used only by the
-    sweep of the same identity (the definition's canonical JSON, so a
-    definition read back from a manifest has the identity it was written with).
-    """
-    text = json.dumps({"format": FORMAT, "definition": definition}, sort_keys=True, separators=(",", ":"),
-                      allow_nan=False)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:_ID_DIGITS]
 
 
 def check_storage(storage) -> str:
@@ -85,8 +76,8 @@ def check_storage(storage) -> str:
 
 
 def manifest(spec: SweepSpec, ident: str, storage: str = "npz") -> dict:
-    from symvib import __version__
-
+    """The manifest of the sweep ``ident`` (written as ``manifest.json``): layout, identity, storage,
+    definition, the names of columns and codes, the files symvib writes."""
     return {"format": FORMAT, "sweep_id": ident, "storage": storage, "definition": spec.to_dict(),
             "chunks": spec.chunks,
             "columns": column_names(spec),
@@ -94,10 +85,6 @@ def manifest(spec: SweepSpec, ident: str, storage: str = "npz") -> dict:
             "event_log_columns": list(EVENT_COLUMNS),
             "files": FILES,
             "symvib_version": __version__}
-
-
-def column_names(spec: SweepSpec) -> list:
-    return ["row"] + [a.field for a in spec.axes] + list(SUMMARY_COLUMNS) + (["event_log"] if spec.log_events else [])
 
 
 def chunk_path(out: Path, index: int) -> Path:
@@ -124,10 +111,6 @@ def write_chunk(out: Path, index: int, columns: dict, ident: str, storage: str =
         raise SweepError(str(path), f"cannot write the chunk: {exc}") from None
 
 
-def _bad_chunk(path: Path, reason: str) -> SweepError:
-    return SweepError(str(path), f"{reason}; run the same sweep again to recompute it")
-
-
 def read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
     """The columns of chunk ``index``, checked against the sweep: identity, names, dtypes, shapes, rows.
 
@@ -143,13 +126,13 @@ def read_chunk(path: Path, spec: SweepSpec, ident: str, index: int) -> dict:
     try:
         with safeio.reading(path.parent, path.name) as fh:
             if os.fstat(fh.fileno()).st_size > spec.chunk_bytes() + limits.MAX_MANIFEST_BYTES:
-                raise _bad_chunk(path, "larger than a chunk of this sweep can be")
+                raise bad_chunk(path, "larger than a chunk of this sweep can be")
             data = np.load(fh, allow_pickle=False)
             columns = _chunk_columns(path, data, spec, ident, n, expected)
     except SweepError:
         raise
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
-        raise _bad_chunk(path, f"truncated or unreadable ({type(exc).__name__})") from None
+        raise bad_chunk(path, f"truncated or unreadable ({type(exc).__name__})") from None
     check_rows(path, spec, index, columns)
     return columns
 
@@ -159,33 +142,21 @@ def _chunk_columns(path: Path, data, spec: SweepSpec, ident: str, n: int, expect
     with data:
         names = set(data.files)
         if "sweep_id" not in names:
-            raise _bad_chunk(path, "no sweep identity: not a chunk of this sweep")
+            raise bad_chunk(path, "no sweep identity: not a chunk of this sweep")
         _check_header(path, data, "sweep_id", lambda d, sh: d.kind == "U" and sh == () and d.itemsize <= 4 * 64,
                       "a text")
         if str(data["sweep_id"]) != ident:
-            raise _bad_chunk(path, "made by another sweep (its sweep_id differs from the manifest's)")
+            raise bad_chunk(path, "made by another sweep (its sweep_id differs from the manifest's)")
         if names != set(expected) | {"sweep_id"}:
-            raise _bad_chunk(path, f"columns {sorted(names - {'sweep_id'})} are not this sweep's")
+            raise bad_chunk(path, f"columns {sorted(names - {'sweep_id'})} are not this sweep's")
         columns = {}
         for name in expected:   # each header checked before its array is allocated
-            want = np.dtype(np.int64 if name == "row" or name in INTEGER_COLUMNS else np.float64)
-            shape = (n, spec.log_events, EVENT_WIDTH) if name == "event_log" else (n,)
+            want = column_dtype(name)
+            shape = (n,) + column_tail(spec, name)
             _check_header(path, data, name, lambda d, sh: d == want and sh == shape,
                           f"{want}{list(shape)}")
             columns[name] = data[name]
     return columns
-
-
-def check_rows(where, spec: SweepSpec, index: int, columns: dict) -> None:
-    """Refuse (naming ``where``) a chunk whose rows or varied values are not chunk ``index``'s, or whose
-    status codes are out of range."""
-    rows, values = spec.rows(index)
-    if not np.array_equal(columns["row"], rows) or not all(
-            np.array_equal(columns[a.field], v) for a, v in zip(spec.axes, values)):
-        raise _bad_chunk(where, f"rows or varied values are not those of chunk {index}")
-    status = columns["status"]
-    if status.size and (status.min() < 0 or status.max() >= len(STATUSES)):
-        raise _bad_chunk(where, "status codes out of range")
 
 
 def _check_header(path: Path, data, name: str, ok, expected: str) -> None:
@@ -195,7 +166,7 @@ def _check_header(path: Path, data, name: str, ok, expected: str) -> None:
         read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
         shape, fortran, dtype = read(fh)
     if fortran or dtype.hasobject or not ok(dtype, shape):
-        raise _bad_chunk(path, f"column {name} is {dtype}{list(shape)}, expected {expected}")
+        raise bad_chunk(path, f"column {name} is {dtype}{list(shape)}, expected {expected}")
 
 
 def check_out(out) -> Path:
@@ -381,8 +352,6 @@ def _remove(out: Path, rel: str) -> None:
 def _open_zarr(out: Path, spec: SweepSpec, ident: str, files: set):
     """The sweep's Zarr store for writing: the one there if it is this sweep's, else a new one (whose
     markers are removed from ``files``)."""
-    from symvib.numeric.sweep import zarrstore
-
     _zarr_writer.clear()
     try:
         chunks = zarrstore.ZarrChunks(out, spec, ident, mode="r+")
@@ -394,12 +363,6 @@ def _open_zarr(out: Path, spec: SweepSpec, ident: str, files: set):
         chunks = zarrstore.ZarrChunks(out, spec, ident, mode="r+")
     _zarr_writer.append((Path(out), ident, chunks))
     return chunks
-
-
-def marker_path(out: Path, index: int) -> Path:
-    from symvib.numeric.sweep.zarrstore import marker_path as path
-
-    return path(out, index)
 
 
 def missing_chunks(out: Path, manifest: dict, spec: SweepSpec) -> None:
@@ -415,9 +378,7 @@ def missing_chunks(out: Path, manifest: dict, spec: SweepSpec) -> None:
 def reader(out: Path, manifest: dict, spec: SweepSpec, ident: str):
     """A function ``index -> columns`` reading the checked chunks of the sweep in ``out`` (either storage)."""
     if manifest["storage"] == "zarr":
-        from symvib.numeric.sweep.zarrstore import ZarrChunks
-
-        return ZarrChunks(out, spec, ident).read
+        return zarrstore.ZarrChunks(out, spec, ident).read
     return lambda index: read_chunk(chunk_path(out, index), spec, ident, index)
 
 

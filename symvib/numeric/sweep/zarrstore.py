@@ -1,7 +1,7 @@
 """A sweep's chunks in one Zarr store (``symvib sweep --format zarr``), checked like the ``.npz`` chunks.
 
 Layout: ``OUT/sweep.zarr`` is a Zarr group that ``xarray.open_zarr`` opens in
-one call: one array per column, named as :func:`symvib.numeric.sweep.labelled.dataset`
+one call: one array per column, named as :func:`symvib.numeric.sweep.frames.dataset`
 names them (``qdot0``, ``mu``, ``impacts``, ...), along the dimension ``row``,
 with their ``units``, ``long_name`` and ``latex`` and the sweep's identity
 (``sweep_id``) in the group's attributes.  A Zarr chunk of every array is one
@@ -41,13 +41,14 @@ from pathlib import Path
 import numpy as np
 
 from symvib import safeio
-from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
+from symvib.numeric.sweep.frames import dataset, require
+from symvib.numeric.sweep.limits import SweepError
+from symvib.numeric.sweep.owned import STORE, remove_store
+from symvib.numeric.sweep.schema import bad_chunk, check_rows, column_dtype, column_tail, variable_names
 from symvib.paths import UserPathError
 
 __all__ = ["STORE", "MAX_MARKER_BYTES", "store_path", "marker_path", "create", "remove", "ZarrChunks", "digests"]
 
-#: The Zarr store's name in a sweep folder.
-STORE = "sweep.zarr"
 #: Largest chunk marker read, in bytes (a marker holds one digest per column).
 MAX_MARKER_BYTES = 2**16
 
@@ -61,8 +62,6 @@ def marker_path(out: Path, index: int) -> Path:
 
 
 def _zarr():
-    from symvib.numeric.sweep.labelled import require
-
     return require("zarr", "a sweep stored as Zarr")
 
 
@@ -79,23 +78,17 @@ def digests(columns: dict) -> dict:
 def remove(out: Path) -> None:
     """Remove the Zarr store of ``out`` if symvib provably wrote it (:func:`symvib.numeric.sweep.owned.remove_store`:
     its sweep identity, and nothing in it but Zarr's own entries); else a :class:`SweepError` naming it."""
-    from symvib.numeric.sweep.owned import remove_store
-
     remove_store(out)
 
 
 def create(out: Path, spec, ident: str) -> None:
     """Create the empty store of the sweep (its arrays' metadata, attributes and identity; no data)."""
-    from symvib.numeric.sweep.labelled import dataset, require, variable_names
-    from symvib.numeric.sweep.result import INTEGER_COLUMNS
-
     da = require("dask.array", "a sweep stored as Zarr")
     remove(out)
     lazy = {}
     for column in variable_names(spec):
-        shape = (spec.count,) + ((spec.log_events, EVENT_WIDTH) if column == "event_log" else ())
-        dtype = np.int64 if column == "row" or column in INTEGER_COLUMNS else np.float64
-        lazy[column] = da.zeros(shape, dtype=dtype, chunks=shape)
+        shape = (spec.count,) + column_tail(spec, column)
+        lazy[column] = da.zeros(shape, dtype=column_dtype(column), chunks=shape)
     ds = dataset(spec, lazy, ident, store=True)
     ds.attrs["columns"] = json.dumps({c: n for c, n in variable_names(spec).items() if c != "row"})
     encoding = {name: {"chunks": (spec.chunk,) + var.shape[1:]} for name, var in ds.data_vars.items()}
@@ -119,7 +112,7 @@ class ZarrChunks:
         The sweep folder.
     spec : SweepSpec
     ident : str
-        The sweep's identity (:func:`~symvib.numeric.sweep.store.sweep_id`).
+        The sweep's identity (:func:`~symvib.numeric.sweep.schema.sweep_id`).
     mode : {"r", "r+"}
 
     Raises
@@ -130,15 +123,11 @@ class ZarrChunks:
     """
 
     def __init__(self, out: Path, spec, ident: str, mode: str = "r"):
-        from symvib.numeric.sweep.labelled import variable_names
-        from symvib.numeric.sweep.result import INTEGER_COLUMNS
-
         zarr = _zarr()
         self.out, self.spec, self.ident = Path(out), spec, ident
         path = store_path(out)
         if path.is_symlink() or not path.is_dir():
-            raise SweepError(str(path), "no Zarr store here (missing, or not a folder); run the same sweep "
-                                        "again to recompute it")
+            raise bad_chunk(path, "no Zarr store here (missing, or not a folder)")
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -154,8 +143,8 @@ class ZarrChunks:
             raise SweepError(str(path), f"arrays {sorted(arrays)} are not this sweep's")
         for column, name in self.names.items():
             arr = arrays[name]
-            tail = (spec.log_events, EVENT_WIDTH) if column == "event_log" else ()
-            dtype = np.dtype(np.int64 if column in INTEGER_COLUMNS else np.float64)
+            tail = column_tail(spec, column)
+            dtype = column_dtype(column)
             if arr.dtype != dtype or tuple(arr.shape) != (spec.count,) + tail \
                     or tuple(arr.chunks) != (spec.chunk,) + tail:
                 raise SweepError(str(path), f"array {name} is {arr.dtype}{list(arr.shape)} in chunks "
@@ -176,15 +165,12 @@ class ZarrChunks:
         ok = isinstance(marker, dict) and marker.get("sweep_id") == self.ident \
             and isinstance(marker.get("sha256"), dict)
         if not ok or type(marker.get("chunk")) is not int or marker["chunk"] != index:
-            raise SweepError(str(path), "made by another sweep, or not the marker of this chunk; run the same "
-                                        "sweep again to recompute it")
+            raise bad_chunk(path, "made by another sweep, or not the marker of this chunk")
         return marker
 
     def read(self, index: int) -> dict:
         """The columns of chunk ``index`` (as :func:`~symvib.numeric.sweep.store.read_chunk` returns them), checked:
         its marker is this sweep's and the store holds the bytes it was written with."""
-        from symvib.numeric.sweep.store import check_rows
-
         marker = self._marker(index)
         rows = self.spec.rows(index)[0]
         start, stop = (int(rows[0]), int(rows[-1]) + 1) if len(rows) else (0, 0)
@@ -194,11 +180,9 @@ class ZarrChunks:
             for column, name in self.names.items():
                 columns[column] = np.asarray(self.arrays[name][start:stop])
         except Exception as exc:  # noqa: BLE001 - a truncated or foreign Zarr chunk fails in the codec
-            raise SweepError(where, f"truncated or unreadable ({type(exc).__name__}); run the same sweep again "
-                                    "to recompute it") from None
+            raise bad_chunk(where, f"truncated or unreadable ({type(exc).__name__})") from None
         if digests(columns) != marker["sha256"]:
-            raise SweepError(where, "its data are not what this sweep wrote (truncated, edited or another "
-                                    "sweep's); run the same sweep again to recompute it")
+            raise bad_chunk(where, "its data are not what this sweep wrote (truncated, edited or another sweep's)")
         check_rows(where, self.spec, index, columns)
         return columns
 
