@@ -22,7 +22,11 @@ start-up included, and reports the wall time beside issue 15's target:
 * the main install's sweep speed (numba is a dependency): the same sweep again in a
   later process, which loads the compiled engine from disk (target >= 10,000 scenes/s);
 * the plain-Python engine's sweep speed on ``--plain-scenes`` scenes (where numba is
-  missing).
+  missing);
+* ``--prepared``: a user curve with a pole inside its domain (``x**2 + 1/(x - 0.3)``),
+  its first run (derivation, singular points), the same run again in a new process with
+  the caches of the first (issue 25's target <= 0.5 s, no SymPy), and a run from a start
+  on the other side of the pole (one generated module for both).
 """
 from __future__ import annotations
 
@@ -63,9 +67,9 @@ qdot = 3.0
 """
 
 
-def timed(args: list, backend: str | None = None, caches: Path | None = None) -> tuple:
+def timed(args: list, backend: str | None = None, caches: Path | None = None, codes=(0,)) -> tuple:
     """Wall time of ``symvib ARGS`` in a fresh process with empty caches (or the ``caches``
-    folder of an earlier call), and its output."""
+    folder of an earlier call), and its output (an exit code outside ``codes`` stops the benchmark)."""
     with tempfile.TemporaryDirectory() as tmp:
         folder = caches or Path(tmp)
         env = dict(os.environ, SYMVIB_CACHE=str(folder / "kernels"), NUMBA_CACHE_DIR=str(folder / "numba"))
@@ -76,7 +80,7 @@ def timed(args: list, backend: str | None = None, caches: Path | None = None) ->
         out = subprocess.run([sys.executable, "-m", "symvib.cli", *args], capture_output=True, text=True, env=env,
                              cwd=tmp)
         wall = time.perf_counter() - start
-    if out.returncode != 0:
+    if out.returncode not in codes:
         raise SystemExit(f"symvib {' '.join(args)} failed ({out.returncode}):\n{out.stderr[-2000:]}")
     return wall, out.stdout + out.stderr
 
@@ -104,12 +108,48 @@ def grid(n: int) -> tuple:
     return ("--vary", f"qdot=3:12:{a}", "--vary", f"mu=0.01:0.2:{b}"), a * b
 
 
+#: A user curve with a pole inside its declared domain, as a scene file (the start is set per run).
+POLE = """
+[curve]
+name = "pole"
+z = "x**2 + 1/(x - 0.3)"
+closed_form = "never"
+
+[physics]
+mu = 0.1
+restitution = 0.5
+
+[initial]
+q = {q0}
+qdot = 0.0
+"""
+
+
+def prepared_runs() -> None:
+    """Issue 25: a user curve prepared once, then run by later processes without SymPy."""
+    with tempfile.TemporaryDirectory() as tmp:
+        caches = Path(tmp) / "caches"
+        right, left = Path(tmp) / "right.toml", Path(tmp) / "left.toml"
+        right.write_text(POLE.format(q0=0.5), encoding="utf-8")
+        left.write_text(POLE.format(q0=0.1), encoding="utf-8")
+        wall, _ = timed(["run", str(right)], caches=caches)
+        print(f"{'symvib run pole (first: derive, singular points)':48s} {wall:8.2f}s")
+        walls = sorted(timed(["run", str(right)], caches=caches)[0] for _ in range(5))
+        print(f"{'symvib run pole again (new process, median of 5)':48s} {walls[2]:8.2f}s   <= 0.5 s (issue 25)")
+        # (from the left the particle slides into the pole: status reached_singular_point, exit code 3)
+        wall, _ = timed(["run", str(left)], caches=caches, codes=(0, 3))
+        modules = sorted(p.name for p in (caches / "kernels").glob("*.py"))
+        print(f"{'symvib run pole, other side of the pole':48s} {wall:8.2f}s   "
+              f"{len(modules)} generated module(s) for both starts: {', '.join(modules)}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sweep-scenes", type=int, default=200_000)
     ap.add_argument("--plain-scenes", type=int, default=2_000)
     ap.add_argument("--closed-form", default="auto", help="curve.closed_form of the new curves (or a comma list)")
     ap.add_argument("--only-new-curves", action="store_true", help="time the new curves' first runs only")
+    ap.add_argument("--prepared", action="store_true", help="time a prepared user curve's runs only (issue 25)")
     args = ap.parse_args(argv)
     try:
         import numba  # noqa: F401
@@ -119,6 +159,9 @@ def main(argv=None) -> int:
         fast = False
     print(f"# first calls, empty caches, fresh processes; numba installed: {fast}")
     print(f"{'what':48s} {'wall':>9s}   target")
+    if args.prepared:
+        prepared_runs()
+        return 0
     from symvib.checks.corpus import entry
 
     for choice in args.closed_form.split(","):

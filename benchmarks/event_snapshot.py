@@ -23,8 +23,11 @@ def record(path):
     warnings.simplefilter("ignore")
     try:
         from symvib.checks.stability import cases
-        from symvib.numeric.driver import simulate
         from symvib.numeric.scene import load_scene, scene_from_dict
+        try:
+            from symvib.api import simulate  # with the prepare step (a user curve prepared first)
+        except ImportError:
+            from symvib.numeric.driver import simulate
     except ImportError:
         from symvib.driver import simulate
         from symvib.scene import load_scene, scene_from_dict
