@@ -135,3 +135,30 @@ def test_the_threaded_sweep_runs_every_scene_once_in_blocks_and_raises_a_block_s
 
     with pytest.raises(ZeroDivisionError, match="in a block"):
         threaded_sweep(failing)(rows, rows, R, 0)
+
+
+def test_a_numeric_F_sigma_kernel_is_cached_on_disk_like_the_others(tmp_path, monkeypatch):
+    """numba caches a compiled function only when it holds no function passed as a value; a
+    numeric ``F_sigma`` calls ``F_sigma'`` by name, so its compiled kernels (and the engine that
+    inlines them) are found on disk by the next process, as a closed form's are."""
+    pytest.importorskip("numba")
+    import warnings
+    from pathlib import Path
+
+    import numba
+    from numba.core.errors import NumbaWarning
+
+    from symvib.numeric.engine.bind import _compiled_kernels
+    from symvib.prepare import load_kernels
+
+    monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
+    mod = load_kernels({"name": "bowl-numeric", "kind": "graph", "q": "x", "z": "R - sqrt(R**2 - x**2)",
+                        "domain": ["-R", "R"], "params": {"R": "positive"}, "closed_form": "never"})
+    assert set(mod.F_ROUTES.values()) == {"numeric"}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", NumbaWarning)   # "Cannot cache ... dynamic globals" fails here
+        kernels = _compiled_kernels(mod, len(mod.PARAMS))
+    assert kernels[0](0.1, 0.05, 0.5) == mod.F_p_scalar(0.1, 0.05, 0.5)   # the same arithmetic
+    stem = Path(mod.__file__).stem
+    saved = {p.name.split("-")[0] for p in Path(numba.config.CACHE_DIR).rglob(f"{stem}.F_*_scalar-*.nbi")}
+    assert saved == {f"{stem}.F_p_scalar", f"{stem}.F_m_scalar"}

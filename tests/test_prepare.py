@@ -8,6 +8,7 @@ singular points is read only when it is well formed.
 """
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import os
@@ -50,13 +51,14 @@ def test_one_module_serves_starts_on_both_sides_of_a_pole(cache):
 
 
 def test_a_narrowed_view_integrates_F_sigma_from_inside_its_interval(cache):
-    """``F_+(b) - F_+(a)`` of the view against mpmath's quadrature of ``F_+'`` on the interval."""
+    """``F_s(b) - F_s(a)`` of the view against mpmath's quadrature of ``F_s'`` on the interval."""
     mpmath = pytest.importorskip("mpmath")
     view = prepare(_scene(0.5)).kernels
     mu = 0.1
-    for a, b in ((0.31, 0.5), (0.5, 2.0), (0.35, 7.5)):
-        got = view.F_p_scalar(b, mu) - view.F_p_scalar(a, mu)
-        want = float(mpmath.quad(lambda x: view.dF_p_scalar(float(x), mu), [a, (a + b) / 2, b]))
+    branches = ((view.F_p_scalar, view.dF_p_scalar), (view.F_m_scalar, view.dF_m_scalar))
+    for (a, b), (F, dF) in itertools.product(((0.31, 0.5), (0.5, 2.0), (0.35, 7.5)), branches):
+        got = F(b, mu) - F(a, mu)
+        want = float(mpmath.quad(lambda x: dF(float(x), mu), [a, (a + b) / 2, b]))
         # (panels PANEL * scale wide, the scale the start's distance to the pole: 1e-14 away from it,
         # 2e-11 at a twentieth of that scale from it)
         assert abs(got - want) <= 1e-10 * max(1.0, abs(want)), (a, b, got, want)
@@ -134,3 +136,21 @@ def test_a_start_on_the_pole_is_refused_naming_the_field(cache):
     with pytest.raises(SceneError) as err:
         prepare(_scene(0.3))
     assert err.value.field == "initial.q" and "singular point" in str(err.value)
+
+
+@pytest.mark.slow  # compiles the engine for the narrowed view (20-40 s)
+def test_a_narrowed_run_compiles_for_this_process_only_and_agrees_with_the_plain_engine(cache):
+    pytest.importorskip("numba")
+    from symvib import simulate
+    from symvib.numeric.engine.bind import is_compiled
+
+    scene = _scene(0.5)
+    plain = simulate(scene, backend="python", samples=False)
+    compiled = simulate(scene, backend="numba", samples=False)
+    assert compiled.status is plain.status and len(compiled.events) == len(plain.events) > 3
+    for a, b in zip(plain.events, compiled.events):
+        assert a.kind is b.kind and abs(a.t - b.t) <= 1e-12 * max(1.0, a.t) and abs(a.q - b.q) <= 1e-12
+    # its run's numbers are compile-time constants numba's disk cache does not key on: never
+    # marked as compiled, so a later "auto" run takes the plain engine instead of compiling
+    view = prepare(scene).kernels
+    assert not is_compiled(view) and simulate(scene, samples=False).stats["backend"] == "python"

@@ -386,18 +386,6 @@ def _antiderivative(f, q, q_ref, args, width):
     total = numpy.sum(values * (_GL_WA / (2.0 * panels)), axis=(-2, -1))
     return numpy.broadcast_to(total * length, shape) * 1.0
 
-
-def _antiderivative_scalar(f, q, q_ref, args, width):
-    """Scalar twin of _antiderivative (floats, math)."""
-    length = q - q_ref
-    panels = max(1, math.ceil(abs(length) / width))
-    step = length / panels
-    total = 0.0
-    for k in range(panels):
-        left = q_ref + k * step
-        for xk, wk in zip(_GL_X, _GL_W):
-            total += wk * f(left + 0.5 * step * (xk + 1.0), *args)
-    return 0.5 * step * total
 '''
 
 
@@ -447,10 +435,20 @@ def module_text(d: Derivation, source: dict) -> str:
         parts.append(
             f"def F_{b}({', '.join(args)}):\n    \"\"\"{doc}\"\"\"\n"
             f"    return _antiderivative(dF_{b}, q, {ref}, ({call_args},), PANEL * q_scale({scale}))")
+        # The scalar twin calls dF by name (not as a function passed in): numba caches a compiled
+        # function on disk only without such values, so the compiled engine is found again.
         parts.append(
             f"def F_{b}_scalar({', '.join(args)}):\n    \"\"\"{doc} Floats only (math).\"\"\"\n"
-            f"    return _antiderivative_scalar(dF_{b}_scalar, q, {ref_s}, ({call_args},), "
-            f"PANEL * q_scale_scalar({scale}))")
+            f"    q_ref = {ref_s}\n"
+            f"    length = q - q_ref\n"
+            f"    panels = max(1, math.ceil(abs(length) / (PANEL * q_scale_scalar({scale}))))\n"
+            f"    step = length / panels\n"
+            f"    total = 0.0\n"
+            f"    for k in range(panels):\n"
+            f"        left = q_ref + k * step\n"
+            f"        for xk, wk in zip(_GL_X, _GL_W):\n"
+            f"            total += wk * dF_{b}_scalar(left + 0.5 * step * (xk + 1.0), {call_args})\n"
+            f"    return 0.5 * step * total")
     # Domain as numbers.
     lo, hi = c.domain
     dom = lambda e, p: "math.inf" if e == sp.oo else "-math.inf" if e == -sp.oo else p.doprint(e)  # noqa: E731

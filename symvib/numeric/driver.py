@@ -356,7 +356,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
             sampler = partial(_lazy_samples, partial(_sample_engine, mod, requested, backend), cp, row,
                               out.intervals, out.n_intervals, R, scene, mod, pieces)
         interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], R)
-    stats = {"intervals": int(out.n_intervals) if samples else None, "backend": backend, "t_err": float(out.t_err)}
+    stats = {"intervals": int(out.n_intervals) if samples else None, "backend": backend, "t_err": float(out.t_err),
+             "domain": (prep.domain.lo, prep.domain.hi)}   # the run's (narrowed next to a singular point)
     if status == StatusCode.TOLERANCE_NOT_MET:
         stats["accuracy"] = (
             f"error: the time of the motion interval from {scene.shape.q} = {float(out.q):.12g} to "

@@ -372,7 +372,8 @@ def _sketch_range(result):
         qs += [float(S.q.min()), float(S.q.max())]
     lo, hi = min(qs), max(qs)
     pad = SKETCH_MARGIN * max(hi - lo, 1e-3)
-    dlo, dhi = (float(v) for v in mod.domain(*cp))
+    # (the run's own domain: a curve with a singular point inside its declared one is drawn up to it)
+    dlo, dhi = (float(v) for v in result.stats.get("domain") or mod.domain(*cp))
     inset = 1e-6 * max(hi - lo, 1e-3)
     return max(lo - pad, dlo + inset), min(hi + pad, dhi - inset)
 

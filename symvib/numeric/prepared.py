@@ -240,25 +240,29 @@ def _q_scale(*cp):
     return RUN_SCALE + 0.0 * _RUN_NP.asarray(cp[0] if cp else 0.0)  # noqa: F821
 
 
-def _quadrature(f, q, args):
-    """Integral of ``f`` from ``RUN_Q_REF`` to ``q``: composite Gauss-Legendre, panels at most ``RUN_WIDTH``."""
-    length = q - RUN_Q_REF  # noqa: F821
+def _F_p_scalar(q, mu, *cp):
+    """Integral of ``F_+'`` from ``RUN_Q_REF`` to ``q``: composite Gauss-Legendre, panels at most
+    ``RUN_WIDTH`` (the generated numeric ``F_sigma``'s rule; ``F_+'`` called by name, not passed)."""
+    length = q - RUN_Q_REF  # noqa: F821 - globals of the view
     panels = max(1, math.ceil(abs(length) / RUN_WIDTH))  # noqa: F821
     step = length / panels
     total = 0.0
     for k in range(panels):
         left = RUN_Q_REF + k * step  # noqa: F821
-        for i in range(len(RUN_GL_X)):  # noqa: F821
-            total += RUN_GL_W[i] * f(left + 0.5 * step * (RUN_GL_X[i] + 1.0), *args)  # noqa: F821
+        for xk, wk in zip(RUN_GL_X, RUN_GL_W):  # noqa: F821
+            total += wk * dF_p_scalar(left + 0.5 * step * (xk + 1.0), mu, *cp)  # noqa: F821
     return 0.5 * step * total
 
 
-def _F_p_scalar(q, mu, *cp):
-    return _run_quadrature(dF_p_scalar, q, (mu,) + cp)  # noqa: F821
+def _twin(fn, names: dict):
+    """``fn`` with the globals it names renamed (``dF_p_scalar`` -> ``dF_m_scalar``): one template
+    for both branches, each calling its ``F_sigma'`` by name."""
+    code = fn.__code__
+    return types.FunctionType(code.replace(co_names=tuple(names.get(n, n) for n in code.co_names)),
+                              fn.__globals__, fn.__name__.replace("_p", "_m"))
 
 
-def _F_m_scalar(q, mu, *cp):
-    return _run_quadrature(dF_m_scalar, q, (mu,) + cp)  # noqa: F821
+_F_m_scalar = _twin(_F_p_scalar, {"dF_p_scalar": "dF_m_scalar"})
 
 
 def _F_p(q, mu, *cp):
@@ -271,7 +275,7 @@ def _F_m(q, mu, *cp):
 
 #: The view's replacements, by the name they take.
 _TEMPLATES = {"domain": _domain, "q_scale_scalar": _q_scale_scalar, "q_scale": _q_scale,
-              "_run_quadrature": _quadrature, "F_p_scalar": _F_p_scalar, "F_m_scalar": _F_m_scalar,
+              "F_p_scalar": _F_p_scalar, "F_m_scalar": _F_m_scalar,
               "F_p": _F_p, "F_m": _F_m}
 #: Views already built, by (module name, input hash, run numbers): one object each, so the driver's
 #: engine cache holds.

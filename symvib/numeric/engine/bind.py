@@ -31,6 +31,7 @@ Examples
 from __future__ import annotations
 
 import hashlib
+import inspect
 import types
 from functools import cache, partial
 from pathlib import Path
@@ -86,6 +87,8 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
     ncp = len(module.PARAMS)
     if not shared:
         entries = _specialized_engine(module, ncp)
+        if not getattr(module, "__file__", None):   # a prepared view: compiled in this process only
+            return Engine(entries["simulate_bound"], entries["sample_bound"], threaded_sweep(entries["sweep_bound"]))
         return Engine(_marking(entries["simulate_bound"], compiled_marker(module, "simulate_bound")),
                       _marking(entries["sample_bound"], compiled_marker(module, "sample_bound")),
                       threaded_sweep(entries["sweep_bound"]))
@@ -189,12 +192,16 @@ def _compiled_kernels(module, ncp: int) -> tuple:
     sigs = _signatures(ncp)
     wanted = {fname for fname, _, _ in KERNEL_INTERFACE.values()}
     # Every function the interface kernels may call: the module's float-only functions.
+    # A prepared view of a module on a narrowed domain (symvib.numeric.prepared.kernel_view) has no
+    # file: its run's numbers are compile-time constants that numba's cache does not key on.
+    cache = bool(getattr(module, "__file__", None))
     compiled = _compiled_functions([module], lambda n: n.endswith("_scalar") or n in wanted,
-                                   options={f: {"cache": True, **ERRORS} for f in wanted}, default=ERRORS)
+                                   options={f: {"cache": cache, **ERRORS} for f in wanted}, default=ERRORS)
     out = []
     for name, (fname, _, _) in KERNEL_INTERFACE.items():
         dispatcher = compiled[fname]
-        dispatcher.compile(sigs[name])
+        if not dispatcher.py_func.__code__.co_flags & inspect.CO_VARARGS:   # (a view's take *cp: compiled
+            dispatcher.compile(sigs[name])                                     # at their first call)
         out.append(dispatcher)
     module._symvib_compiled_kernels = tuple(out)
     return module._symvib_compiled_kernels
@@ -337,10 +344,11 @@ def _specialized_engine(module, ncp: int) -> dict:
     from symvib.numeric.kernels import cache_dir
 
     tag = _tag(module)
-    options = {name: {"cache": True, **ERRORS} for name in BOUND_ENTRIES}
+    cache = bool(getattr(module, "__file__", None))   # (not a prepared view's: see _compiled_kernels)
+    options = {name: {"cache": cache, **ERRORS} for name in BOUND_ENTRIES}
     # Threads of Python over blocks of scenes (threaded_sweep), not numba's parallel loop (prange):
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
-    options["sweep_bound"] = {"cache": True, "nogil": True, **ERRORS}
+    options["sweep_bound"] = {"cache": cache, "nogil": True, **ERRORS}
     options.update({name: {"inline": "always", **INNER}
                     for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE)})
     options.update({name: {"_nrt": False, **INNER} for name in NO_REFCOUNT})
