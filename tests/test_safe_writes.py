@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from symvib import safeio
+from symvib import safeio, sweep
 from symvib.cli import main, sweep_main
 from symvib.numeric.scene import resolve_scene
-from symvib.numeric.sweep import load_sweep, sweep
+from symvib.numeric.sweep import load_sweep
 from symvib.numeric.sweep.limits import SweepError
 from symvib.paths import UserPathError
 

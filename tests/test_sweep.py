@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symvib import simulate
+from symvib import simulate, sweep
 from symvib.cli import sweep_main as main
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.numeric.scene import resolve_scene as _resolve_scene
-from symvib.numeric.sweep import FORMAT, Progress, load_sweep, make_spec, run_chunk, sweep
+from symvib.numeric.sweep import FORMAT, Progress, load_sweep, make_spec, run_chunk
 
 PARABOLA = {"curve": {"shape": "parabola"}, "parameters": {"p": 1.0},
             "physics": {"g": 9.81, "m": 0.2, "mu": 0.05, "restitution": 0.8},

@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 from readme_blocks import DOCS, run_section
 
+from symvib import sweep
 from symvib.cli import sweep_main as main
 from symvib.numeric.layout import EVENT_COLUMNS, STATUSES, SUMMARY_COLUMNS
 from symvib.numeric.scene import scene_from_dict
-from symvib.numeric.sweep import SweepError, load_sweep, open_sweep, sweep, sweep_id
+from symvib.numeric.sweep import SweepError, load_sweep, open_sweep, sweep_id
 
 xr = pytest.importorskip("xarray")
 pd = pytest.importorskip("pandas")

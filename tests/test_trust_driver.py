@@ -11,13 +11,14 @@ import math
 import numpy as np
 import pytest
 
+from symvib import sweep
 from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
 from symvib.numeric import driver
 from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe, kind_of, status_of
 from symvib.numeric.layout import ERROR_CODES, STATUSES, SceneRow, StatusCode, Summary
 from symvib.numeric.scene import CONTACTS, MAX_EVENTS, SceneError, scene_from_dict
 from symvib.numeric.scene import resolve_scene as _resolve_scene
-from symvib.numeric.sweep import make_spec, sweep
+from symvib.numeric.sweep import make_spec
 
 #: The README's parabola scene (paper figs. 5-11, k = 0.8).
 BASE = {"curve": {"shape": "parabola"}, "parameters": {"p": 1},

@@ -6,11 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from symvib import simulate
+from symvib import simulate, sweep
 from symvib.cli import EXIT_RUN_FAILED
 from symvib.cli import sweep_main as main
 from symvib.numeric.scene import SceneError, scene_from_dict
-from symvib.numeric.sweep import sweep
 from symvib.shapes import CATALOGUE
 
 #: The README's own user curve (a graph z = f(x)).
