@@ -63,11 +63,34 @@ import dataclasses
 import math
 import numbers
 import re
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from symvib import expr as _expr
+from symvib.numeric.scene_checks import (
+    CHECKS,
+    INFINITE,
+    MAX_NAME_LENGTH,
+    Check,
+    SceneError,
+    SceneNumbers,
+    check_identifier,
+    check_name,
+    check_numbers,
+    declared_domain,
+    field_key,
+    finite,
+    show_value,
+)
+from symvib.numeric.scene_checks import (
+    CONTACTS as CONTACTS,
+)
+from symvib.numeric.scene_checks import (
+    MAX_EVENTS as MAX_EVENTS,
+)
+from symvib.numeric.scene_checks import (
+    checks as checks,
+)
 from symvib.paths import UserPathError, read_user_toml, safe_stem
 from symvib.shapes import CATALOGUE, CLOSED_FORMS, Shape
 
@@ -79,19 +102,10 @@ __all__ = ["Scene", "SceneError", "SceneNumbers", "Check", "CHECKS", "load_scene
 DEFAULT_T_MAX = 1000.0
 #: Default bound on the number of events of a run.
 DEFAULT_MAX_EVENTS = 100_000
-#: Largest ``run.max_events`` accepted: the engine's event log grows with the events (48 bytes
-#: each, so 4.8 GB at this bound) and its counter is an int64.
-MAX_EVENTS = 10**8
-#: Values of ``physics.contact`` (physics.md, "Assumptions"): ``bilateral`` (the default, the
-#: paper's model: a bead on a wire, held on both sides, N may change sign) or ``unilateral``
-#: (a particle on the surface, supported only along the normal n: the run ends when N reaches 0).
-CONTACTS = ("bilateral", "unilateral")
 #: Standard gravity, the default of ``physics.g``.
 STANDARD_GRAVITY = 9.81
 #: Default mass, kilograms.
 DEFAULT_MASS = 1.0
-#: Longest scene or curve name, in characters.
-MAX_NAME_LENGTH = 200
 #: Longest scene description, in characters.
 MAX_DESCRIPTION_LENGTH = 10_000
 
@@ -146,14 +160,6 @@ _UNIT_NAME = r"[A-Za-z_][A-Za-z0-9_]*(?:/[A-Za-z_][A-Za-z0-9_]*)?"
 _WITH_UNIT = re.compile(rf"(?s)(?P<value>.*?\S)\s+(?P<unit>{_UNIT_NAME})\s*")
 
 
-class SceneError(ValueError):
-    """A scene was rejected; ``field`` names where (``"physics.restitution"``)."""
-
-    def __init__(self, field: str, reason: str):
-        self.field = field
-        self.reason = reason
-        super().__init__(f"{field}: {reason}")
-
 
 #: Keys of ``Shape.source()`` that a scene file's ``[curve]`` table takes (``kind`` is implied by ``x``).
 _CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params", "closed_form")
@@ -198,7 +204,7 @@ def friction_coefficient(alpha0, field: str = "physics.alpha0") -> float:
     ...
     symvib.numeric.scene.SceneError: physics.alpha0: friction angle must be in [0, pi/2) radians, got 2.0
     """
-    alpha0 = _finite(alpha0, field)
+    alpha0 = finite(alpha0, field)
     if not 0 <= alpha0 < math.pi / 2:
         raise SceneError(field, f"friction angle must be in [0, pi/2) radians, got {alpha0}")
     return math.tan(alpha0)
@@ -300,62 +306,8 @@ class Scene:
         return out
 
 
-def _show(value) -> str:
-    """A number as plain text for messages (``2.0``, never ``np.float64(2.0)``)."""
-    if isinstance(value, numbers.Integral) and not isinstance(value, bool):
-        text = str(int(value))
-        return text if len(text) <= _expr.MAX_INT_DIGITS else f"an integer of {len(text)} digits"
-    if isinstance(value, numbers.Real):
-        return repr(float(value))
-    text = repr(value)
-    return text if len(text) <= MAX_NAME_LENGTH else text[:MAX_NAME_LENGTH] + "..."
-
-
-def _finite(value, field):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise SceneError(field, f"must be a number, got {_show(value)}")
-    try:
-        result = float(value)
-    except OverflowError:
-        raise SceneError(field, f"number too large: {_show(value)}") from None
-    if not math.isfinite(result):
-        raise SceneError(field, f"must be finite, got {_show(value)}")
-    return result
-
-
-def _check_name(value, field):
-    """A scene or curve name: one line of printable text of at most MAX_NAME_LENGTH characters."""
-    if not isinstance(value, str):
-        raise SceneError(field, f"must be a string, got {type(value).__name__}")
-    if not value.strip():
-        raise SceneError(field, "must not be empty")
-    if len(value) > MAX_NAME_LENGTH:
-        raise SceneError(field, f"is {len(value)} characters long; at most {MAX_NAME_LENGTH} are accepted")
-    if not value.isprintable():
-        raise SceneError(field, f"must be one line of printable text, got {_show(value)}")
-
-
-def _key(key) -> str:
-    """A TOML key as it may appear in a field name: one printable line, not too long."""
-    text = str(key)
-    if not text.isprintable():
-        text = repr(text)[1:-1]
-    return text if len(text) <= MAX_NAME_LENGTH else text[:MAX_NAME_LENGTH] + "..."
-
-
-def _check_identifier(value, field, what):
-    """A coordinate or parameter name: a plain identifier that is not a function or constant."""
-    if not isinstance(value, str):
-        raise SceneError(field, f"{what} must be a string, got {type(value).__name__}")
-    if not value.isidentifier() or value.startswith("_") or len(value) > MAX_NAME_LENGTH:
-        raise SceneError(field, f"{what} must be an identifier (letters, digits, _; not starting with _ or "
-                                f"a digit; at most {MAX_NAME_LENGTH} characters), got {_show(value)}")
-    if value in _expr.FUNCTIONS or value in _expr.CONSTANTS:
-        raise SceneError(field, f"{what} {value!r} is the name of a function or constant")
-
-
 def _validate(s: Scene) -> None:
-    _check_name(s.name, "name")
+    check_name(s.name, "name")
     if not isinstance(s.shape, Shape):
         raise SceneError("curve", "must be a catalogue shape or a curve definition")
     declared = list(s.shape.params)
@@ -368,241 +320,6 @@ def _validate(s: Scene) -> None:
         if n not in given:
             raise SceneError(f"parameters.{n}", f"missing: curve '{s.shape.name}' needs a value for {n}")
     check_numbers(SceneNumbers.of(s))
-
-
-class SceneNumbers:
-    """The numbers of one scene, or of many as columns, as :data:`CHECKS` read them.
-
-    For one scene (:meth:`of`) every attribute is the scene's value (``left``
-    and ``right`` may be ``None``; ``has_left`` says whether there is one) and
-    ``domain`` is computed when a check first reads it
-    (:func:`declared_domain`), so its errors come in their order.  For many
-    scenes (a sweep's rows, :mod:`symvib.numeric.sweep.rows`) the attributes
-    are NumPy columns of equal length or single values, and ``domain`` is
-    ``(lo, hi)`` as values or columns.
-
-    Parameters
-    ----------
-    params : dict
-        Parameter name -> value (or column).
-    kinds : dict
-        Parameter name -> assumption (``"positive"``, ...), the curve's.
-    domain : tuple or callable
-        ``(lo, hi)``, or a function returning it (called once, when first read).
-    """
-
-    NAMES = ("g", "m", "mu", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max",
-             "max_events", "contact")
-
-    def __init__(self, *, params: dict, kinds: dict, domain, **values):
-        missing = set(self.NAMES) - set(values)
-        if missing or set(values) - set(self.NAMES):
-            raise TypeError(f"SceneNumbers takes {', '.join(self.NAMES)}")
-        self.__dict__.update(values)
-        self.params, self.kinds, self._domain = params, kinds, domain
-
-    @classmethod
-    def of(cls, s: Scene) -> SceneNumbers:
-        """The numbers of scene ``s`` (its domain computed on first use)."""
-        return cls(params=dict(s.params), kinds=dict(s.shape.params), domain=lambda: declared_domain(s),
-                   g=s.g, m=s.m, mu=s.mu, k=s.k, has_left=s.left is not None, left=s.left,
-                   has_right=s.right is not None, right=s.right, q0=s.q0, qdot0=s.qdot0, t_max=s.t_max,
-                   max_events=s.max_events, contact=s.contact)
-
-    @property
-    def domain(self) -> tuple:
-        """``(lo, hi)``: the curve's declared domain for these parameter values."""
-        if callable(self._domain):
-            self._domain = self._domain()
-        return self._domain
-
-    def row(self, i: int) -> SceneNumbers:
-        """The numbers of scene ``i`` of columns (single values are shared by every row)."""
-        def pick(v):
-            return v[i] if hasattr(v, "__len__") and not isinstance(v, str) else v
-
-        return SceneNumbers(params={n: pick(v) for n, v in self.params.items()}, kinds=self.kinds,
-                            domain=lambda: tuple(pick(v) for v in self.domain),
-                            **{n: pick(getattr(self, n)) for n in self.NAMES})
-
-
-@dataclass(frozen=True)
-class Check:
-    """One check of a scene's numbers: where it applies, what it tests and what it says.
-
-    ``value``, ``test`` and ``when`` take a :class:`SceneNumbers`.  They use
-    arithmetic, comparisons, ``&`` and ``|`` only, so they hold for one scene
-    and, element-wise, for columns of many (a sweep's rows).  ``test`` ``None``
-    means: ``value`` must be a finite number (for one scene the type is checked
-    too, :func:`_finite`).  ``reason`` gives the message for one scene: a text
-    (then ``", got VALUE"`` follows) or a function of its numbers.
-    """
-
-    field: str
-    value: Callable
-    test: Callable | None = None
-    reason: str | Callable = "must be finite"
-    when: Callable | None = None
-
-    def message(self, n: SceneNumbers) -> str:
-        """The reason this check fails for the one scene ``n``."""
-        if callable(self.reason):
-            return self.reason(n)
-        return f"{self.reason}, got {_show(self.value(n))}"
-
-
-def _positive_integer(v):
-    """``v >= 1`` and whole: a Python ``int`` for one scene, whole numbers in a float column."""
-    if isinstance(v, numbers.Number) or not hasattr(v, "dtype"):
-        return isinstance(v, numbers.Integral) and not isinstance(v, bool) and v >= 1
-    return (v % 1 == 0) & (v >= 1)
-
-
-def _attr(name: str) -> Callable:
-    return lambda n: getattr(n, name)
-
-
-def _finite_check(field: str, name: str, when=None) -> Check:
-    return Check(field, _attr(name), when=when)
-
-
-def _limit_reason(side: str) -> Callable:
-    where = "left of the left" if side == "left" else "right of the right"
-    return lambda n: (f"{_show(float(n.q0))} is outside the limiters: {where} limiter at "
-                      f"{_show(getattr(n, side))}")
-
-
-def _domain_check(field: str, name: str, when=None) -> Check:
-    def test(n):
-        lo, hi = n.domain
-        v = getattr(n, name)
-        return (lo < v) & (v < hi)
-
-    def reason(n):
-        lo, hi = n.domain
-        v = getattr(n, name)
-        return f"{_show(float(v) if name == 'q0' else v)} is outside the curve's regular domain ({lo:.6g}, {hi:.6g})"
-
-    return Check(field, _attr(name), test, reason, when)
-
-
-def _parameter_checks(n: SceneNumbers) -> list:
-    out = []
-    for name in n.params:
-        value = (lambda name: lambda n: n.params[name])(name)
-        out.append(Check(f"parameters.{name}", value))
-        if n.kinds.get(name, "positive") == "positive":
-            out.append(Check(f"parameters.{name}", value, lambda n, value=value: value(n) > 0, "must be positive"))
-    return out
-
-
-_has_left, _has_right = _attr("has_left"), _attr("has_right")
-
-#: The checks of a scene's numbers after its parameters', in the order they are made
-#: (:func:`check_numbers`); a sweep applies the same to its rows (:mod:`symvib.numeric.sweep.rows`).
-CHECKS = (
-    _finite_check("physics.g", "g"),
-    Check("physics.g", _attr("g"), lambda n: n.g > 0, "must be positive"),
-    _finite_check("physics.m", "m"),
-    Check("physics.m", _attr("m"), lambda n: n.m > 0, "must be positive"),
-    _finite_check("physics.mu", "mu"),
-    Check("physics.mu", _attr("mu"), lambda n: n.mu >= 0, "friction coefficient must be >= 0"),
-    _finite_check("physics.restitution", "k"),
-    Check("physics.restitution", lambda n: float(n.k), lambda n: (n.k >= 0) & (n.k <= 1),
-          "must be in [0, 1] (1 = ideally elastic, 0 = plastic)"),
-    _finite_check("limiters.left", "left", when=_has_left),
-    _finite_check("limiters.right", "right", when=_has_right),
-    Check("limiters", _attr("left"), lambda n: n.left < n.right,
-          lambda n: f"left limiter ({_show(n.left)}) must be left of the right one ({_show(n.right)})",
-          when=lambda n: n.has_left & n.has_right),
-    _finite_check("initial.q", "q0"),
-    _finite_check("initial.qdot", "qdot0"),
-    Check("initial.q", _attr("q0"), lambda n: n.q0 >= n.left, _limit_reason("left"), when=_has_left),
-    Check("initial.q", _attr("q0"), lambda n: n.q0 <= n.right, _limit_reason("right"), when=_has_right),
-    _domain_check("limiters.left", "left", when=_has_left),
-    _domain_check("limiters.right", "right", when=_has_right),
-    _domain_check("initial.q", "q0"),
-    _finite_check("run.t_max", "t_max"),
-    Check("run.t_max", _attr("t_max"), lambda n: n.t_max > 0, "must be positive"),
-    Check("physics.contact", _attr("contact"), lambda n: n.contact in CONTACTS,
-          lambda n: f"must be one of {', '.join(map(repr, CONTACTS))}, got {_show(n.contact)}"),
-    Check("run.max_events", _attr("max_events"), lambda n: _positive_integer(n.max_events),
-          "must be a positive integer"),
-    Check("run.max_events", _attr("max_events"), lambda n: n.max_events <= MAX_EVENTS,
-          f"at most {MAX_EVENTS} (scene.MAX_EVENTS)"),
-)
-
-
-def checks(n: SceneNumbers) -> list:
-    """Every check of the numbers ``n``, in order: the parameters', then :data:`CHECKS`."""
-    return _parameter_checks(n) + list(CHECKS)
-
-
-def check_numbers(n: SceneNumbers) -> None:
-    """Make every check (:func:`checks`) of one scene's numbers; the first that fails raises.
-
-    Raises
-    ------
-    SceneError
-        Naming the field of the first failing check.
-
-    Examples
-    --------
-    >>> s = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
-    ...     "physics": {"mu": 0, "restitution": 1}, "initial": {"q": 0, "qdot": 1}})
-    >>> n = SceneNumbers.of(s)
-    >>> n.k = 1.5
-    >>> check_numbers(n)
-    Traceback (most recent call last):
-    ...
-    symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5
-    """
-    for c in checks(n):
-        if c.when is not None and not c.when(n):
-            continue
-        if c.test is None:
-            _finite(c.value(n), c.field)
-        elif not c.test(n):
-            raise SceneError(c.field, c.message(n))
-
-
-#: Texts of an infinite end of a curve's domain (with an optional sign).
-_INFINITE = ("oo", "inf")
-
-
-def declared_domain(s: Scene, values=None) -> tuple:
-    """The curve's declared domain ``(lo, hi)`` as floats, for the scene's parameter values
-    or for ``values`` (the parameters' values in the curve's order).
-
-    Raises
-    ------
-    SceneError
-        Naming ``curve.domain[i]`` (or ``curve.domain`` when the ends are
-        reversed), before any limiter or initial position is compared with it.
-
-    Examples
-    --------
-    >>> s = scene_from_dict({"curve": {"shape": "cycloid"}, "parameters": {"R": 1},
-    ...     "physics": {"mu": 0, "restitution": 1}, "initial": {"q": 0, "qdot": 1}})
-    >>> [round(v, 6) for v in declared_domain(s)]
-    [-3.141593, 3.141593]
-    """
-    names = [n for n, _ in s.params]
-    values = dict(s.params) if values is None else dict(zip(names, (float(v) for v in values)))
-    out = []
-    for i, end in enumerate(s.shape.domain):
-        text = str(end).strip()
-        if text.lstrip("+-") in _INFINITE:
-            out.append(-math.inf if text.startswith("-") else math.inf)
-            continue
-        try:
-            out.append(_expr.number(text, field=f"curve.domain[{i}]", symbols=values))
-        except _expr.ExpressionError as exc:
-            raise SceneError(exc.field, exc.reason) from None
-    lo, hi = out
-    if not lo < hi:
-        raise SceneError("curve.domain", f"the low end ({lo:.6g}) must be below the high end ({hi:.6g})")
-    return lo, hi
 
 
 def field_unit(name: str, shape: Shape | None = None) -> str | None:
@@ -729,20 +446,20 @@ def _split_unit(text: str, field_: str, unit: str | None, symbols) -> tuple[str,
     if given in accepted or given == unit:
         return match["value"], accepted.get(given, 1.0)
     if accepted:
-        raise SceneError(field_, f"unknown unit {_show(given)}; this field is in {unit} and takes "
+        raise SceneError(field_, f"unknown unit {show_value(given)}; this field is in {unit} and takes "
                                  f"{', '.join(accepted)}")
     if unit == "1":
-        raise SceneError(field_, f"takes no unit (a dimensionless number), got the unit {_show(given)}")
+        raise SceneError(field_, f"takes no unit (a dimensionless number), got the unit {show_value(given)}")
     if unit is None:
         hint = (" (a curve parameter is an angle when the curve uses it only inside "
                 f"{', '.join(sorted(TRIGONOMETRIC))} or its alpha)") if field_.startswith("parameters.") else ""
-        raise SceneError(field_, f"takes no unit, got {_show(given)}; units are accepted on angles only "
+        raise SceneError(field_, f"takes no unit, got {show_value(given)}; units are accepted on angles only "
                                  f"({', '.join(VALUE_UNITS['rad'])}){hint}")
     angles = ", ".join(VALUE_UNITS["rad"])
     if re.fullmatch(_UNIT_NAME, unit):
-        raise SceneError(field_, f"unknown unit {_show(given)}: this field is in {unit} (SI), the one unit it "
+        raise SceneError(field_, f"unknown unit {show_value(given)}: this field is in {unit} (SI), the one unit it "
                                  f"takes; other units are accepted on angles only ({angles})")
-    raise SceneError(field_, f"takes no unit, got {_show(given)}: write the number in {unit} (SI); units are "
+    raise SceneError(field_, f"takes no unit, got {show_value(given)}: write the number in {unit} (SI); units are "
                              f"accepted on angles only ({angles})")
 
 
@@ -754,7 +471,7 @@ def _number(section: dict, key: str, prefix: str, symbols=None, default=None, sh
     if isinstance(value, bool):
         raise SceneError(field_, f"must be a number, got {value!r}")
     if isinstance(value, (int, float)):
-        return _finite(value, field_)
+        return finite(value, field_)
     if not isinstance(value, str):
         raise SceneError(field_, f"must be a number or an expression string, got {type(value).__name__}")
     text, factor = _split_unit(value, field_, field_unit(field_, shape) if shape is not None else None, symbols)
@@ -762,7 +479,7 @@ def _number(section: dict, key: str, prefix: str, symbols=None, default=None, sh
         number = _expr.number(text, field=field_, symbols=symbols)
     except _expr.ExpressionError as exc:
         raise SceneError(exc.field, exc.reason) from None
-    return number if factor == 1.0 else _finite(number * factor, field_)
+    return number if factor == 1.0 else finite(number * factor, field_)
 
 
 def _shape(curve: dict) -> Shape:
@@ -789,9 +506,9 @@ def _shape(curve: dict) -> Shape:
                                               f"not {closed_form!r}")
     kind = "parametric" if "x" in curve else "graph"
     q = curve.get("q", "q" if kind == "parametric" else "x")
-    _check_identifier(q, "curve.q", "the coordinate")
+    check_identifier(q, "curve.q", "the coordinate")
     if "name" in curve:
-        _check_name(curve["name"], "curve.name")
+        check_name(curve["name"], "curve.name")
     # Validate the expressions now (safely), so errors name the field.
     params = curve.get("params")
     names = _curve_symbols(curve, q)
@@ -799,12 +516,12 @@ def _shape(curve: dict) -> Shape:
         params = {n: "positive" for n in names}
     elif isinstance(params, list):
         for i, n in enumerate(params):
-            _check_identifier(n, f"curve.params[{i}]", "a parameter name")
+            check_identifier(n, f"curve.params[{i}]", "a parameter name")
         params = {n: "positive" for n in params}
     elif not isinstance(params, dict):
         raise SceneError("curve.params", "must be a list of names or a table name -> assumption")
     for n, assumption in params.items():
-        _check_identifier(n, f"curve.params.{_key(n)}", "a parameter name")
+        check_identifier(n, f"curve.params.{field_key(n)}", "a parameter name")
         if not isinstance(assumption, str):
             raise SceneError(f"curve.params.{n}", f"the assumption must be a string, got {type(assumption).__name__}")
     if q in params:
@@ -818,7 +535,7 @@ def _shape(curve: dict) -> Shape:
         raise SceneError("curve.domain", "must be a list [low, high] of expressions")
     for i, end in enumerate(domain):
         _domain_end(end, f"curve.domain[{i}]", params)
-    domain = [end if isinstance(end, str) else _show(_finite(end, f"curve.domain[{i}]"))
+    domain = [end if isinstance(end, str) else show_value(finite(end, f"curve.domain[{i}]"))
               for i, end in enumerate(domain)]
     return Shape(name=curve.get("name", "user-curve"), kind=kind, q=q, z=curve["z"], x=curve.get("x"),
                  params=dict(params), domain=tuple(str(d) for d in domain), h=curve.get("h"),
@@ -831,9 +548,9 @@ def _domain_end(end, field, params) -> None:
     if isinstance(end, bool) or not isinstance(end, (str, numbers.Real)):
         raise SceneError(field, f"must be a number or an expression string, got {type(end).__name__}")
     if not isinstance(end, str):
-        _finite(end, field)
+        finite(end, field)
         return
-    if end.strip().lstrip("+-") in _INFINITE:
+    if end.strip().lstrip("+-") in INFINITE:
         return
     try:
         _expr.parse(end, symbols=tuple(params), field=field)
@@ -865,7 +582,8 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         raise SceneError("scene", "must be a table")
     for key in data:
         if key not in _SECTIONS and key not in _TOP:
-            raise SceneError(_key(key), f"unknown section or key; known: {', '.join(sorted(_SECTIONS) + sorted(_TOP))}")
+            raise SceneError(field_key(key), f"unknown section or key; known: "
+                                             f"{', '.join(sorted(_SECTIONS) + sorted(_TOP))}")
     description = data.get("description", "")
     if not isinstance(description, str) or len(description) > MAX_DESCRIPTION_LENGTH:
         raise SceneError("description", f"must be a string of at most {MAX_DESCRIPTION_LENGTH} characters")
@@ -880,7 +598,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         if keys is not None:
             for key in data[section]:
                 if key not in keys:
-                    raise SceneError(f"{section}.{_key(key)}", f"unknown key; known keys of [{section}]: "
+                    raise SceneError(f"{section}.{field_key(key)}", f"unknown key; known keys of [{section}]: "
                                                          f"{', '.join(sorted(keys))}")
     shape = _shape(data["curve"])
     raw = data.get("parameters", {})
@@ -890,7 +608,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
     values = {}
     for key in raw:
         if key not in shape.params:
-            raise SceneError(f"parameters.{_key(key)}", f"unknown symbol: curve '{shape.name}' has parameters "
+            raise SceneError(f"parameters.{field_key(key)}", f"unknown symbol: curve '{shape.name}' has parameters "
                                                   f"{', '.join(shape.params) or 'none'}")
         values[key] = _number(raw, key, "parameters", shape=shape)
     params = tuple((n, values[n]) if n in values else (n, None) for n in shape.params)
@@ -952,7 +670,7 @@ def load_scene(path) -> Scene:
     try:
         data = read_user_toml(path, "scene file")
     except UserPathError as exc:
-        raise SceneError(_key(exc.path), exc.reason) from None
+        raise SceneError(field_key(exc.path), exc.reason) from None
     stem = path.stem if path.stem.isprintable() and len(path.stem) <= MAX_NAME_LENGTH else safe_stem(path.stem)
     return scene_from_dict(data, name=data.get("name", stem))
 
