@@ -60,9 +60,7 @@ symvib.numeric.scene.SceneError: physics.mu: missing: the friction coefficient m
 from __future__ import annotations
 
 import dataclasses
-import math
 import numbers
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -90,6 +88,18 @@ from symvib.numeric.scene_checks import (
 )
 from symvib.numeric.scene_checks import (
     checks as checks,
+)
+from symvib.numeric.scene_units import (
+    FIELD_UNITS,
+    TEXT_FIELDS,
+    VALUE_UNITS,
+    field_unit,
+    friction_coefficient,
+    read_number,
+    units_table,
+)
+from symvib.numeric.scene_units import (
+    angle_parameters as angle_parameters,
 )
 from symvib.paths import UserPathError, read_user_toml, safe_stem
 from symvib.shapes import CATALOGUE, CLOSED_FORMS, Shape
@@ -119,47 +129,6 @@ _SECTIONS = {
 }
 _TOP = {"name", "description"}
 
-#: The SI unit of every scene field that is a quantity, the one table of them: the schema docs
-#: (``docs/scenes.md``, written by :func:`units_table`) and the JSON of a result
-#: (:meth:`symvib.numeric.events.Result.to_dict`) read it.  ``"1"`` is a dimensionless number;
-#: ``"[q]"`` the unit of the curve's coordinate (:attr:`symvib.shapes.Shape.unit`: ``rad`` for the
-#: angle of the catalogue's parametric shapes, ``m`` for the ``x`` of a graph).  The catalogue's
-#: parameters are lengths; a user curve's parameters have the units its expressions give them
-#: (``x`` and ``z`` in m).  Units may be written in values only where :data:`VALUE_UNITS` has some.
-FIELD_UNITS = {
-    "curve.x": "m",
-    "curve.z": "m",
-    "curve.h": "m/[q]",
-    "curve.alpha": "rad",
-    "curve.domain": "[q]",
-    "curve.q_scale": "[q]",
-    "parameters.*": "m",
-    "physics.g": "m/s^2",
-    "physics.m": "kg",
-    "physics.mu": "1",
-    "physics.alpha0": "rad",
-    "physics.restitution": "1",
-    "limiters.left": "[q]",
-    "limiters.right": "[q]",
-    "initial.q": "[q]",
-    "initial.qdot": "[q]/s",
-    "run.t_max": "s",
-    "run.max_events": "1",
-}
-#: Scene fields that are text or names, not quantities (they have no unit).
-TEXT_FIELDS = ("name", "description", "curve.shape", "curve.name", "curve.q", "curve.params", "curve.closed_form",
-               "physics.contact")
-#: Units a value may carry (``alpha0 = "3 deg"``), by the SI unit of its field: unit -> factor to SI.
-#: ``deg`` is ``pi/180`` rad.  Only angles (and angular rates) take units in values.
-VALUE_UNITS = {
-    "rad": {"rad": 1.0, "deg": math.pi / 180.0},
-    "rad/s": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
-}
-#: A value with a unit: an expression, blanks, then the unit (``"pi/6 rad"``, ``"3 deg"``, ``"90 deg/s"``).
-_UNIT_NAME = r"[A-Za-z_][A-Za-z0-9_]*(?:/[A-Za-z_][A-Za-z0-9_]*)?"
-_WITH_UNIT = re.compile(rf"(?s)(?P<value>.*?\S)\s+(?P<unit>{_UNIT_NAME})\s*")
-
-
 
 #: Keys of ``Shape.source()`` that a scene file's ``[curve]`` table takes (``kind`` is implied by ``x``).
 _CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params", "closed_form")
@@ -183,31 +152,6 @@ def _friction_dict(s: Scene) -> dict:
             pass
     return {"mu": s.mu}
 
-
-def friction_coefficient(alpha0, field: str = "physics.alpha0") -> float:
-    """The friction coefficient ``mu = tan(alpha0)`` of a friction angle ``alpha0`` (radians).
-
-    The one conversion of the package: scene files, :meth:`Scene.replace` and
-    sweeps that vary ``alpha0`` all call it.
-
-    Raises
-    ------
-    SceneError
-        Naming ``field`` when ``alpha0`` is not a finite number in ``[0, pi/2)``.
-
-    Examples
-    --------
-    >>> round(friction_coefficient(0.05), 9)
-    0.050041708
-    >>> friction_coefficient(2.0)
-    Traceback (most recent call last):
-    ...
-    symvib.numeric.scene.SceneError: physics.alpha0: friction angle must be in [0, pi/2) radians, got 2.0
-    """
-    alpha0 = finite(alpha0, field)
-    if not 0 <= alpha0 < math.pi / 2:
-        raise SceneError(field, f"friction angle must be in [0, pi/2) radians, got {alpha0}")
-    return math.tan(alpha0)
 
 
 @dataclass(frozen=True)
@@ -321,165 +265,6 @@ def _validate(s: Scene) -> None:
             raise SceneError(f"parameters.{n}", f"missing: curve '{s.shape.name}' needs a value for {n}")
     check_numbers(SceneNumbers.of(s))
 
-
-def field_unit(name: str, shape: Shape | None = None) -> str | None:
-    """The SI unit of scene field ``name`` (:data:`FIELD_UNITS`), for the curve ``shape``.
-
-    ``"[q]"`` becomes the coordinate's unit (:attr:`symvib.shapes.Shape.unit`); a
-    parameter's unit is ``m`` for a catalogue shape and ``None`` (not known) for
-    a user curve.  Without ``shape`` the table's entry is returned as it is.
-
-    Raises
-    ------
-    KeyError
-        When ``name`` is not a quantity of a scene.
-
-    Examples
-    --------
-    >>> from symvib.shapes import shape
-    >>> field_unit("initial.qdot", shape("circle")), field_unit("limiters.left", shape("catenary"))
-    ('rad/s', 'm')
-    >>> field_unit("parameters.R"), field_unit("physics.g")
-    ('m', 'm/s^2')
-    """
-    key = "parameters.*" if name.startswith("parameters.") else name
-    unit = FIELD_UNITS[key]
-    if shape is None:
-        return unit
-    if key == "parameters.*" and not shape.in_catalogue:
-        return ANGLE_UNIT if name.split(".", 1)[1] in angle_parameters(shape) else None
-    return unit.replace("[q]", shape.unit)
-
-
-#: The unit of an angle-valued curve parameter (its values may carry ``deg``, as any angle's).
-ANGLE_UNIT = "rad"
-#: Functions whose argument is an angle: a parameter found only in their arguments is one.
-TRIGONOMETRIC = frozenset({"sin", "cos", "tan"})
-
-
-def angle_parameters(shape: Shape) -> frozenset:
-    """The parameters of a user curve that are angles: every use of them in ``x`` and ``z`` lies
-    inside the argument of a trigonometric function (``z = "x*tan(beta)"``), or in the tangent
-    angle ``alpha`` given with the curve.  Their values may carry angle units (``"17 deg"``).
-
-    Examples
-    --------
-    >>> from symvib.shapes import Shape
-    >>> sorted(angle_parameters(Shape(name="ramp", kind="graph", q="x", z="x*tan(beta) + c*x**2",
-    ...                               params={"beta": "real", "c": "positive"})))
-    ['beta']
-    """
-    names = set(shape.params)
-    outside, inside_ = set(), set()
-    for text, angle in ((shape.x, False), (shape.z, False), (shape.alpha, True)):
-        if not text:
-            continue
-        try:
-            tree = _expr.parse(text, symbols=_expr.ANY_NAME, field="curve").tree
-        except _expr.ExpressionError:
-            return frozenset()
-        _collect(tree, angle, names, outside, inside_)
-    return frozenset(inside_ - outside)
-
-
-def _collect(node: tuple, angle: bool, names: set, outside: set, inside_: set) -> None:
-    """Sort the parameter names of ``node`` by whether they sit in an angle (``angle``) or not."""
-    kind = node[0]
-    if kind == "sym":
-        if node[1] in names:
-            (inside_ if angle else outside).add(node[1])
-    elif kind == "bin":
-        _collect(node[2], angle, names, outside, inside_)
-        _collect(node[3], angle, names, outside, inside_)
-    elif kind == "neg":
-        _collect(node[1], angle, names, outside, inside_)
-    elif kind == "call":
-        for arg in node[2:]:
-            _collect(arg, angle or node[1] in TRIGONOMETRIC, names, outside, inside_)
-
-
-def _value_units(name: str, unit: str) -> str:
-    """The units a value of field ``name`` (SI unit ``unit``) may carry, as text for the table."""
-    if name.startswith("curve."):
-        return "-"  # expressions of the curve, not values
-    if "[q]" in unit:
-        angle, length = unit.replace("[q]", "rad"), unit.replace("[q]", "m")
-        return f"{', '.join(VALUE_UNITS[angle])} (an angle coordinate); {_value_units(name, length)} (a length)"
-    accepted = list(VALUE_UNITS.get(unit, ()))
-    if unit not in accepted and re.fullmatch(_UNIT_NAME, unit):
-        accepted.append(unit)
-    return ", ".join(accepted) or "-"
-
-
-def units_table() -> str:
-    """:data:`FIELD_UNITS` as a Markdown table (``docs/scenes.md`` holds it; a test keeps it current).
-
-    Examples
-    --------
-    >>> print("\\n".join(units_table().splitlines()[:3]))
-    | field | SI unit | units a value may carry |
-    | --- | --- | --- |
-    | `curve.x` | m | - |
-    """
-    lines = ["| field | SI unit | units a value may carry |", "| --- | --- | --- |"]
-    lines += [f"| `{name}` | {unit} | {_value_units(name, unit)} |" for name, unit in FIELD_UNITS.items()]
-    return "\n".join(lines)
-
-
-def _split_unit(text: str, field_: str, unit: str | None, symbols) -> tuple[str, float]:
-    """``(expression, factor to SI)`` of a value that may end in a unit (``"3 deg"``).
-
-    A text ends in a unit when it is an expression, blanks and a name; the expression
-    then must parse on its own (``"2 * pi"`` is an expression, not ``2 *`` in ``pi``).
-    """
-    if len(text) > _expr.MAX_LENGTH:
-        return text, 1.0  # the parser's caps apply to the whole text, unit included
-    match = _WITH_UNIT.fullmatch(text)
-    if match is None:
-        return text, 1.0
-    try:
-        _expr.parse(match["value"], symbols=tuple(symbols or ()), field=field_)
-    except _expr.ExpressionError:
-        return text, 1.0
-    given = match["unit"]
-    accepted = VALUE_UNITS.get(unit or "", {})
-    if given in accepted or given == unit:
-        return match["value"], accepted.get(given, 1.0)
-    if accepted:
-        raise SceneError(field_, f"unknown unit {show_value(given)}; this field is in {unit} and takes "
-                                 f"{', '.join(accepted)}")
-    if unit == "1":
-        raise SceneError(field_, f"takes no unit (a dimensionless number), got the unit {show_value(given)}")
-    if unit is None:
-        hint = (" (a curve parameter is an angle when the curve uses it only inside "
-                f"{', '.join(sorted(TRIGONOMETRIC))} or its alpha)") if field_.startswith("parameters.") else ""
-        raise SceneError(field_, f"takes no unit, got {show_value(given)}; units are accepted on angles only "
-                                 f"({', '.join(VALUE_UNITS['rad'])}){hint}")
-    angles = ", ".join(VALUE_UNITS["rad"])
-    if re.fullmatch(_UNIT_NAME, unit):
-        raise SceneError(field_, f"unknown unit {show_value(given)}: this field is in {unit} (SI), the one unit it "
-                                 f"takes; other units are accepted on angles only ({angles})")
-    raise SceneError(field_, f"takes no unit, got {show_value(given)}: write the number in {unit} (SI); units are "
-                             f"accepted on angles only ({angles})")
-
-
-def _number(section: dict, key: str, prefix: str, symbols=None, default=None, shape: Shape | None = None):
-    if key not in section:
-        return default
-    value = section[key]
-    field_ = f"{prefix}.{key}"
-    if isinstance(value, bool):
-        raise SceneError(field_, f"must be a number, got {value!r}")
-    if isinstance(value, (int, float)):
-        return finite(value, field_)
-    if not isinstance(value, str):
-        raise SceneError(field_, f"must be a number or an expression string, got {type(value).__name__}")
-    text, factor = _split_unit(value, field_, field_unit(field_, shape) if shape is not None else None, symbols)
-    try:
-        number = _expr.number(text, field=field_, symbols=symbols)
-    except _expr.ExpressionError as exc:
-        raise SceneError(exc.field, exc.reason) from None
-    return number if factor == 1.0 else finite(number * factor, field_)
 
 
 def _shape(curve: dict) -> Shape:
@@ -610,7 +395,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         if key not in shape.params:
             raise SceneError(f"parameters.{field_key(key)}", f"unknown symbol: curve '{shape.name}' has parameters "
                                                   f"{', '.join(shape.params) or 'none'}")
-        values[key] = _number(raw, key, "parameters", shape=shape)
+        values[key] = read_number(raw, key, "parameters", shape=shape)
     params = tuple((n, values[n]) if n in values else (n, None) for n in shape.params)
     for n, v in params:
         if v is None:
@@ -621,11 +406,11 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
     if "mu" not in phys and "alpha0" not in phys:
         raise SceneError("physics.mu", "missing: the friction coefficient mu >= 0, or the friction angle alpha0 "
                                        "(mu = tan(alpha0)); mu = 0 for a frictionless curve")
-    alpha0 = _number(phys, "alpha0", "physics", shape=shape)
+    alpha0 = read_number(phys, "alpha0", "physics", shape=shape)
     if alpha0 is not None:
         mu = friction_coefficient(alpha0)
     else:
-        mu = _number(phys, "mu", "physics", shape=shape)
+        mu = read_number(phys, "mu", "physics", shape=shape)
     if "restitution" not in phys:
         raise SceneError("physics.restitution", "missing: the restitution coefficient k in [0, 1]")
     lim = data.get("limiters", {})
@@ -641,16 +426,16 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         name=name or data.get("name", "scene"),
         shape=shape,
         params=params,
-        g=_number(phys, "g", "physics", default=STANDARD_GRAVITY, shape=shape),
-        m=_number(phys, "m", "physics", default=DEFAULT_MASS, shape=shape),
+        g=read_number(phys, "g", "physics", default=STANDARD_GRAVITY, shape=shape),
+        m=read_number(phys, "m", "physics", default=DEFAULT_MASS, shape=shape),
         mu=mu,
         alpha0=alpha0,
-        k=_number(phys, "restitution", "physics", shape=shape),
-        left=_number(lim, "left", "limiters", symbols=values, shape=shape),
-        right=_number(lim, "right", "limiters", symbols=values, shape=shape),
-        q0=_number(ini, "q", "initial", symbols=values, shape=shape),
-        qdot0=_number(ini, "qdot", "initial", symbols=values, shape=shape),
-        t_max=_number(run, "t_max", "run", default=DEFAULT_T_MAX, shape=shape),
+        k=read_number(phys, "restitution", "physics", shape=shape),
+        left=read_number(lim, "left", "limiters", symbols=values, shape=shape),
+        right=read_number(lim, "right", "limiters", symbols=values, shape=shape),
+        q0=read_number(ini, "q", "initial", symbols=values, shape=shape),
+        qdot0=read_number(ini, "qdot", "initial", symbols=values, shape=shape),
+        t_max=read_number(run, "t_max", "run", default=DEFAULT_T_MAX, shape=shape),
         max_events=max_events,
         contact=phys.get("contact", "bilateral"),
     )
