@@ -1,0 +1,175 @@
+"""The scene model: :class:`Scene`, a curve, its parameters, friction, limiters and an initial state.
+
+A :class:`Scene` is immutable and always valid: it runs every check of
+:mod:`symvib.numeric.scene_checks` when it is built, so a wrong value is a
+:class:`~symvib.numeric.scene.SceneError` naming its field, and a copy with
+fields changed (:meth:`Scene.replace`) is checked again.  Its numbers are SI
+(:mod:`symvib.numeric.scene_units`); friction is the coefficient ``mu``, with
+the friction angle ``alpha0`` kept when the scene was given one.
+:meth:`Scene.to_dict` writes it back as the tables of a scene file, which
+:func:`symvib.numeric.scene.scene_from_dict` reads
+(:mod:`symvib.numeric.scene_files`).
+
+This module is in the numeric wing: it imports neither SymPy nor NumPy.
+
+Examples
+--------
+>>> from symvib.shapes import shape
+>>> s = Scene(name="demo", shape=shape("circle"), params=(("R", 0.5),), g=9.81, m=1.0, mu=0.05, k=1.0,
+...           left=None, right=0.8, q0=0.25, qdot0=7.0)
+>>> s.replace(qdot0=8.0).qdot0, s.to_dict()["limiters"]
+(8.0, {'right': 0.8})
+>>> s.replace(k=1.5)
+Traceback (most recent call last):
+...
+symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+from symvib.numeric.scene_checks import SceneError, SceneNumbers, check_name, check_numbers
+from symvib.numeric.scene_units import friction_coefficient
+from symvib.shapes import Shape
+
+__all__ = ["Scene", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS"]
+
+#: Default time bound of a run, in seconds.
+DEFAULT_T_MAX = 1000.0
+#: Default bound on the number of events of a run.
+DEFAULT_MAX_EVENTS = 100_000
+
+#: Keys of ``Shape.source()`` that a scene file's ``[curve]`` table takes (``kind`` is implied by ``x``).
+_CURVE_KEYS = ("name", "x", "z", "q", "domain", "h", "alpha", "q_scale", "params", "closed_form")
+
+
+def _curve_dict(sh: Shape) -> dict:
+    """The ``[curve]`` table of a shape: its catalogue name, or its expressions."""
+    if sh.in_catalogue:
+        return {"shape": sh.name}
+    source = sh.source()
+    return {k: source[k] for k in _CURVE_KEYS if source.get(k) is not None}
+
+
+def _friction_dict(s: Scene) -> dict:
+    """``{"alpha0": ...}`` when the scene's ``mu`` is ``tan(alpha0)``, else ``{"mu": ...}``."""
+    if s.alpha0 is not None:
+        try:
+            if friction_coefficient(s.alpha0) == s.mu:
+                return {"alpha0": s.alpha0}
+        except SceneError:
+            pass
+    return {"mu": s.mu}
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene (immutable).  Build with :func:`~symvib.numeric.scene.load_scene`,
+    :func:`~symvib.numeric.scene.scene_from_dict` or :meth:`replace`.
+
+    Attributes
+    ----------
+    name : str
+    shape : Shape
+        The curve (a catalogue shape or a user curve's data).
+    params : tuple of (str, float)
+        Values of the curve parameters, in the curve's order.
+    g, m, mu, k : float
+        Gravity, mass, friction coefficient ``mu = tan(alpha0)``, restitution.
+    left, right : float or None
+        Limiter positions in ``q``.
+    q0, qdot0 : float
+        Initial state.
+    t_max : float
+    max_events : int
+    contact : {"bilateral", "unilateral"}
+        Whether the curve holds the particle on both sides (a bead on a wire) or
+        only pushes it along the normal ``n = (-sin alpha, cos alpha)`` (a particle
+        on top of a graph; for a parametric curve, on the left of the direction
+        of increasing ``q``), :data:`~symvib.numeric.scene_checks.CONTACTS`.
+    """
+
+    name: str
+    shape: Shape
+    params: tuple
+    g: float
+    m: float
+    mu: float
+    k: float
+    left: float | None
+    right: float | None
+    q0: float
+    qdot0: float
+    t_max: float = DEFAULT_T_MAX
+    max_events: int = DEFAULT_MAX_EVENTS
+    alpha0: float | None = field(default=None, compare=False)
+    contact: str = "bilateral"
+
+    def __post_init__(self):
+        _validate(self)
+
+    @property
+    def param_values(self) -> tuple:
+        """The parameter values in the curve's order (kernel argument order)."""
+        return tuple(v for _, v in self.params)
+
+    @property
+    def param_dict(self) -> dict:
+        return dict(self.params)
+
+    def replace(self, **changes) -> Scene:
+        """A copy with fields changed (validated again).
+
+        ``params`` may be given as a dict of the names to change.
+        """
+        if isinstance(changes.get("params"), dict):
+            merged = dict(self.params)
+            unknown = set(changes["params"]) - set(merged)
+            if unknown:
+                raise SceneError(f"parameters.{sorted(unknown)[0]}",
+                                 f"not a parameter of curve '{self.shape.name}' (it has: {', '.join(merged)})")
+            merged.update(changes["params"])
+            changes["params"] = tuple(merged.items())
+        if "mu" in changes and "alpha0" not in changes:
+            changes["alpha0"] = None
+        if "alpha0" in changes and changes["alpha0"] is not None and "mu" not in changes:
+            changes["mu"] = friction_coefficient(changes["alpha0"])
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        """The scene as TOML-ready data: ``scene_from_dict(s.to_dict()) == s``.
+
+        A catalogue shape is written by name, any other curve by the keys of a
+        scene file's ``[curve]`` (``z``, ``x``, ``q``, ``name``, ``domain``,
+        ``h``, ``alpha``, ``q_scale``, ``params``), so user curves round-trip too
+        (sweep manifests and Dask tasks carry scenes this way).  The friction
+        angle ``alpha0`` is written when the scene was given one (so it survives
+        the round trip), else ``mu``.
+        """
+        sh = self.shape
+        out = {"name": self.name, "curve": _curve_dict(sh), "parameters": dict(self.params),
+               "physics": {"g": self.g, "m": self.m, **_friction_dict(self), "restitution": self.k},
+               "initial": {"q": self.q0, "qdot": self.qdot0},
+               "run": {"t_max": self.t_max, "max_events": self.max_events}}
+        out["physics"]["contact"] = self.contact
+        limiters = {k: v for k, v in (("left", self.left), ("right", self.right)) if v is not None}
+        if limiters:
+            out["limiters"] = limiters
+        return out
+
+
+def _validate(s: Scene) -> None:
+    check_name(s.name, "name")
+    if not isinstance(s.shape, Shape):
+        raise SceneError("curve", "must be a catalogue shape or a curve definition")
+    declared = list(s.shape.params)
+    given = [n for n, _ in s.params]
+    for n in given:
+        if n not in declared:
+            raise SceneError(f"parameters.{n}", f"unknown symbol: curve '{s.shape.name}' has parameters "
+                                                f"{', '.join(declared) or 'none'}")
+    for n in declared:
+        if n not in given:
+            raise SceneError(f"parameters.{n}", f"missing: curve '{s.shape.name}' needs a value for {n}")
+    check_numbers(SceneNumbers.of(s))
