@@ -52,6 +52,7 @@ import numpy as np
 from symvib.numeric.engine.timing import PANEL_COLUMNS, PANELS, TINY, WORK_ROWS, PanelColumn
 from symvib.numeric.layout import IntervalColumn
 from symvib.numeric.quadrature import rule
+from symvib.numeric.scenerow import scene_row
 
 __all__ = ["DenseOutput", "NEWTON_MAXITER", "NEWTON_RTOL"]
 
@@ -281,7 +282,6 @@ class DenseOutput:
         the plain engine's ``quad`` once more, in its mode that records the panels it accepts
         (so the state at an event's time is the event's state to rounding)."""
         if self._engine is None:
-            from symvib.numeric.driver import scene_row
             from symvib.numeric.engine.bind import kernel_functions
             from symvib.numeric.engine.plain import plain_functions, plain_rules
             from symvib.numeric.engine.state import Kernels

@@ -55,6 +55,7 @@ from symvib.numeric.kernels import load
 from symvib.numeric.layout import ERROR_CODES, EventCode, EventColumn, SceneRow, StatusCode, Summary
 from symvib.numeric.prepared import Prepared, prepared_of
 from symvib.numeric.quadrature import rule
+from symvib.numeric.scenerow import scene_row
 from symvib.shapes import Shape
 
 __all__ = ["simulate", "NODES", "MAX_F_PANELS", "check_panels", "quiet_compiler",
@@ -524,30 +525,6 @@ def guarded_sweep(sweep_fn):
 
     guarded.__wrapped__ = sweep_fn
     return guarded
-
-
-def scene_row(scene) -> np.ndarray:
-    """``scene`` as the engine's row of floats (columns :class:`symvib.numeric.layout.SceneRow`).
-
-    Examples
-    --------
-    >>> from symvib.numeric.scene import scene_from_dict
-    >>> s = scene_from_dict({"curve": {"shape": "parabola"}, "parameters": {"p": 1},
-    ...     "physics": {"mu": 0.1, "restitution": 0.8}, "limiters": {"right": 0.5}, "initial": {"q": 0, "qdot": 2}})
-    >>> row = scene_row(s)
-    >>> row[SceneRow.mu].item(), row[SceneRow.has_left].item(), row[SceneRow.right].item()
-    (0.1, 0.0, 0.5)
-    """
-    row = np.zeros(len(SceneRow))
-    row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k] = scene.g, scene.m, scene.mu, scene.k
-    row[SceneRow.has_left] = scene.left is not None
-    row[SceneRow.left] = 0.0 if scene.left is None else scene.left
-    row[SceneRow.has_right] = scene.right is not None
-    row[SceneRow.right] = 0.0 if scene.right is None else scene.right
-    row[SceneRow.q0], row[SceneRow.qdot0] = scene.q0, scene.qdot0
-    row[SceneRow.t_max], row[SceneRow.max_events] = scene.t_max, scene.max_events
-    row[SceneRow.unilateral] = scene.contact == "unilateral"
-    return row
 
 
 def sweep_function(scene, backend: str = "auto", *, rtol: float = RTOL, atol: float = ATOL):

@@ -32,19 +32,18 @@ from __future__ import annotations
 
 import hashlib
 import inspect
-import types
 from functools import cache, partial
 from pathlib import Path
 from typing import NamedTuple
 
-from symvib.numeric.engine import anchor, laws, loop, roots, scan, timing
+from symvib.numeric.engine import loop
+from symvib.numeric.engine.plain import plain_entries
+from symvib.numeric.engine.rebind import ENGINE_MODULES, rebound_functions
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
 __all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
            "own_rules", "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS", "NO_REFCOUNT"]
 
-#: The engine's modules, in import order.
-ENGINE_MODULES = (laws, roots, anchor, scan, timing, loop)
 #: Entry points compiled with explicit signatures (and cached on disk).
 ENTRY_POINTS = ("simulate_scene", "sample_scene", "sweep_block")
 
@@ -79,8 +78,6 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
     slower).  Compile times and the runs' speed: docs/benchmarks.md.
     """
     if backend == "python":
-        from symvib.numeric.engine.plain import plain_entries
-
         return Engine(*plain_entries(Kernels(*kernel_functions(module))))
     if backend != "numba":
         raise ValueError(f"unknown backend {backend!r}; use 'numba' or 'python'")
@@ -136,32 +133,6 @@ def _signatures(ncp: int) -> dict:
         result = f64 if returns == 1 else nt.UniTuple(f64, returns)
         out[name] = result(*([f64] * (len(leading) + ncp)))
     return out
-
-
-def rebound_functions(modules, keep, make=None, names=None) -> dict:
-    """The functions defined in ``modules`` whose names pass ``keep``, each rebuilt from its own
-    code object by ``make(name, fn)`` (default: as it is), with a copy of its module's globals.
-
-    In each copy, every such name is the rebuilt function (names must be unique across
-    the modules), then ``names`` replace or add globals (numba's static-length
-    ``params_of`` and the kernels; the plain engine's primitives).  No source text is
-    pasted or executed: both backends run the engine's own code.
-    """
-    functions, spaces = {}, []
-    for mod in modules:
-        namespace = dict(vars(mod))
-        spaces.append(namespace)
-        for name, fn in vars(mod).items():
-            if isinstance(fn, types.FunctionType) and fn.__module__ == mod.__name__ and keep(name):
-                if name in functions:
-                    raise RuntimeError(f"engine function {name!r} is defined twice ({mod.__name__})")
-                new = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
-                new.__qualname__, new.__module__, new.__doc__ = fn.__qualname__, fn.__module__, fn.__doc__
-                functions[name] = make(name, new) if make else new
-    for namespace in spaces:
-        namespace.update(functions)
-        namespace.update(names or {})
-    return functions
 
 
 def _compiled_functions(modules, keep, *, names=None, options=None, default=None, qualnames=None) -> dict:

@@ -3,8 +3,9 @@
 The engine (:mod:`~symvib.numeric.engine.laws`, ``roots``, ``scan``, ``timing``,
 ``loop``) is written once, for numba, where indexing a NumPy array costs
 nothing; run as plain Python, each ``a[i, j]`` costs about 100 ns.  Without numba
-the engine's functions run as they are, rebound (as :mod:`symvib.numeric.engine.bind`
-rebinds them for numba) to globals in which these primitives replace their loop versions:
+the engine's functions run as they are, rebound (:mod:`symvib.numeric.engine.rebind`, as
+the compiled binding rebinds them for numba) to globals in which these primitives replace
+their loop versions:
 
 * :func:`scratch`: scratch rows as Python lists (indexing a list is several
   times faster than indexing an array);
@@ -32,6 +33,7 @@ from functools import cache
 
 import numpy as np
 
+from symvib.numeric.engine.rebind import ENGINE_MODULES, rebound_functions
 from symvib.numeric.engine.state import Rules
 
 __all__ = ["scratch", "cumulate", "grown", "plain_rules", "plain_entries", "plain_functions", "PRIMITIVES"]
@@ -70,9 +72,7 @@ def plain_rules(R: Rules) -> Rules:
 @cache
 def _engine() -> dict:
     """The engine's functions with the plain primitives (built once;
-    :func:`symvib.numeric.engine.bind.rebound_functions`)."""
-    from symvib.numeric.engine.bind import ENGINE_MODULES, rebound_functions
-
+    :func:`symvib.numeric.engine.rebind.rebound_functions`)."""
     return rebound_functions(ENGINE_MODULES, lambda name: True, names=PRIMITIVES)
 
 

@@ -1,6 +1,6 @@
 """A sweep's scenes as rows: the engine's scene rows and parameter rows of a chunk, checked.
 
-Every row starts as the base scene's row (:func:`symvib.numeric.driver.scene_row`,
+Every row starts as the base scene's row (:func:`symvib.numeric.scenerow.scene_row`,
 columns :class:`symvib.numeric.layout.SceneRow`) with the varied fields set,
 and is checked by the scene's own checks (:data:`symvib.numeric.scene.CHECKS`,
 applied element-wise to the columns): a bad row raises the
@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from symvib.numeric.driver import scene_row
 from symvib.numeric.layout import SceneRow
 from symvib.numeric.scene import SceneError, SceneNumbers, checks, declared_domain, friction_coefficient
+from symvib.numeric.scenerow import scene_row
 from symvib.numeric.sweep.axes import FIELDS
 
 __all__ = ["scene_rows", "check_rows"]
