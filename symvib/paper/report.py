@@ -5,7 +5,7 @@ one folder:
 
 * ``report.md`` (and ``report.html``): per curve the derived double equations
   of motion and phase trajectories in LaTeX beside the paper's printed forms
-  and the verdicts of :mod:`symvib.symbolic.audit`, the scene parameters, the event
+  and the verdicts of :mod:`symvib.paper.audit`, the scene parameters, the event
   table and the energy budget of each run;
 * PNG figures of every scene with ``k = 1`` (the paper's conclusions): the
   scene sketch, the force plan, the phase portrait, ``F_N``, ``P_mu``, ``Ek``,
@@ -14,7 +14,7 @@ one folder:
   ``k``) the phase portrait, ``E`` and ``E(t)``; each titled and captioned with
   the paper's figure it reproduces (:data:`PAPER_FIGURES`);
 * ``results.json``: every run's result (status, events, energy budget);
-* ``report.html`` reads offline (formulas as MathML, :mod:`symvib.texmathml`),
+* ``report.html`` reads offline (formulas as MathML, :mod:`symvib.paper.texmathml`),
   and ``report.pdf`` with ``pdf=True`` (``symvib paper --pdf``).
 
 The simulations use the generated kernels and the driver's plain-Python core,
@@ -36,13 +36,12 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-# The readings of the first circle scene's "alpha0 = 3" and the remark they are judged by (re-exported).
 from symvib import safeio
-from symvib.errata import ALPHA0_READINGS, REMARK
 from symvib.numeric.scene import packaged_scene
+from symvib.paper.errata import REMARK
 from symvib.shapes import PAPER_SCENES
 
-__all__ = ["SCENES", "LOW_K", "HIGH_K", "run_paper", "ALPHA0_READINGS", "main"]
+__all__ = ["SCENES", "LOW_K", "HIGH_K", "run_paper", "main"]
 
 #: The figure numbers each of the paper's scenes reproduces.
 SCENE_FIGURES = {"paper-parabola": "figs. 6-11", "paper-cycloid": "figs. 13-18", "paper-circle-3.8": "fig. 20",
@@ -147,7 +146,7 @@ def _scene_table(scene) -> list:
 
 
 def _equations(shape_name, verdicts) -> list:
-    from symvib.symbolic.audit import PRINTED, derivation, ocr_cell, seed_cell
+    from symvib.paper.audit import PRINTED, derivation, ocr_cell, seed_cell
 
     d = derivation(shape_name)
     tex = d.latex()
@@ -208,7 +207,7 @@ def _figures(result, out: Path, key: str, every: bool, scene_name: str) -> tuple
 
 def _alpha0_section(out_lines) -> tuple:
     """The report's section on "alpha0 = 3"; returns the readings (for the errata row)."""
-    from symvib.errata import alpha0_readings
+    from symvib.paper.errata import alpha0_readings
 
     readings, rejected = alpha0_readings()
     out_lines += [
@@ -242,7 +241,7 @@ SYMBOLIC_JOBS = (None, "parabola", "cycloid", "circle")
 
 def _symbolic(shape_name):
     """One symbolic job: ``(verdicts, equation lines)`` of a curve, or the general verdicts."""
-    from symvib.symbolic.audit import audit
+    from symvib.paper.audit import audit
 
     if shape_name is None:
         return audit(shapes=()), []
@@ -265,9 +264,9 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
     """Write the report, figures and results into ``out_dir`` (and ``report.pdf`` with ``pdf``);
     returns what was written."""
     from symvib import simulate
-    from symvib.conclusions import conclusions, conclusions_markdown
-    from symvib.errata import alpha0_row
-    from symvib.symbolic.audit import errata_markdown
+    from symvib.paper.audit import errata_markdown
+    from symvib.paper.conclusions import conclusions, conclusions_markdown
+    from symvib.paper.errata import alpha0_row
 
     say = progress or (lambda msg: None)
     out = safeio.check_root(out_dir, "report folder")   # a real folder of the user's, not a link
@@ -371,8 +370,8 @@ def formulas(text: str) -> list:
 
 
 def _math_html(tex: str, display: bool) -> str:
-    """A formula as MathML, or its TeX in ``<code>`` outside :mod:`symvib.texmathml`'s subset."""
-    from symvib.texmathml import to_mathml
+    """A formula as MathML, or its TeX in ``<code>`` outside :mod:`symvib.paper.texmathml`'s subset."""
+    from symvib.paper.texmathml import to_mathml
 
     out = to_mathml(tex, display=display)
     return out if out is not None else f'<code class="tex">{html.escape(tex, quote=False)}</code>'
@@ -406,7 +405,7 @@ def _inline_text(s: str) -> str:
 
 def markdown_to_html(text: str, *, title: str) -> str:
     """The report's Markdown as one self-contained HTML page: tables, lists, figures with their
-    captions, and formulas as MathML (:mod:`symvib.texmathml`), so it needs no script and no network."""
+    captions, and formulas as MathML (:mod:`symvib.paper.texmathml`), so it needs no script and no network."""
     body = []
     table = []
     items = []
