@@ -13,8 +13,10 @@ the physics is done by the wings below:
 * :mod:`~symvib.paper.conclusions`: the paper's concluding claims against the runs of
   its scenes (:mod:`symvib.numeric`);
 * :mod:`~symvib.paper.errata`: the errata document ``docs/errata.md``;
-* :mod:`~symvib.paper.report`: the ``symvib paper`` job (report, figures, results,
-  HTML with formulas as MathML: :mod:`~symvib.paper.texmathml`, PDF).
+* :mod:`~symvib.paper.report`: the ``symvib paper`` job (report, figures, results);
+  :mod:`~symvib.paper.report_html` turns the report's Markdown into one offline HTML
+  page (formulas as MathML: :mod:`~symvib.paper.texmathml`), :mod:`~symvib.paper.report_pdf`
+  into a PDF.
 
 The wing imports :mod:`symvib.symbolic` and :mod:`symvib.numeric`, and neither imports
 it (their old module names ``symvib.symbolic.audit``, ``.seed`` and ``.seedtex`` stay
@@ -24,7 +26,7 @@ job (the module ``symvib/paper.py`` before the wing was gathered) load their mod
 on first use.
 
 >>> import symvib.paper
->>> symvib.paper.LOW_K, symvib.paper.markdown_to_html is symvib.paper.report.markdown_to_html
+>>> symvib.paper.LOW_K, symvib.paper.markdown_to_html is symvib.paper.report_html.markdown_to_html
 (0.8, True)
 """
 from __future__ import annotations
@@ -34,10 +36,11 @@ import importlib
 #: The report job's names, by the module that defines them.
 _LAZY = {
     **dict.fromkeys(("SCENES", "SCENE_FIGURES", "PAPER_FIGURES", "LOW_K_FIGURES", "HIGH_K", "LOW_K", "BACKEND",
-                     "DIGITS", "SYMBOLIC_JOBS", "Run", "event_table", "parse_event_tables", "run_paper", "main",
-                     "HTML_STYLE", "MATH", "formulas", "markdown_to_html",
-                     "PDF_PAGE", "PDF_LINES", "PDF_COLUMNS", "PDF_FIGURES_PER_PAGE", "pdf_text_pages", "write_pdf"),
+                     "DIGITS", "SYMBOLIC_JOBS", "Run", "event_table", "parse_event_tables", "run_paper", "main"),
                     "symvib.paper.report"),
+    **dict.fromkeys(("HTML_STYLE", "MATH", "formulas", "markdown_to_html"), "symvib.paper.report_html"),
+    **dict.fromkeys(("PDF_PAGE", "PDF_LINES", "PDF_COLUMNS", "PDF_FIGURES_PER_PAGE", "pdf_text_pages", "write_pdf"),
+                    "symvib.paper.report_pdf"),
     **dict.fromkeys(("ALPHA0_READINGS", "REMARK"), "symvib.paper.errata"),
 }
 
