@@ -326,7 +326,8 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
     elastic = {r.key.removesuffix(f"-k{HIGH_K:g}"): r.result for r in runs if r.scene.k == HIGH_K}
     lines += ["## Conclusions", "",
               "The paper's concluding claims about the motion, in its own words, against the runs above with "
-              f"$k = {HIGH_K:g}$ (the quantities per motion interval between two events; `symvib/conclusions.py`).",
+              f"$k = {HIGH_K:g}$ (the quantities per motion interval between two events; "
+              "`symvib/paper/conclusions.py`).",
               "", conclusions_markdown(conclusions(elastic)), ""]
     lines += [""] + errata_markdown(verdicts, extra_rows=[alpha0_row(readings)],
                                     title="## Errata of the paper's printed equations").splitlines()
