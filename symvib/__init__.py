@@ -1,14 +1,16 @@
 """symvib: vibro-impact dynamics of a heavy particle on rough curves.
 
-Two wings, and the prepare step above them:
+Two wings, and the prepare step and the paper's wing above them:
 
-* :mod:`symvib.symbolic` (SymPy): curves, antiderivatives, the derivation, the audit, singular points;
+* :mod:`symvib.symbolic` (SymPy): curves, antiderivatives, the derivation, singular points;
 * :mod:`symvib.codegen`: the one bridge, derived expressions -> generated kernel modules;
 * :mod:`symvib.numeric` (NumPy only): kernels, the engine, the driver, sweeps, figures; it receives
   a prepared curve and imports neither SymPy nor the two modules above;
 * :mod:`symvib.prepare`: a curve's kernels generated and its singular points searched once,
   recorded beside the kernels, so a later run needs no SymPy;
-* :mod:`symvib.checks`: references, peer integrators, the stability suite, benchmarks.
+* :mod:`symvib.checks`: references, peer integrators, the stability suite, benchmarks;
+* :mod:`symvib.paper`: the seed paper's wing: its printed equations audited, its conclusions
+  checked against runs, its errata, and the ``symvib paper`` report (Markdown, HTML, PDF).
 
 ``import symvib`` imports neither SymPy nor NumPy; the names below load their
 module on first use.  The four verbs:
@@ -40,7 +42,7 @@ _LAZY = {
     "parametric": "symvib.symbolic.curve",
     "shape": "symvib.shapes",
     "CATALOGUE": "symvib.shapes",
-    "audit": "symvib.symbolic.audit",
+    "audit": "symvib.paper.audit",
 }
 
 __all__ = sorted(_LAZY)

@@ -118,14 +118,14 @@ def _cmd_derive(args) -> int:
 
 
 def _cmd_audit(args) -> int:
+    from symvib.paper.audit import audit
     from symvib.paths import check_output_file
-    from symvib.symbolic.audit import audit
 
     if args.write:
         check_output_file(args.write, "--write file")
     verdicts = audit()
     if args.write:
-        from symvib.errata import write_errata
+        from symvib.paper.errata import write_errata
 
         print(f"wrote {write_errata(args.write, verdicts=verdicts)}")
     for v in verdicts:
@@ -256,7 +256,7 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_paper(args) -> int:
-    from symvib.paper import main as paper_main
+    from symvib.paper.report import main as paper_main
     from symvib.paths import check_output_dir
 
     check_output_dir(args.out, "--out folder")

@@ -165,7 +165,7 @@ CATALOGUE: dict[str, Shape] = {s.name: s for s in (
 #: The shapes the paper treats, in its order.
 PAPER_SHAPES = ("parabola", "cycloid", "circle")
 #: The paper's scenes, in its order (files ``symvib/scenes/NAME.toml``): the one list the paper
-#: job (:mod:`symvib.paper`), its conclusions (:mod:`symvib.conclusions`) and the benchmarks read.
+#: job (:mod:`symvib.paper`), its conclusions (:mod:`symvib.paper.conclusions`) and the benchmarks read.
 PAPER_SCENES = ("paper-parabola", "paper-cycloid", "paper-circle-3.8", "paper-circle-7")
 
 

@@ -7,10 +7,10 @@ from pathlib import Path
 import pytest
 import sympy as sp
 
-from symvib.errata import errata_document
-from symvib.symbolic.audit import GENERAL, PRINTED, audit, errata_markdown, pm, seed_differences
-from symvib.symbolic.seed import OCR_EDITS, SEED_FILE, SEED_TEXT
-from symvib.symbolic.seedtex import SeedTexError, layout, read
+from symvib.paper.audit import GENERAL, PRINTED, audit, errata_markdown, pm, seed_differences
+from symvib.paper.errata import errata_document
+from symvib.paper.seed import OCR_EDITS, SEED_FILE, SEED_TEXT
+from symvib.paper.seedtex import SeedTexError, layout, read
 from symvib.symbolic.symbols import mu
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -68,7 +68,7 @@ def test_evidence_says_what_is_wrong(verdicts):
 def test_errata_document_is_current(verdicts):
     path = ROOT / "docs" / "errata.md"
     assert path.read_text(encoding="utf-8").strip() == errata_document(verdicts).strip(), \
-        "docs/errata.md is stale: run `python -m symvib.errata docs/errata.md`"
+        "docs/errata.md is stale: run `python -m symvib.paper.errata docs/errata.md`"
 
 
 def test_errata_document_has_the_alpha0_row_and_the_conclusions(verdicts):
@@ -92,7 +92,7 @@ def test_errata_table_rows_keep_their_four_cells(verdicts):
 
 
 def test_report_html_keeps_escaped_pipes_in_cells():
-    from symvib.paper import markdown_to_html
+    from symvib.paper.report_html import markdown_to_html
 
     html = markdown_to_html("| a | b |\n| --- | --- |\n| x \\|y\\| | z |\n", title="t")
     assert "<td>x |y|</td><td>z</td>" in html
@@ -152,7 +152,7 @@ def test_an_undeclared_difference_fails(key, mutate):
 
 
 def test_a_declaration_that_does_not_match_fails():
-    from symvib.symbolic.seedtex import Edit
+    from symvib.paper.seedtex import Edit
 
     e = _entry("eq3")
     bad = dataclasses.replace(e, ocr=(Edit(r"\sin\phi \pm", r"\sin\phi -", "a made-up reason of some length"),))

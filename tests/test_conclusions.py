@@ -1,6 +1,6 @@
 """The paper's conclusions: every quote verbatim in the seed, every number recomputed independently.
 
-The numbers of :mod:`symvib.conclusions` come from the generated closed-form
+The numbers of :mod:`symvib.paper.conclusions` come from the generated closed-form
 phase trajectories sampled between events.  Here each motion interval is
 integrated again from the state after its first event with SciPy's
 ``solve_ivp`` on the equation of motion of docs/physics.md, written out from
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from symvib import conclusions as conc
+from symvib.paper import conclusions as conc
+from symvib.paper.seed import SEED_FILE
 from symvib.shapes import shape
-from symvib.symbolic.seed import SEED_FILE
 
 scipy_integrate = pytest.importorskip("scipy.integrate")
 

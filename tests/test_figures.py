@@ -14,7 +14,7 @@ from symvib.numeric.events import EventKind
 from symvib.numeric.figures import FIGURE_NAMES, equilibrium_arcs, run_figures
 from symvib.numeric.kernels import load
 from symvib.numeric.scene import resolve_scene
-from symvib.paper import HIGH_K, LOW_K, PAPER_FIGURES, SCENES
+from symvib.paper.report import HIGH_K, LOW_K, PAPER_FIGURES, SCENES
 
 matplotlib.use("Agg")
 

@@ -18,16 +18,42 @@ def test_import_symvib_loads_neither_sympy_nor_numpy():
 
 
 def test_top_level_derive_and_audit_are_the_functions_and_the_modules_live_in_their_wing():
-    # The modules live in symvib.symbolic; the package's names are the functions, in
-    # whatever order things are imported.
+    # The modules live in symvib.symbolic and in the paper's wing symvib.paper; the package's
+    # names are the functions, in whatever order things are imported.
     assert _run("""
         import types
-        import symvib.symbolic.audit, symvib.symbolic.derive
+        import symvib.paper.audit, symvib.symbolic.derive
         from symvib import derive, audit
         import symvib
         print(isinstance(derive, types.FunctionType), isinstance(audit, types.FunctionType),
-              symvib.derive is symvib.symbolic.derive.derive, derive.__module__)
-    """) == "True True True symvib.symbolic.derive"
+              symvib.derive is symvib.symbolic.derive.derive, derive.__module__, audit.__module__)
+    """) == "True True True symvib.symbolic.derive symvib.paper.audit"
+
+
+def test_the_paper_wing_keeps_the_old_names():
+    """``symvib/paper.py`` became the package ``symvib.paper`` (issue 25): its names stay, loaded on
+    first use from the module that defines each; the modules gathered into the package keep their
+    old names as aliases (the same module objects, so a name set on one is seen on the other)."""
+    assert _run("""
+        import sys
+        import symvib.paper
+        print(sorted(m for m in sys.modules if m.startswith("symvib")), "numpy" in sys.modules)
+        from symvib.paper import (ALPHA0_READINGS, HIGH_K, LOW_K, PDF_FIGURES_PER_PAGE, REMARK, SCENES, formulas,
+                                  main, markdown_to_html, parse_event_tables, pdf_text_pages, run_paper, write_pdf)
+        from symvib.paper import errata, report, report_html, report_pdf
+        print(run_paper is report.run_paper and main is report.main and SCENES is report.SCENES,
+              markdown_to_html is report_html.markdown_to_html and formulas is report_html.formulas,
+              write_pdf is report_pdf.write_pdf and pdf_text_pages is report_pdf.pdf_text_pages,
+              ALPHA0_READINGS is errata.ALPHA0_READINGS, set(symvib.paper.__all__) <= set(dir(symvib.paper)))
+        import importlib
+        old = {"symvib.errata": "errata", "symvib.conclusions": "conclusions", "symvib.texmathml": "texmathml",
+               "symvib.symbolic.audit": "audit", "symvib.symbolic.seed": "seed", "symvib.symbolic.seedtex": "seedtex"}
+        print(all(importlib.import_module(name) is importlib.import_module("symvib.paper." + new)
+                  for name, new in old.items()))
+        from symvib.symbolic.audit import EXPLANATIONS, pm
+        from symvib.texmathml import to_mathml
+        print(to_mathml("x") is not None)
+    """).splitlines() == ["['symvib', 'symvib.paper'] False", "True True True True True", "True", "True"]
 
 
 def test_unknown_attribute_names_itself():

@@ -6,8 +6,10 @@ import sys
 
 import pytest
 
-from symvib import paper, simulate
+from symvib import simulate
 from symvib.numeric.events import EventKind
+from symvib.paper import report
+from symvib.paper.report_html import markdown_to_html
 
 #: Smallest plausible size of a figure file, bytes, and the pixel sizes allowed.
 MIN_PNG_BYTES = 10_000
@@ -23,7 +25,7 @@ def png_size(path):
 
 @pytest.fixture(scope="module")
 def written(tmp_path_factory):
-    return paper.run_paper(tmp_path_factory.mktemp("paper"))
+    return report.run_paper(tmp_path_factory.mktemp("paper"))
 
 
 @pytest.mark.slow
@@ -31,11 +33,11 @@ def test_every_promised_file_exists(written):
     out = written["report"].parent
     assert (out / "report.md").exists() and (out / "report.html").exists() and (out / "results.json").exists()
     names = {p.name for p in written["figures"]}
-    for scene, _ in paper.SCENES:
+    for scene, _ in report.SCENES:
         for fig in ("phase", "F_N", "P_mu", "Ek", "Ep", "E", "energy-time"):
-            assert f"{scene}-k{paper.HIGH_K:g}-{fig}.png" in names
+            assert f"{scene}-k{report.HIGH_K:g}-{fig}.png" in names
         for fig in ("phase", "energy-time"):
-            assert f"{scene}-k{paper.LOW_K:g}-{fig}.png" in names
+            assert f"{scene}-k{report.LOW_K:g}-{fig}.png" in names
     for path in written["figures"]:
         (w, h), size = png_size(path)
         assert size > MIN_PNG_BYTES and PNG_PIXELS[0] <= w <= PNG_PIXELS[1] and PNG_PIXELS[0] // 2 <= h <= PNG_PIXELS[1]
@@ -47,8 +49,8 @@ def test_every_promised_file_exists(written):
 @pytest.mark.slow
 def test_event_tables_match_the_driver(written):
     text = written["report"].read_text()
-    tables = paper.parse_event_tables(text)
-    assert len(tables) == len(paper.SCENES) * 2
+    tables = report.parse_event_tables(text)
+    assert len(tables) == len(report.SCENES) * 2
     for run in written["runs"]:
         fresh = simulate(run.scene, backend="python", samples=False)
         rows = tables[run.key]
@@ -68,8 +70,8 @@ def test_report_states_the_readings_and_the_errata(written):
     assert "**differs**" in text and r"\frac{\mu}{2}" in text and "(differs)" not in text
     assert "k = 0.8" in text
     # The conclusions, and the seed's text beside each transcription.
-    from symvib.conclusions import CLAIM_KEYS
-    from symvib.symbolic.audit import PRINTED, seed_cell
+    from symvib.paper.audit import PRINTED, seed_cell
+    from symvib.paper.conclusions import CLAIM_KEYS
 
     conclusions = text.split("## Conclusions")[1].split("## Errata")[0]
     assert all(c.quote in conclusions for c in CLAIM_KEYS)
@@ -82,7 +84,7 @@ def test_report_states_the_readings_and_the_errata(written):
 
 
 def test_markdown_to_html_renders_tables_and_images():
-    html = paper.markdown_to_html("# T\n\n| a | b |\n| --- | --- |\n| 1 | $x$ |\n\n![f](figures/f.png)\n", title="t")
+    html = markdown_to_html("# T\n\n| a | b |\n| --- | --- |\n| 1 | $x$ |\n\n![f](figures/f.png)\n", title="t")
     assert "<table>" in html and "<td>1</td>" in html and 'src="figures/f.png"' in html
     assert "<math><semantics><mrow><mi>x</mi>" in html and "MathJax" not in html  # offline (issue 16)
 

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 from matplotlib.figure import Figure
 
-from symvib import paper
-from symvib.texmathml import tex_to_mathml, to_mathml
+from symvib.paper import report, report_html, report_pdf
+from symvib.paper.texmathml import tex_to_mathml, to_mathml
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Elements without an end tag (HTML void elements, and MathML's written self-closed).
@@ -82,7 +82,7 @@ Odd: $\\weirdmacro{x}$ stays TeX.
 
 
 def test_html_needs_no_network_and_is_well_formed():
-    out = paper.markdown_to_html(SAMPLE, title="t")
+    out = report_html.markdown_to_html(SAMPLE, title="t")
     s = structure(out)
     assert s.errors == [] and s.stack == []
     assert s.external == [] and s.scripts == 0 and "MathJax" not in out and "http" not in out
@@ -115,7 +115,7 @@ def test_a_formula_outside_the_subset_is_refused_not_garbled(tex):
 
 def test_every_formula_of_the_committed_report_renders_as_mathml():
     text = (ROOT / "docs" / "paper" / "report.md").read_text(encoding="utf-8")
-    formulas = paper.formulas(text)
+    formulas = report_html.formulas(text)
     assert len(formulas) > 100
     assert [f for f in formulas if to_mathml(f) is None] == []
     html_text = (ROOT / "docs" / "paper" / "report.html").read_text(encoding="utf-8")
@@ -137,11 +137,11 @@ def test_pdf_has_the_text_pages_and_the_figure_pages(tmp_path):
         fig.savefig(path)
         figures.append(path)
     text = SAMPLE + "\n".join(f"line {i} with $x_{i}$ and a long tail " * 4 for i in range(200))
-    path, pages = paper.write_pdf(text, figures, tmp_path / "report.pdf")
+    path, pages = report_pdf.write_pdf(text, figures, tmp_path / "report.pdf")
     data = path.read_bytes()
-    text_pages = len(paper.pdf_text_pages(text))
+    text_pages = len(report_pdf.pdf_text_pages(text))
     assert data.startswith(b"%PDF-")
-    assert text_pages > 1 and pages == _pdf_pages(data) == text_pages + math.ceil(3 / paper.PDF_FIGURES_PER_PAGE)
+    assert text_pages > 1 and pages == _pdf_pages(data) == text_pages + math.ceil(3 / report_pdf.PDF_FIGURES_PER_PAGE)
 
 
 def test_cli_paper_offers_pdf():
@@ -151,11 +151,12 @@ def test_cli_paper_offers_pdf():
 
 @pytest.mark.slow  # the whole paper job (about a minute on 2 shared cores)
 def test_paper_pdf_and_html_offline(tmp_path):
-    written = paper.run_paper(tmp_path, pdf=True)
+    written = report.run_paper(tmp_path, pdf=True)
     data = written["pdf"].read_bytes()
     assert data.startswith(b"%PDF-")
     text = written["report"].read_text(encoding="utf-8")
-    expected = len(paper.pdf_text_pages(text)) + math.ceil(len(written["figures"]) / paper.PDF_FIGURES_PER_PAGE)
+    per_page = report_pdf.PDF_FIGURES_PER_PAGE
+    expected = len(report_pdf.pdf_text_pages(text)) + math.ceil(len(written["figures"]) / per_page)
     assert _pdf_pages(data) == written["pdf_pages"] == expected
     s = structure(written["html"].read_text(encoding="utf-8"))
     assert s.errors == [] and s.external == [] and s.scripts == 0
@@ -170,7 +171,7 @@ def test_every_formula_of_the_committed_report_is_well_formed_mathml():
     ``<msup>`` of three children put the 3 on the base line)."""
     text = (ROOT / "docs" / "paper" / "report.md").read_text(encoding="utf-8")
     bad = []
-    for tex in paper.formulas(text):
+    for tex in report_html.formulas(text):
         root = ET.fromstring(to_mathml(tex).replace("<math>", f'<math xmlns="{MATHML[1:-1]}">'))
         for element in root.iter():
             tag = element.tag.split("}")[-1]

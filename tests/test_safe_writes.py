@@ -400,7 +400,7 @@ def test_figures_never_write_through_a_link_at_a_figure_name(tmp_path, elsewhere
 
 
 def test_the_errata_writer_never_writes_through_a_link(tmp_path, elsewhere, monkeypatch):
-    from symvib import errata
+    from symvib.paper import errata
 
     monkeypatch.setattr(errata, "errata_document", lambda verdicts: "# errata")
     link = tmp_path / "errata.md"

@@ -5,7 +5,7 @@ one folder:
 
 * ``report.md`` (and ``report.html``): per curve the derived double equations
   of motion and phase trajectories in LaTeX beside the paper's printed forms
-  and the verdicts of :mod:`symvib.symbolic.audit`, the scene parameters, the event
+  and the verdicts of :mod:`symvib.paper.audit`, the scene parameters, the event
   table and the energy budget of each run;
 * PNG figures of every scene with ``k = 1`` (the paper's conclusions): the
   scene sketch, the force plan, the phase portrait, ``F_N``, ``P_mu``, ``Ek``,
@@ -14,8 +14,8 @@ one folder:
   ``k``) the phase portrait, ``E`` and ``E(t)``; each titled and captioned with
   the paper's figure it reproduces (:data:`PAPER_FIGURES`);
 * ``results.json``: every run's result (status, events, energy budget);
-* ``report.html`` reads offline (formulas as MathML, :mod:`symvib.texmathml`),
-  and ``report.pdf`` with ``pdf=True`` (``symvib paper --pdf``).
+* ``report.html``, which reads offline (:mod:`symvib.paper.report_html`: formulas as MathML),
+  and ``report.pdf`` with ``pdf=True`` (``symvib paper --pdf``; :mod:`symvib.paper.report_pdf`).
 
 The simulations use the generated kernels and the driver's plain-Python core,
 so the job needs no compiler and runs in seconds; SymPy is used for the
@@ -23,26 +23,26 @@ equations of the report only.
 
 Examples
 --------
->>> from symvib.paper import SCENES, LOW_K
+>>> from symvib.paper.report import SCENES, LOW_K
 >>> [s for s, _ in SCENES], LOW_K
 (['paper-parabola', 'paper-cycloid', 'paper-circle-3.8', 'paper-circle-7'], 0.8)
 """
 from __future__ import annotations
 
-import html
 import json
 import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
-# The readings of the first circle scene's "alpha0 = 3" and the remark they are judged by (re-exported).
 from symvib import safeio
-from symvib.errata import ALPHA0_READINGS, REMARK
 from symvib.numeric.scene import packaged_scene
+from symvib.paper.errata import REMARK
+from symvib.paper.report_html import markdown_to_html
+from symvib.paper.report_pdf import write_pdf
 from symvib.shapes import PAPER_SCENES
 
-__all__ = ["SCENES", "LOW_K", "HIGH_K", "run_paper", "ALPHA0_READINGS", "main"]
+__all__ = ["SCENES", "LOW_K", "HIGH_K", "run_paper", "main"]
 
 #: The figure numbers each of the paper's scenes reproduces.
 SCENE_FIGURES = {"paper-parabola": "figs. 6-11", "paper-cycloid": "figs. 13-18", "paper-circle-3.8": "fig. 20",
@@ -62,10 +62,6 @@ PAPER_FIGURES = {
 }
 #: Figures of the k < 1 runs (the scene sketch and force plan are those of k = 1).
 LOW_K_FIGURES = ("phase", "E", "energy-time")
-#: Pages of the PDF report: A4 portrait [inches], text lines per page and characters per line,
-#: figures per page.
-PDF_PAGE = (8.27, 11.69)
-PDF_LINES, PDF_COLUMNS, PDF_FIGURES_PER_PAGE = 78, 118, 2
 #: Restitution of the paper's conclusions, and the k < 1 run added.
 HIGH_K, LOW_K = 1.0, 0.8
 #: Backend of the simulations (no compile time; the runs are short).
@@ -147,7 +143,7 @@ def _scene_table(scene) -> list:
 
 
 def _equations(shape_name, verdicts) -> list:
-    from symvib.symbolic.audit import PRINTED, derivation, ocr_cell, seed_cell
+    from symvib.paper.audit import PRINTED, derivation, ocr_cell, seed_cell
 
     d = derivation(shape_name)
     tex = d.latex()
@@ -208,7 +204,7 @@ def _figures(result, out: Path, key: str, every: bool, scene_name: str) -> tuple
 
 def _alpha0_section(out_lines) -> tuple:
     """The report's section on "alpha0 = 3"; returns the readings (for the errata row)."""
-    from symvib.errata import alpha0_readings
+    from symvib.paper.errata import alpha0_readings
 
     readings, rejected = alpha0_readings()
     out_lines += [
@@ -242,7 +238,7 @@ SYMBOLIC_JOBS = (None, "parabola", "cycloid", "circle")
 
 def _symbolic(shape_name):
     """One symbolic job: ``(verdicts, equation lines)`` of a curve, or the general verdicts."""
-    from symvib.symbolic.audit import audit
+    from symvib.paper.audit import audit
 
     if shape_name is None:
         return audit(shapes=()), []
@@ -265,9 +261,9 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
     """Write the report, figures and results into ``out_dir`` (and ``report.pdf`` with ``pdf``);
     returns what was written."""
     from symvib import simulate
-    from symvib.conclusions import conclusions, conclusions_markdown
-    from symvib.errata import alpha0_row
-    from symvib.symbolic.audit import errata_markdown
+    from symvib.paper.audit import errata_markdown
+    from symvib.paper.conclusions import conclusions, conclusions_markdown
+    from symvib.paper.errata import alpha0_row
 
     say = progress or (lambda msg: None)
     out = safeio.check_root(out_dir, "report folder")   # a real folder of the user's, not a link
@@ -330,7 +326,8 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
     elastic = {r.key.removesuffix(f"-k{HIGH_K:g}"): r.result for r in runs if r.scene.k == HIGH_K}
     lines += ["## Conclusions", "",
               "The paper's concluding claims about the motion, in its own words, against the runs above with "
-              f"$k = {HIGH_K:g}$ (the quantities per motion interval between two events; `symvib/conclusions.py`).",
+              f"$k = {HIGH_K:g}$ (the quantities per motion interval between two events; "
+              "`symvib/paper/conclusions.py`).",
               "", conclusions_markdown(conclusions(elastic)), ""]
     lines += [""] + errata_markdown(verdicts, extra_rows=[alpha0_row(readings)],
                                     title="## Errata of the paper's printed equations").splitlines()
@@ -350,172 +347,6 @@ def run_paper(out_dir="symvib-paper", *, low_k: float = LOW_K, html_too: bool = 
         written["pdf"], written["pdf_pages"] = write_pdf(text, written["figures"], out / "report.pdf")
     written["runs"] = runs
     return written
-
-
-#: Style of the HTML report (no external resource: the report reads offline).
-HTML_STYLE = ("body{font-family:sans-serif;max-width:70em;margin:auto;padding:0 1em} table{border-collapse:collapse}"
-              " td,th{border:1px solid #ccc;padding:2px 6px;font-size:90%} figure{display:inline-block;"
-              "width:48%;margin:0.5em 0.5%;vertical-align:top} figure img{width:100%}"
-              " figcaption{font-size:85%;color:#333}"
-              " math[display=block]{margin:0.6em 0;padding:0.4em 0;overflow-x:auto;overflow-y:hidden}"
-              " code.tex{color:#555}")
-#: Math in a Markdown line: display ``$$...$$`` or inline ``$...$``.
-MATH = re.compile(r"\$\$(.+?)\$\$|(?<![\\$])\$([^$\n]+?)\$")
-#: A code span (kept as it is: the seed's texts hold ``$``) or math, whichever comes first.
-_CODE_OR_MATH = re.compile(r"`([^`\n]+)`|" + MATH.pattern)
-
-
-def formulas(text: str) -> list:
-    """The TeX of every formula of Markdown ``text`` (not those inside code spans)."""
-    return [m.group(2) or m.group(3) for m in _CODE_OR_MATH.finditer(text) if m.group(1) is None]
-
-
-def _math_html(tex: str, display: bool) -> str:
-    """A formula as MathML, or its TeX in ``<code>`` outside :mod:`symvib.texmathml`'s subset."""
-    from symvib.texmathml import to_mathml
-
-    out = to_mathml(tex, display=display)
-    return out if out is not None else f'<code class="tex">{html.escape(tex, quote=False)}</code>'
-
-
-def _inline(s: str) -> str:
-    """Markdown inline constructs of the report (images, links, bold, italics, code) and math as MathML."""
-    parts = []
-    last = 0
-    for m in _CODE_OR_MATH.finditer(s):
-        parts.append(_inline_text(s[last:m.start()]))
-        if m.group(1) is not None:
-            parts.append(f"<code>{html.escape(m.group(1), quote=False)}</code>")
-        else:
-            display = m.group(2) is not None
-            parts.append(_math_html(m.group(2) if display else m.group(3), display))
-        last = m.end()
-    parts.append(_inline_text(s[last:]))
-    return "".join(parts)
-
-
-def _inline_text(s: str) -> str:
-    s = html.escape(s, quote=False)
-    s = re.sub(r"!\[([^\]]*)\]\(([^)]+)\)", r'<img alt="\1" src="\2">', s)
-    s = re.sub(r"\[([^\]]+)\]\(([^)]+)\)", r'<a href="\2">\1</a>', s)
-    s = re.sub(r"`([^`]+)`", r"<code>\1</code>", s)
-    s = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", s)
-    s = re.sub(r"(?<![*\w])\*([^*\s][^*]*?)\*(?![*\w])", r"<em>\1</em>", s)
-    return s
-
-
-def markdown_to_html(text: str, *, title: str) -> str:
-    """The report's Markdown as one self-contained HTML page: tables, lists, figures with their
-    captions, and formulas as MathML (:mod:`symvib.texmathml`), so it needs no script and no network."""
-    body = []
-    table = []
-    items = []
-
-    def flush():
-        if table:
-            rows = [r for r in table if not re.match(r"^\|\s*:?-", r)]
-            cells = [[c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", r.strip()[1:-1])]
-                     for r in rows]
-            tag = lambda i: "th" if i == 0 else "td"  # noqa: E731
-            out = ["<table>"] + ["<tr>" + "".join(f"<{tag(i)}>{_inline(c)}</{tag(i)}>" for c in row) + "</tr>"
-                                 for i, row in enumerate(cells)] + ["</table>"]
-            body.append("\n".join(out))
-            table.clear()
-        if items:
-            body.append("<ul>\n" + "\n".join(f"<li>{_inline(i)}</li>" for i in items) + "\n</ul>")
-            items.clear()
-
-    lines = text.splitlines()
-    k = 0
-    while k < len(lines):
-        line = lines[k]
-        k += 1
-        if line.startswith("|"):
-            if items:
-                flush()
-            table.append(line)
-            continue
-        if line.startswith("- "):
-            if table:
-                flush()
-            items.append(line[2:])
-            continue
-        flush()
-        m = re.match(r"^(#{1,4}) (.*)$", line)
-        image = re.match(r"^!\[([^\]]*)\]\(([^)]+)\)$", line)
-        if m:
-            level = len(m.group(1))
-            anchor = re.sub(r"[^a-z0-9 -]", "", m.group(2).lower()).replace(" ", "-")
-            body.append(f'<h{level} id="{anchor}">{_inline(m.group(2))}</h{level}>')
-        elif image:
-            # A figure; its caption is the next paragraph when it is in italics.
-            j = k
-            while j < len(lines) and not lines[j].strip():
-                j += 1
-            cap = ""
-            if j < len(lines) and re.match(r"^\*[^*].*\*$", lines[j]):
-                cap = f"<figcaption>{_inline(lines[j][1:-1])}</figcaption>"
-                k = j + 1
-            alt, src = (html.escape(g, quote=True) for g in image.groups())
-            body.append(f'<figure><img alt="{alt}" src="{src}">{cap}</figure>')
-        elif line.strip():
-            body.append(f"<p>{_inline(line)}</p>")
-    flush()
-    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" + html.escape(title)
-            + "</title>\n<style>" + HTML_STYLE + "</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n")
-
-
-def pdf_text_pages(text: str) -> list:
-    """The report's Markdown as pages of at most :data:`PDF_LINES` lines of :data:`PDF_COLUMNS`
-    characters (formulas stay TeX; the HTML report renders them)."""
-    import textwrap
-
-    lines = []
-    caption_next = False
-    for line in text.splitlines():
-        image = re.match(r"^!\[([^\]]*)\]\(([^)]+)\)$", line)
-        if image:  # the figure pages follow the text, each figure with its caption
-            line, caption_next = f"[figure {image.group(1)}: on the figure pages]", True
-        elif caption_next and line.strip():
-            caption_next = False
-            if line.startswith("*"):
-                continue
-        lines += textwrap.wrap(line, PDF_COLUMNS, subsequent_indent="    ", break_long_words=True,
-                               replace_whitespace=False) or [""]
-    return ["\n".join(lines[i:i + PDF_LINES]) for i in range(0, len(lines), PDF_LINES)] or [""]
-
-
-def write_pdf(text: str, figures, path: Path) -> tuple:
-    """``report.pdf``: the report's text, then its figures (:data:`PDF_FIGURES_PER_PAGE` a page),
-    with Matplotlib's PDF backend (no other dependency).  Returns ``(path, pages)``."""
-    from matplotlib.backends.backend_pdf import PdfPages
-    from matplotlib.figure import Figure
-    from matplotlib.image import imread
-
-    pages = 0
-    path = Path(path)
-    with safeio.replacing_file(path, what="PDF file") as fh, PdfPages(fh) as pdf:
-        info = pdf.infodict()
-        info["Title"], info["Creator"] = "symvib: the paper reproduced", "symvib paper --pdf"
-        for page in pdf_text_pages(text):
-            fig = Figure(figsize=PDF_PAGE)
-            fig.text(0.06, 0.97, page, family="monospace", fontsize=6.3, va="top", ha="left", parse_math=False)
-            pdf.savefig(fig)
-            pages += 1
-        figures = list(figures)
-        for i in range(0, len(figures), PDF_FIGURES_PER_PAGE):
-            fig = Figure(figsize=PDF_PAGE)
-            chunk = figures[i:i + PDF_FIGURES_PER_PAGE]
-            axes = fig.subplots(PDF_FIGURES_PER_PAGE, 1)
-            for ax, fpath in zip(axes, chunk):
-                ax.imshow(imread(fpath))
-                ax.set_title(Path(fpath).name, fontsize=7)
-            for ax in axes:
-                ax.axis("off")
-            fig.tight_layout()
-            pdf.savefig(fig)
-            pages += 1
-    return path, pages
 
 
 def main(out_dir="symvib-paper", *, low_k: float = LOW_K, quiet: bool = False, pdf: bool = False) -> int:
