@@ -13,8 +13,8 @@ import pytest
 
 import symvib
 
-#: Modules whose examples take long (the audit derives and compares every printed equation; its old name too).
-SLOW = {"paper.audit", "symbolic.audit"}
+#: Modules whose examples take long (the audit derives and compares every printed equation).
+SLOW = {"paper.audit"}
 MODULES = sorted(m.name.removeprefix("symvib.") for m in pkgutil.walk_packages(symvib.__path__, "symvib.")
                  if not m.name.startswith("symvib.generated"))
 #: The packages of symvib's optional extras (top-level import names).

@@ -7,7 +7,7 @@ here, each with its reason, so that a new one fails; the numeric wing has none (
 format of a generated module, :mod:`symvib.kernelformat`; the Gauss-Legendre computation,
 :mod:`symvib.quadrature_rules`; a run's regular domain from singular pieces, :mod:`symvib.regular`)
 lives on the ground floor, ``symvib/``.  The paper's wing, :mod:`symvib.paper`, stands above both wings:
-neither imports it, but for the old names of the modules gathered into it (aliases).
+neither imports it.
 """
 import ast
 from pathlib import Path
@@ -22,8 +22,6 @@ PACKAGE = Path(symvib.__file__).resolve().parent
 #: Function-level imports of ``symvib.numeric`` by the code generator: ``(file, function) -> reason``
 #: (none at module level, ever).
 CODEGEN_TO_NUMERIC: dict = {}
-#: The old names of modules gathered into the paper's wing (issue 25): each is only an alias of its module there.
-PAPER_ALIASES = {"symbolic/audit.py", "symbolic/seed.py", "symbolic/seedtex.py"}
 
 
 def _imports(path: Path, root: Path | None = None) -> list:
@@ -92,13 +90,10 @@ def test_the_symbolic_wing_imports_nothing_numeric():
 
 @pytest.mark.parametrize("wing", ["symbolic", "codegen"])
 def test_the_paper_wing_stands_above_the_symbolic_wing_and_the_code_generator(wing):
-    """The audit uses the derivation, not the other way round: symvib/symbolic imports symvib.paper
-    only in the aliases that keep the old names of the modules gathered there; symvib/codegen never."""
-    found = [f"symvib/{rel}:{line}" for rel, _, line in _climbs(wing, "symvib.paper") if rel not in PAPER_ALIASES]
+    """The audit uses the derivation, not the other way round: neither symvib/symbolic nor
+    symvib/codegen imports symvib.paper."""
+    found = [f"symvib/{rel}:{line}" for rel, _, line in _climbs(wing, "symvib.paper")]
     assert not found, f"symvib/{wing} imports the paper's wing:\n" + "\n".join(found)
-    for rel in PAPER_ALIASES:
-        if rel.startswith(wing + "/"):
-            assert len((PACKAGE / rel).read_text(encoding="utf-8").splitlines()) < 20, f"symvib/{rel} is no alias"
 
 
 def _climbs_any(folder: str, target: str) -> list:

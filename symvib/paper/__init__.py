@@ -19,11 +19,10 @@ the physics is done by the wings below:
   into a PDF.
 
 The wing imports :mod:`symvib.symbolic` and :mod:`symvib.numeric`, and neither imports
-it (their old module names ``symvib.symbolic.audit``, ``.seed`` and ``.seedtex`` stay
-as aliases of the modules here, as do ``symvib.errata``, ``symvib.conclusions`` and
-``symvib.texmathml``).  ``import symvib.paper`` imports nothing: the names of the report
-job (the module ``symvib/paper.py`` before the wing was gathered) load their module
-on first use.
+it (``symvib.errata``, ``symvib.conclusions`` and ``symvib.texmathml``, the old names of
+three of its modules, stay as aliases on the top floor).  ``import symvib.paper`` imports
+nothing: the names of the report job (the module ``symvib/paper.py`` before the wing was
+gathered) load their module on first use.
 
 >>> import symvib.paper
 >>> symvib.paper.LOW_K, symvib.paper.markdown_to_html is symvib.paper.report_html.markdown_to_html

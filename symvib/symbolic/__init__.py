@@ -3,6 +3,5 @@
 Nothing in the numeric wing (:mod:`symvib.numeric`) imports this package; the
 code generator (:mod:`symvib.codegen`) is the one bridge.  The audit of the
 paper's printed equations, built on the derivation, lives in the paper's wing
-(:mod:`symvib.paper.audit`); ``symvib.symbolic.audit``, ``.seed`` and ``.seedtex``
-are its modules' old names, kept as aliases.
+(:mod:`symvib.paper.audit`, with the seed paper's text, :mod:`symvib.paper.seed`).
 """

@@ -246,7 +246,7 @@ def pm_latex(text: str) -> str:
 
     SymPy prints a product with the branch-sign symbol as ``- \pm`` or
     ``+ \pm``; the paper writes ``\mp`` and ``\pm``.  Used by
-    :meth:`Derivation.latex` and the audit (:mod:`symvib.symbolic.audit`).
+    :meth:`Derivation.latex` and the audit (:mod:`symvib.paper.audit`).
 
     Parameters
     ----------
