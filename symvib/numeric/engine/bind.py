@@ -82,7 +82,9 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
     if backend != "numba":
         raise ValueError(f"unknown backend {backend!r}; use 'numba' or 'python'")
     ncp = len(module.PARAMS)
-    if not shared:
+    # (a prepared view's kernels take *cp, which the shared engine's explicit signatures do not
+    # describe: a view is always bound to an engine of its own)
+    if not shared or not getattr(module, "__file__", None):
         entries = _specialized_engine(module, ncp)
         if not getattr(module, "__file__", None):   # a prepared view: compiled in this process only
             return Engine(entries["simulate_bound"], entries["sample_bound"], threaded_sweep(entries["sweep_bound"]))
