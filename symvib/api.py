@@ -76,7 +76,8 @@ def simulate(scene, **options):
     from symvib.prepare import prepare
 
     scene = load_scene(scene)
-    options.setdefault("prepared", prepare(scene))
+    if options.get("prepared") is None:
+        options["prepared"] = prepare(scene)
     return _simulate(scene, **options)
 
 
@@ -87,5 +88,6 @@ def sweep(scene, vary: dict, **options):
     from symvib.prepare import prepare
 
     scene = load_scene(scene)
-    options.setdefault("prepared", prepare(scene))
+    if options.get("prepared") is None:
+        options["prepared"] = prepare(scene)
     return _sweep(scene, vary, **options)

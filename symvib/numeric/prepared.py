@@ -29,6 +29,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 import types
 from dataclasses import dataclass
 
@@ -103,6 +104,12 @@ def _record_name(module) -> str | None:
     return Path(path).stem + RECORD_SUFFIX
 
 
+#: Records already read in this process, by path: ``(stat signature, entries)``.  A loop of runs
+#: stats its curve's record instead of reading and checking it again; a record changed on disk
+#: (another process added to it, or it was damaged) has another signature and is read again.
+_RECORDS: dict = {}
+
+
 def _read_record(module) -> list:
     """The record's entries (empty when there is none, or it is unreadable or of another module)."""
     from symvib.numeric.kernels import cache_dir
@@ -110,6 +117,15 @@ def _read_record(module) -> list:
     name = _record_name(module)
     if name is None:
         return []
+    path = cache_dir() / name
+    try:
+        st = os.stat(path, follow_symlinks=False)
+    except OSError:
+        return []
+    signature = (st.st_ino, st.st_size, st.st_mtime_ns, module.INPUT_HASH)
+    known = _RECORDS.get(str(path))
+    if known is not None and known[0] == signature:
+        return known[1]
     try:
         raw = safeio.read_bytes(cache_dir(), name, max_bytes=MAX_RECORD_BYTES, what="kernel cache", private=True)
         data = json.loads(raw.decode("utf-8"))
@@ -118,7 +134,9 @@ def _read_record(module) -> list:
     if not isinstance(data, dict) or data.get("format") != RECORD_FORMAT or \
             data.get("input_hash") != module.INPUT_HASH or not isinstance(data.get("entries"), list):
         return []
-    return [e for e in data["entries"] if _valid_entry(e)]
+    entries = [e for e in data["entries"] if _valid_entry(e)]
+    _RECORDS[str(path)] = (signature, entries)
+    return entries
 
 
 def _valid_entry(entry) -> bool:
@@ -193,7 +211,7 @@ def _regular(scene, module) -> Prepared:
     """A curve regular on its declared domain: its module as it is."""
     lo, hi = declared_domain(scene)
     scale = float(module.q_scale_scalar(*scene.param_values))
-    return Prepared(module, regular.RunDomain(lo, hi, scale, float(getattr(module, "Q_REF", 0.0)), False))
+    return Prepared(module, regular.RunDomain(lo, hi, scale, regular.reference_point(lo, hi, scale), False))
 
 
 def prepared_of(scene, module=None) -> Prepared:
@@ -237,7 +255,7 @@ def _q_scale_scalar(*cp):
 
 
 def _q_scale(*cp):
-    return RUN_SCALE + 0.0 * _RUN_NP.asarray(cp[0] if cp else 0.0)  # noqa: F821
+    return _broadcast(RUN_SCALE, *cp) if cp else RUN_SCALE  # noqa: F821 - the generated module's helper
 
 
 def _F_p_scalar(q, mu, *cp):

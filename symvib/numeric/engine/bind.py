@@ -84,9 +84,9 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
     ncp = len(module.PARAMS)
     # (a prepared view's kernels take *cp, which the shared engine's explicit signatures do not
     # describe: a view is always bound to an engine of its own)
-    if not shared or not getattr(module, "__file__", None):
+    if not shared or not _cacheable(module):
         entries = _specialized_engine(module, ncp)
-        if not getattr(module, "__file__", None):   # a prepared view: compiled in this process only
+        if not _cacheable(module):   # compiled in this process only: never marked compiled
             return Engine(entries["simulate_bound"], entries["sample_bound"], threaded_sweep(entries["sweep_bound"]))
         return Engine(_marking(entries["simulate_bound"], compiled_marker(module, "simulate_bound")),
                       _marking(entries["sample_bound"], compiled_marker(module, "sample_bound")),
@@ -157,6 +157,13 @@ def _compiled_functions(modules, keep, *, names=None, options=None, default=None
     return rebound_functions(modules, keep, make, names)
 
 
+def _cacheable(module) -> bool:
+    """Whether numba may cache a module's compiled kernels and engine on disk: not for a prepared
+    view of a module on a narrowed domain (:func:`symvib.numeric.prepared.kernel_view`, no file),
+    whose run's numbers are compile-time constants that numba's cache does not key on."""
+    return bool(getattr(module, "__file__", None))
+
+
 def _compiled_kernels(module, ncp: int) -> tuple:
     """The module's interface kernels compiled with their signatures (cached per module)."""
     cached = getattr(module, "_symvib_compiled_kernels", None)
@@ -165,9 +172,7 @@ def _compiled_kernels(module, ncp: int) -> tuple:
     sigs = _signatures(ncp)
     wanted = {fname for fname, _, _ in KERNEL_INTERFACE.values()}
     # Every function the interface kernels may call: the module's float-only functions.
-    # A prepared view of a module on a narrowed domain (symvib.numeric.prepared.kernel_view) has no
-    # file: its run's numbers are compile-time constants that numba's cache does not key on.
-    cache = bool(getattr(module, "__file__", None))
+    cache = _cacheable(module)
     compiled = _compiled_functions([module], lambda n: n.endswith("_scalar") or n in wanted,
                                    options={f: {"cache": cache, **ERRORS} for f in wanted}, default=ERRORS)
     out = []
@@ -317,7 +322,7 @@ def _specialized_engine(module, ncp: int) -> dict:
     from symvib.numeric.kernels import cache_dir
 
     tag = _tag(module)
-    cache = bool(getattr(module, "__file__", None))   # (not a prepared view's: see _compiled_kernels)
+    cache = _cacheable(module)
     options = {name: {"cache": cache, **ERRORS} for name in BOUND_ENTRIES}
     # Threads of Python over blocks of scenes (threaded_sweep), not numba's parallel loop (prange):
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
