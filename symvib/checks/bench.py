@@ -68,11 +68,14 @@ from importlib.resources import files
 from pathlib import Path
 
 from symvib import safeio
+from symvib.checks.shipped import DATA_FOLDER, DATA_PACKAGE, shipped
 from symvib.shapes import PAPER_SCENES
 
 __all__ = ["Setting", "paper_scenes", "reference_events", "random_scenes", "run_setting",
            "ratio_at_equal_accuracy", "scene_key", "shipped", "work_precision", "stability", "references",
-           "REFERENCE_NAME", "RANDOM_TRUTH_NAME"]
+           "REFERENCE_NAME", "RANDOM_TRUTH_NAME",
+           # handed on as well (the shipped data's place, symvib.checks.shipped):
+           "DATA_PACKAGE", "DATA_FOLDER"]
 
 #: The restitutions each paper scene (:data:`symvib.shapes.PAPER_SCENES`) of the work-precision diagram runs with.
 RESTITUTIONS = (1.0, 0.8)
@@ -107,9 +110,6 @@ ERROR_FLOOR = 1e-16
 STABILITY_SETTINGS = (("symvib", 16), ("RK45", 1e-6), ("DOP853", 1e-10), ("Radau", 1e-8), ("LSODA", 1e-8),
                       ("RK4", 1e-3))
 
-#: Package and folder of the shipped references (package data, read with importlib.resources).
-DATA_PACKAGE = "symvib.checks"
-DATA_FOLDER = "data"
 #: 30-digit time references of the paper scenes: shipped in the data folder, and the name of the
 #: on-demand cache in an output folder (regenerate: ``symvib bench reference --write --out DIR``).
 REFERENCE_NAME = "time_reference.json"
@@ -188,28 +188,6 @@ def scene_key(scene) -> str:
             [repr(v) for v in scene.param_values], repr(scene.g), repr(scene.mu), repr(scene.k), repr(scene.left),
             repr(scene.right), repr(scene.q0), repr(scene.qdot0), repr(scene.t_max), scene.max_events]
     return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:16]
-
-
-def shipped(name: str) -> dict:
-    """A reference file shipped with the package (``symvib/checks/data/NAME``), as a dict.
-
-    Parameters
-    ----------
-    name : str
-        :data:`REFERENCE_NAME` or :data:`RANDOM_TRUTH_NAME`.
-
-    Raises
-    ------
-    FileNotFoundError
-        When the installed package lacks the file (the message names it).
-    """
-    resource = files(DATA_PACKAGE) / DATA_FOLDER / name
-    try:
-        text = resource.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{DATA_PACKAGE.replace('.', '/')}/{DATA_FOLDER}/{name}: shipped reference "
-                                f"missing from the installed package (reinstall symvib)") from None
-    return json.loads(text)
 
 
 def _load_json(path: Path | None) -> dict:
