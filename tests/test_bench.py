@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 import tomllib
 
-from symvib.checks import bench
+from symvib.checks import bench, shipped
 from symvib.checks.peers import solve_ivp_events
 from symvib.cli import main
 
@@ -15,13 +15,13 @@ from symvib.cli import main
 needs_scipy = pytest.mark.skipif(importlib.util.find_spec("scipy") is None, reason="needs the optional scipy")
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = Path(bench.__file__).resolve().parent / bench.DATA_FOLDER
+DATA = Path(shipped.__file__).resolve().parent / shipped.DATA_FOLDER
 
 
 def _package_state() -> dict:
     """Every data file of the installed package folder (what bench could write: not its Python
     sources, which an editable checkout may change meanwhile) with its size and modification time."""
-    package = Path(bench.__file__).resolve().parents[1]
+    package = Path(shipped.__file__).resolve().parents[1]
     return {p: (p.stat().st_size, p.stat().st_mtime_ns) for p in package.rglob("*")
             if p.is_file() and p.suffix not in (".py", ".pyc")}
 
