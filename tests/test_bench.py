@@ -8,6 +8,7 @@ import pytest
 import tomllib
 
 from symvib.checks import bench, shipped
+from symvib.checks.bench.output import load_json
 from symvib.checks.peers import solve_ivp_events
 from symvib.cli import main
 
@@ -57,7 +58,7 @@ def test_a_computed_reference_goes_to_the_named_cache(tmp_path):
     cache = tmp_path / "out" / bench.REFERENCE_NAME
     before = _package_state()
     fresh = bench.reference_events(scene, label=label, cached=False, cache=cache)
-    stored = bench._load_json(cache)
+    stored = load_json(cache)
     assert list(stored) == [bench.scene_key(scene)] and stored[bench.scene_key(scene)]["scene"] == label
     assert bench.reference_events(scene, cache=cache) == fresh
     assert _package_state() == before

@@ -56,18 +56,34 @@ Examples
 """
 from __future__ import annotations
 
-import csv
 import hashlib
-import io
 import json
 import math
 import random
 import time
-from dataclasses import dataclass
 from importlib.resources import files
 from pathlib import Path
 
 from symvib import safeio
+from symvib.checks.bench.output import OUT_FOLDER, load_json, store_json, write_csv
+from symvib.checks.bench.settings import (
+    IVP_METHODS,
+    PEER_BUDGET,
+    RK4_STEPS,
+    RTOLS,
+    SEQ_NODES,
+    SEQ_RK4,
+    SEQ_RTOLS,
+    STABILITY_SETTINGS,
+    SYMVIB_NODES,
+    Setting,
+    driver_backend,
+    run_setting,
+    sequence_settings,
+    work_settings,
+)
+from symvib.checks.bench.timing import MIN_TIMING, TIMING_BLOCKS, cpu_per_run, warm_up
+from symvib.checks.bench.workers import map_workers
 from symvib.checks.shipped import DATA_FOLDER, DATA_PACKAGE, shipped
 from symvib.shapes import PAPER_SCENES
 
@@ -75,21 +91,12 @@ __all__ = ["Setting", "paper_scenes", "reference_events", "random_scenes", "run_
            "ratio_at_equal_accuracy", "scene_key", "shipped", "work_precision", "stability", "references",
            "REFERENCE_NAME", "RANDOM_TRUTH_NAME",
            # handed on as well (the shipped data's place, symvib.checks.shipped):
-           "DATA_PACKAGE", "DATA_FOLDER"]
+           "DATA_PACKAGE", "DATA_FOLDER", "SYMVIB_NODES", "IVP_METHODS", "RTOLS", "RK4_STEPS", "SEQ_NODES", "SEQ_RTOLS",
+           "SEQ_RK4", "PEER_BUDGET", "STABILITY_SETTINGS", "work_settings", "sequence_settings", "MIN_TIMING",
+           "TIMING_BLOCKS", "cpu_per_run"]
 
 #: The restitutions each paper scene (:data:`symvib.shapes.PAPER_SCENES`) of the work-precision diagram runs with.
 RESTITUTIONS = (1.0, 0.8)
-#: Gauss nodes per panel of symvib's driver (its accuracy knob).
-SYMVIB_NODES = (1, 2, 3, 4, 6, 8, 12, 16, 24)
-IVP_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
-#: solve_ivp relative tolerances (atol = rtol / 100, as in symvib.checks.peers).
-RTOLS = tuple(10.0 ** -e for e in range(3, 13))
-#: RK4 fixed steps, seconds.
-RK4_STEPS = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
-#: Settings of the random-scene sequence counts (fewer: a few hundred scenes each).
-SEQ_NODES = (2, 4, 16)
-SEQ_RTOLS = (1e-3, 1e-6, 1e-9, 1e-12)
-SEQ_RK4 = (1e-2, 1e-3)
 #: Random scenes (default run, --quick run) and their event cap.
 RANDOM_SCENES = 200
 QUICK_RANDOM = 20
@@ -97,74 +104,15 @@ RANDOM_MAX_EVENTS = 30
 RANDOM_SEED = 2026
 #: Digits of the random scenes' phase reference.
 RANDOM_DPS = 20
-#: CPU seconds a timing is repeated for (at least one run), in TIMING_BLOCKS blocks.
-MIN_TIMING = 0.25
-TIMING_BLOCKS = 5
-#: CPU-time budget of one peer run, seconds.
-PEER_BUDGET = 20.0
 #: Accuracy targets of the ratio at equal accuracy (plus the best a peer reaches).
 RATIO_TARGETS = (1e-6, 1e-10)
 #: Smallest error drawn (errors below are plotted here).
 ERROR_FLOOR = 1e-16
-#: Settings of the stability table: (method, setting).
-STABILITY_SETTINGS = (("symvib", 16), ("RK45", 1e-6), ("DOP853", 1e-10), ("Radau", 1e-8), ("LSODA", 1e-8),
-                      ("RK4", 1e-3))
-
 #: 30-digit time references of the paper scenes: shipped in the data folder, and the name of the
 #: on-demand cache in an output folder (regenerate: ``symvib bench reference --write --out DIR``).
 REFERENCE_NAME = "time_reference.json"
 #: Phase-reference event sequences of the random scenes: shipped, and the on-demand cache's name.
 RANDOM_TRUTH_NAME = "random_truth.json"
-
-
-@dataclass(frozen=True)
-class Setting:
-    """One method at one accuracy setting (``nodes`` for symvib, ``rtol`` for solve_ivp, ``dt`` for RK4)."""
-
-    method: str
-    value: float
-
-    @property
-    def label(self) -> str:
-        if self.method == "symvib":
-            return f"symvib nodes={int(self.value)}"
-        if self.method == "RK4":
-            return f"RK4 dt={self.value:g}"
-        return f"{self.method} rtol={self.value:g}"
-
-
-def run_setting(setting: Setting, scene, *, budget: float = PEER_BUDGET, backend: str = "auto"):
-    """Run one method on one scene: ``(status, events, message)``, events as ``(kind, t, q, qdot_before)``."""
-    if setting.method == "symvib":
-        from symvib import simulate
-
-        r = simulate(scene, nodes=int(setting.value), samples=False, backend=backend)
-        return r.status.value, [(e.kind.value, e.t, e.q, e.qdot_before) for e in r.events], ""
-    from symvib.checks.peers import rk4_events, solve_ivp_events
-
-    if setting.method == "RK4":
-        p = rk4_events(scene, setting.value, budget=budget)
-    else:
-        p = solve_ivp_events(scene, setting.method, setting.value, budget=budget)
-    return p.status, [tuple(e[:4]) for e in p.events], p.message
-
-
-def work_settings(quick: bool = False) -> list:
-    """The settings of the work-precision diagram."""
-    if quick:
-        return ([Setting("symvib", n) for n in (2, 4, 8, 16)]
-                + [Setting(m, r) for m in ("RK45", "DOP853") for r in (1e-4, 1e-7, 1e-10)]
-                + [Setting("RK4", 3e-3)])
-    return ([Setting("symvib", n) for n in SYMVIB_NODES] + [Setting(m, r) for m in IVP_METHODS for r in RTOLS]
-            + [Setting("RK4", dt) for dt in RK4_STEPS])
-
-
-def sequence_settings(quick: bool = False) -> list:
-    """The settings of the random-scene sequence counts."""
-    if quick:
-        return [Setting("symvib", 16), Setting("RK45", 1e-6), Setting("DOP853", 1e-9)]
-    return ([Setting("symvib", n) for n in SEQ_NODES] + [Setting(m, r) for m in IVP_METHODS for r in SEQ_RTOLS]
-            + [Setting("RK4", dt) for dt in SEQ_RK4])
 
 
 # --- scenes and references -----------------------------------------------------------------------
@@ -190,23 +138,6 @@ def scene_key(scene) -> str:
     return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def _load_json(path: Path | None) -> dict:
-    """A cache file written by the benchmarks, or ``{}`` when there is none (or it is unreadable)."""
-    if path is None:
-        return {}
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-
-
-def _store_json(path: Path, entries: dict, **dump) -> None:
-    """Merge ``entries`` into the JSON cache file ``path`` (created with its folder)."""
-    data = _load_json(path)
-    data.update(entries)
-    safeio.write_file(path, json.dumps(data, sort_keys=True, **dump) + "\n", what="bench cache folder")
-
-
 def reference_events(scene, *, label: str = "", cached: bool = True, cache: Path | None = None) -> list:
     """The time reference's events of ``scene`` as ``(kind, t, q, qdot_before)`` floats.
 
@@ -224,7 +155,7 @@ def reference_events(scene, *, label: str = "", cached: bool = True, cache: Path
     """
     key = scene_key(scene)
     if cached:
-        for data in (shipped(REFERENCE_NAME), _load_json(cache)):
+        for data in (shipped(REFERENCE_NAME), load_json(cache)):
             if key in data:
                 return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in data[key]["events"]]
     import mpmath
@@ -234,7 +165,7 @@ def reference_events(scene, *, label: str = "", cached: bool = True, cache: Path
     ref = time_reference(scene, dps=30)
     rows = [(e.kind, mpmath.nstr(e.t, 25), mpmath.nstr(e.q, 25), mpmath.nstr(e.qdot_before, 25)) for e in ref]
     if cache is not None:
-        _store_json(cache, {key: {"scene": label or scene.name, "dps": 30,
+        store_json(cache, {key: {"scene": label or scene.name, "dps": 30,
                                   "method": "symvib.checks.reference_time.time_reference", "events": rows}},
                     indent=1)
     return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in rows]
@@ -280,31 +211,6 @@ def _random_truth(scene):
 
 
 # --- measuring ------------------------------------------------------------------------------------
-def cpu_per_run(fn, min_total: float = MIN_TIMING, blocks: int = TIMING_BLOCKS) -> tuple:
-    """``(CPU seconds per call, last result)``.
-
-    ``fn`` runs in ``blocks`` blocks of at least ``min_total / blocks`` CPU
-    seconds each (one call at least); the cheapest block's mean is returned, so
-    that load from other processes on a shared machine inflates it less.  A call
-    longer than ``min_total`` runs once.
-    """
-    start = time.process_time()
-    out = fn()
-    first = time.process_time() - start
-    if first >= min_total:
-        return first, out
-    best = first
-    for _ in range(blocks):
-        runs, total = 0, 0.0
-        while runs == 0 or total < min_total / blocks:
-            start = time.process_time()
-            out = fn()
-            total += time.process_time() - start
-            runs += 1
-        best = min(best, total / runs)
-    return best, out
-
-
 def _errors(events, ref) -> tuple:
     from symvib.checks.stability import labels
 
@@ -348,20 +254,6 @@ def _sequence_task(args):
     return out
 
 
-def _map(fn, items, workers):
-    """``[fn(x) for x in items]``, over ``workers`` processes when more than one.
-
-    The workers are not daemonic (:func:`symvib.symbolic.budget.worker_pool`), so the
-    symbolic derivation may start its budgeted child processes there.
-    """
-    if workers <= 1:
-        return [fn(x) for x in items]
-    from symvib.symbolic.budget import worker_pool
-
-    with worker_pool(workers) as ex:
-        return list(ex.map(fn, items, chunksize=1))
-
-
 _DERIVATIONS: dict = {}
 
 
@@ -381,33 +273,13 @@ def _shared_derive(curve, **kwargs):
     return _DERIVATIONS[key]
 
 
-def _backend():
-    from symvib.numeric.driver import resolve_backend
-
-    return resolve_backend("auto")
-
-
-def _warm_up(scenes, backend) -> dict:
-    """Compile (or load) the driver for each curve once: CPU seconds of each first call."""
-    from symvib import simulate
-
-    out = {}
-    for _, scene in scenes:
-        name = scene.shape.name
-        if name not in out:
-            start = time.perf_counter()
-            simulate(scene, samples=False, backend=backend)
-            out[name] = time.perf_counter() - start
-    return out
-
-
 def work_precision(out: Path, *, quick: bool = False, n_random: int | None = None, workers: int = 1,
                    budget: float = PEER_BUDGET, log=print) -> dict:
     """Measure and draw the work-precision diagram; returns the summary (see the module docstring)."""
-    safeio.check_root(out, "bench folder")
-    backend = _backend()
+    safeio.check_root(out, OUT_FOLDER)
+    backend = driver_backend()
     scenes = paper_scenes(quick)
-    warm = _warm_up(scenes, backend)
+    warm = warm_up(scenes, backend)
     log(f"symvib backend: {backend}; first call per curve (compile or load, excluded): "
         + ", ".join(f"{k} {v:.2f} s" for k, v in warm.items()))
     refs = {label: reference_events(s, label=label, cache=out / REFERENCE_NAME) for label, s in scenes}
@@ -437,8 +309,8 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
         summary.append(row)
         log(f"  {st.label:22s} error {row['error_correct_scenes']:9.2e}  CPU/trajectory {row['cpu'] * 1e3:9.3f} ms"
             f"  wrong sequence on {wrong}/{len(scenes)} scenes")
-    _write_csv(out / "work_precision_runs.csv", runs)
-    _write_csv(out / "work_precision.csv", summary)
+    write_csv(out / "work_precision_runs.csv", runs)
+    write_csv(out / "work_precision.csv", summary)
     ratios = []
     peer_ok = [r["error"] for r in summary if r["method"] != "symvib" and r["wrong"] == 0]
     targets = list(RATIO_TARGETS) + ([max(min(peer_ok), ERROR_FLOOR)] if peer_ok else [])
@@ -453,10 +325,10 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
     # Random scenes: wrong event sequences.
     n_random = (QUICK_RANDOM if quick else RANDOM_SCENES) if n_random is None else n_random
     seq = _sequence_counts(n_random, sequence_settings(quick), workers, budget, backend, log, out / RANDOM_TRUTH_NAME)
-    _write_csv(out / "wrong_sequences.csv", seq["rows"])
+    write_csv(out / "wrong_sequences.csv", seq["rows"])
     _plot(out / "work_precision.png", summary, backend)
     md = _summary_markdown(summary, ratios, seq, backend, warm, scenes)
-    safeio.write_file(out / "summary.md", md, what="bench folder")
+    safeio.write_file(out / "summary.md", md, what=OUT_FOLDER)
     log(f"wrote {out / 'work_precision.png'}, work_precision.csv, work_precision_runs.csv, wrong_sequences.csv, "
         f"summary.md")
     return {"summary": summary, "ratios": ratios, "sequences": seq, "backend": backend}
@@ -466,21 +338,21 @@ def _sequence_counts(n, settings, workers, budget, backend, log, cache_file: Pat
     """Wrong-sequence counts over ``n`` random scenes; truths missing from the shipped
     :data:`RANDOM_TRUTH_NAME` and from ``cache_file`` are computed and stored in ``cache_file``."""
     scenes = random_scenes(n)
-    cache = {**shipped(RANDOM_TRUTH_NAME), **_load_json(cache_file)}
+    cache = {**shipped(RANDOM_TRUTH_NAME), **load_json(cache_file)}
     todo = [s for s in scenes if scene_key(s) not in cache]
     if todo:
         log(f"phase reference of {len(todo)} random scenes ({RANDOM_DPS} digits; cached in {cache_file})")
-        truths = _map(_random_truth, todo, workers)
+        truths = map_workers(_random_truth, todo, workers)
         new = {scene_key(s): tr for s, tr in zip(todo, truths)}
         cache.update(new)
-        _store_json(cache_file, new)
+        store_json(cache_file, new)
     usable = [(s, cache[scene_key(s)]["labels"]) for s in scenes if cache[scene_key(s)]["labels"] is not None]
     left_out = len(scenes) - len(usable)
     log(f"random scenes: {len(usable)} usable, {left_out} left out (more than {RANDOM_MAX_EVENTS} events, or the "
         f"reference failed)")
     tasks = [(s, tr, settings, budget, backend) for s, tr in usable]
     start = time.perf_counter()
-    results = _map(_sequence_task, tasks, workers)
+    results = map_workers(_sequence_task, tasks, workers)
     rows = []
     for j, st in enumerate(settings):
         col = [r[j] for r in results]
@@ -490,17 +362,6 @@ def _sequence_counts(n, settings, workers, budget, backend, log, cache_file: Pat
             f"{col.count('failed')}")
     log(f"  ({time.perf_counter() - start:.0f} s)")
     return {"rows": rows, "usable": len(usable), "left_out": left_out}
-
-
-def _write_csv(path: Path, rows) -> None:
-    if not rows:
-        return
-    text = io.StringIO(newline="")
-    w = csv.DictWriter(text, fieldnames=list(rows[0]))
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
-    safeio.write_file(path, text.getvalue(), what="bench folder")
 
 
 _STYLE = {"symvib": ("k", "o"), "RK45": ("tab:blue", "s"), "DOP853": ("tab:orange", "^"),
@@ -528,7 +389,7 @@ def _plot(path: Path, summary, backend) -> None:
     ax.grid(True, which="major", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    with safeio.replacing(safeio.check_root(path.parent, "bench folder"), path.name, what="bench folder") as fh:
+    with safeio.replacing(safeio.check_root(path.parent, OUT_FOLDER), path.name, what=OUT_FOLDER) as fh:
         fig.savefig(fh, format="png")
 
 
@@ -582,23 +443,23 @@ def stability(out: Path, *, quick: bool = False, workers: int = 1, budget: float
     """Run every method on every stability case; write ``stability.csv`` and ``stability.md``."""
     from symvib.checks.stability import case, cases, expected
 
-    safeio.check_root(out, "bench folder")
-    backend = _backend()
+    safeio.check_root(out, OUT_FOLDER)
+    backend = driver_backend()
     names = [c.name for c in cases()]
     if quick:
         names = [n for n in names if n in ("grazing", "cone-edge", "zeno", "plastic-stay", "large-friction")]
     settings = STABILITY_SETTINGS
-    warm = _warm_up([(n, case(n).scene) for n in names], backend)
+    warm = warm_up([(n, case(n).scene) for n in names], backend)
     log(f"symvib backend: {backend}; first call per curve (compile or load): "
         + ", ".join(f"{k} {v:.2f} s" for k, v in warm.items()))
     log(f"budget per run {budget:g} s CPU; computing the right outcomes")
     exps = {n: expected(n) for n in names}
     tasks = [(n, exps[n], settings, budget, backend) for n in names]
-    results = _map(_stability_task, tasks, workers)
+    results = map_workers(_stability_task, tasks, workers)
     rows = [r for group in results for r in group]
-    _write_csv(out / "stability.csv", rows)
+    write_csv(out / "stability.csv", rows)
     md = stability_markdown(rows, names, [Setting(m, v).label for m, v in settings])
-    safeio.write_file(out / "stability.md", md, what="bench folder")
+    safeio.write_file(out / "stability.md", md, what=OUT_FOLDER)
     log(md)
     log(f"wrote {out / 'stability.csv'}, {out / 'stability.md'}")
     return rows
