@@ -56,16 +56,24 @@ Examples
 """
 from __future__ import annotations
 
-import hashlib
-import json
 import math
-import random
 import time
-from importlib.resources import files
 from pathlib import Path
 
 from symvib import safeio
-from symvib.checks.bench.output import OUT_FOLDER, load_json, store_json, write_csv
+from symvib.checks.bench.output import OUT_FOLDER, write_csv
+from symvib.checks.bench.paper_references import REFERENCE_NAME, reference_events, references
+from symvib.checks.bench.scenes import (
+    QUICK_RANDOM,
+    RANDOM_MAX_EVENTS,
+    RANDOM_SCENES,
+    RANDOM_SEED,
+    RESTITUTIONS,
+    paper_scenes,
+    random_scenes,
+    scene_key,
+)
+from symvib.checks.bench.sequences import RANDOM_DPS, RANDOM_TRUTH_NAME, sequence_counts
 from symvib.checks.bench.settings import (
     IVP_METHODS,
     PEER_BUDGET,
@@ -85,7 +93,6 @@ from symvib.checks.bench.settings import (
 from symvib.checks.bench.timing import MIN_TIMING, TIMING_BLOCKS, cpu_per_run, warm_up
 from symvib.checks.bench.workers import map_workers
 from symvib.checks.shipped import DATA_FOLDER, DATA_PACKAGE, shipped
-from symvib.shapes import PAPER_SCENES
 
 __all__ = ["Setting", "paper_scenes", "reference_events", "random_scenes", "run_setting",
            "ratio_at_equal_accuracy", "scene_key", "shipped", "work_precision", "stability", "references",
@@ -93,121 +100,13 @@ __all__ = ["Setting", "paper_scenes", "reference_events", "random_scenes", "run_
            # handed on as well (the shipped data's place, symvib.checks.shipped):
            "DATA_PACKAGE", "DATA_FOLDER", "SYMVIB_NODES", "IVP_METHODS", "RTOLS", "RK4_STEPS", "SEQ_NODES", "SEQ_RTOLS",
            "SEQ_RK4", "PEER_BUDGET", "STABILITY_SETTINGS", "work_settings", "sequence_settings", "MIN_TIMING",
-           "TIMING_BLOCKS", "cpu_per_run"]
+           "TIMING_BLOCKS", "cpu_per_run", "RESTITUTIONS", "RANDOM_SCENES", "QUICK_RANDOM", "RANDOM_MAX_EVENTS",
+           "RANDOM_SEED", "RANDOM_DPS"]
 
-#: The restitutions each paper scene (:data:`symvib.shapes.PAPER_SCENES`) of the work-precision diagram runs with.
-RESTITUTIONS = (1.0, 0.8)
-#: Random scenes (default run, --quick run) and their event cap.
-RANDOM_SCENES = 200
-QUICK_RANDOM = 20
-RANDOM_MAX_EVENTS = 30
-RANDOM_SEED = 2026
-#: Digits of the random scenes' phase reference.
-RANDOM_DPS = 20
 #: Accuracy targets of the ratio at equal accuracy (plus the best a peer reaches).
 RATIO_TARGETS = (1e-6, 1e-10)
 #: Smallest error drawn (errors below are plotted here).
 ERROR_FLOOR = 1e-16
-#: 30-digit time references of the paper scenes: shipped in the data folder, and the name of the
-#: on-demand cache in an output folder (regenerate: ``symvib bench reference --write --out DIR``).
-REFERENCE_NAME = "time_reference.json"
-#: Phase-reference event sequences of the random scenes: shipped, and the on-demand cache's name.
-RANDOM_TRUTH_NAME = "random_truth.json"
-
-
-# --- scenes and references -----------------------------------------------------------------------
-def paper_scenes(quick: bool = False) -> list:
-    """``(label, scene)`` of the paper scenes with k = 1 and 0.8 (quick: two of them)."""
-    from symvib.numeric.scene import load_scene
-
-    out = []
-    for name in PAPER_SCENES:
-        for k in RESTITUTIONS:
-            scene = load_scene(files("symvib") / "scenes" / f"{name}.toml").replace(k=k)
-            out.append((f"{name} k={k:g}", scene))
-    if quick:
-        out = [out[1], out[4]]  # parabola k=0.8, circle-3.8 k=1
-    return out
-
-
-def scene_key(scene) -> str:
-    """A fingerprint of everything that determines a scene's events."""
-    data = [scene.shape.name, scene.shape.source() if hasattr(scene.shape, "source") else None,
-            [repr(v) for v in scene.param_values], repr(scene.g), repr(scene.mu), repr(scene.k), repr(scene.left),
-            repr(scene.right), repr(scene.q0), repr(scene.qdot0), repr(scene.t_max), scene.max_events]
-    return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()[:16]
-
-
-def reference_events(scene, *, label: str = "", cached: bool = True, cache: Path | None = None) -> list:
-    """The time reference's events of ``scene`` as ``(kind, t, q, qdot_before)`` floats.
-
-    Parameters
-    ----------
-    scene : symvib.numeric.scene.Scene
-    label : str
-        The scene's label in the cache file (default: its name).
-    cached : bool
-        Look the scene up (by :func:`scene_key`) in the shipped references
-        (:data:`REFERENCE_NAME`) and in ``cache`` first; False recomputes it.
-    cache : pathlib.Path, optional
-        A JSON file (in an output folder) where a computed reference is stored,
-        merged with what the file holds; None stores nothing.
-    """
-    key = scene_key(scene)
-    if cached:
-        for data in (shipped(REFERENCE_NAME), load_json(cache)):
-            if key in data:
-                return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in data[key]["events"]]
-    import mpmath
-
-    from symvib.checks.reference_time import time_reference
-
-    ref = time_reference(scene, dps=30)
-    rows = [(e.kind, mpmath.nstr(e.t, 25), mpmath.nstr(e.q, 25), mpmath.nstr(e.qdot_before, 25)) for e in ref]
-    if cache is not None:
-        store_json(cache, {key: {"scene": label or scene.name, "dps": 30,
-                                  "method": "symvib.checks.reference_time.time_reference", "events": rows}},
-                    indent=1)
-    return [(e[0], float(e[1]), float(e[2]), float(e[3])) for e in rows]
-
-
-def random_scenes(n: int, seed: int = RANDOM_SEED) -> list:
-    """``n`` random paper-parabola / circle scenes (random ``qdot0``, ``mu``, ``k``, limiters), capped events."""
-    from symvib.numeric.scene import scene_from_dict
-
-    rng = random.Random(seed)
-    out = []
-    for i in range(n):
-        circle = rng.random() < 0.5
-        left = -rng.uniform(0.15, 1.0) if rng.random() < 0.85 else None
-        right = rng.uniform(0.15, 1.0) if rng.random() < 0.85 else None
-        lo = -0.9 * (1.0 if left is None else -left)
-        hi = 0.9 * (1.0 if right is None else right)
-        data = {"name": f"random-{seed}-{i}",
-                "curve": {"shape": "circle" if circle else "parabola"},
-                "parameters": {"R": 0.5} if circle else {"p": 1.0},
-                "physics": {"g": 9.81, "m": 0.2, "mu": round(rng.uniform(0.01, 0.4), 6),
-                            "restitution": 1.0 if rng.random() < 0.15 else round(rng.uniform(0.0, 1.0), 6)},
-                "limiters": {k: v for k, v in (("left", left), ("right", right)) if v is not None},
-                "initial": {"q": round(rng.uniform(lo, hi), 6), "qdot": round(rng.uniform(-9.0, 9.0), 6)},
-                "run": {"t_max": 60.0, "max_events": RANDOM_MAX_EVENTS}}
-        out.append(scene_from_dict(data))
-    return out
-
-
-def _random_truth(scene):
-    """Sequence labels of a random scene by the phase reference, or None (too many events, or it failed)."""
-    from symvib.checks.reference import phase_reference
-    from symvib.checks.stability import labels
-
-    try:
-        ref = phase_reference(scene, dps=RANDOM_DPS, max_events=RANDOM_MAX_EVENTS, derive=_shared_derive)
-    except Exception as exc:  # noqa: BLE001 - a scene the reference cannot do is left out, and counted
-        return {"labels": None, "why": f"{type(exc).__name__}"}
-    if not ref or ref[-1].kind not in ("arrest", "rest_on_limiter"):
-        return {"labels": None, "why": "needs more than the event cap"}
-    rows = [(e.kind, float(e.t), float(e.q), float(e.qdot_before)) for e in ref]
-    return {"labels": list(labels(rows)), "t": [r[1] for r in rows]}
 
 
 # --- measuring ------------------------------------------------------------------------------------
@@ -234,43 +133,6 @@ def ratio_at_equal_accuracy(rows, target: float):
     p = min(peers, key=lambda r: r["cpu"])
     s = min(ours, key=lambda r: r["cpu"])
     return p["label"], p["cpu"], s["label"], s["cpu"], p["cpu"] / s["cpu"]
-
-
-def _sequence_task(args):
-    """One random scene through every sequence setting (runs in a worker)."""
-    scene, truth, settings, budget, backend = args
-    from symvib.checks.stability import labels
-
-    out = []
-    for st in settings:
-        try:
-            status, events, _ = run_setting(st, scene, budget=budget, backend=backend)
-        except Exception:  # noqa: BLE001 - a crash is a failure to count
-            status, events = "failed", []
-        if status == "failed":
-            out.append("failed")
-        else:
-            out.append("ok" if list(labels(events)) == truth else "wrong")
-    return out
-
-
-_DERIVATIONS: dict = {}
-
-
-def _shared_derive(curve, **kwargs):
-    """:func:`symvib.symbolic.derive.derive`, memoized per process for the phase reference.
-
-    :func:`symvib.checks.reference.phase_reference` derives the scene's curve on every
-    call (a second or so, in budgeted child processes); the random scenes use
-    two curves, so the derivation is memoized by the curve's expressions and
-    the options (``_DERIVATIONS``) and passed as its ``derive``.
-    """
-    from symvib.symbolic.derive import derive
-
-    key = (curve.name, str(curve.x), str(curve.z), str(curve.q), tuple(sorted(kwargs.items())))
-    if key not in _DERIVATIONS:
-        _DERIVATIONS[key] = derive(curve, **kwargs)
-    return _DERIVATIONS[key]
 
 
 def work_precision(out: Path, *, quick: bool = False, n_random: int | None = None, workers: int = 1,
@@ -324,7 +186,7 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
             log(f"ratio at error <= {target:.1e}: no peer setting reaches it")
     # Random scenes: wrong event sequences.
     n_random = (QUICK_RANDOM if quick else RANDOM_SCENES) if n_random is None else n_random
-    seq = _sequence_counts(n_random, sequence_settings(quick), workers, budget, backend, log, out / RANDOM_TRUTH_NAME)
+    seq = sequence_counts(n_random, sequence_settings(quick), workers, budget, backend, log, out / RANDOM_TRUTH_NAME)
     write_csv(out / "wrong_sequences.csv", seq["rows"])
     _plot(out / "work_precision.png", summary, backend)
     md = _summary_markdown(summary, ratios, seq, backend, warm, scenes)
@@ -332,36 +194,6 @@ def work_precision(out: Path, *, quick: bool = False, n_random: int | None = Non
     log(f"wrote {out / 'work_precision.png'}, work_precision.csv, work_precision_runs.csv, wrong_sequences.csv, "
         f"summary.md")
     return {"summary": summary, "ratios": ratios, "sequences": seq, "backend": backend}
-
-
-def _sequence_counts(n, settings, workers, budget, backend, log, cache_file: Path) -> dict:
-    """Wrong-sequence counts over ``n`` random scenes; truths missing from the shipped
-    :data:`RANDOM_TRUTH_NAME` and from ``cache_file`` are computed and stored in ``cache_file``."""
-    scenes = random_scenes(n)
-    cache = {**shipped(RANDOM_TRUTH_NAME), **load_json(cache_file)}
-    todo = [s for s in scenes if scene_key(s) not in cache]
-    if todo:
-        log(f"phase reference of {len(todo)} random scenes ({RANDOM_DPS} digits; cached in {cache_file})")
-        truths = map_workers(_random_truth, todo, workers)
-        new = {scene_key(s): tr for s, tr in zip(todo, truths)}
-        cache.update(new)
-        store_json(cache_file, new)
-    usable = [(s, cache[scene_key(s)]["labels"]) for s in scenes if cache[scene_key(s)]["labels"] is not None]
-    left_out = len(scenes) - len(usable)
-    log(f"random scenes: {len(usable)} usable, {left_out} left out (more than {RANDOM_MAX_EVENTS} events, or the "
-        f"reference failed)")
-    tasks = [(s, tr, settings, budget, backend) for s, tr in usable]
-    start = time.perf_counter()
-    results = map_workers(_sequence_task, tasks, workers)
-    rows = []
-    for j, st in enumerate(settings):
-        col = [r[j] for r in results]
-        rows.append({"method": st.method, "setting": st.value, "label": st.label, "scenes": len(col),
-                     "wrong": col.count("wrong"), "failed": col.count("failed")})
-        log(f"  {st.label:22s} wrong sequence {col.count('wrong'):4d}/{len(col)}, failed/out of budget "
-            f"{col.count('failed')}")
-    log(f"  ({time.perf_counter() - start:.0f} s)")
-    return {"rows": rows, "usable": len(usable), "left_out": left_out}
 
 
 _STYLE = {"symvib": ("k", "o"), "RK45": ("tab:blue", "s"), "DOP853": ("tab:orange", "^"),
@@ -478,30 +310,3 @@ def stability_markdown(rows, names, methods) -> str:
             marks.append("**correct**" if o == "correct" else o)
         lines.append(f"| {case(n).title} | " + " | ".join(marks) + " |")
     return "\n".join(lines) + "\n"
-
-
-# --- time references ---------------------------------------------------------------------------------
-def references(out: Path | None = None, *, log=print) -> list:
-    """Recompute the time reference of every paper scene (``symvib bench reference``).
-
-    Parameters
-    ----------
-    out : pathlib.Path, optional
-        Folder whose :data:`REFERENCE_NAME` receives them (merged with what it
-        holds); None stores nothing.
-
-    Returns
-    -------
-    list of (str, list)
-        ``(label, events)`` per paper scene.
-    """
-    cache = None if out is None else Path(out) / REFERENCE_NAME
-    done = []
-    for label, scene in paper_scenes():
-        start = time.process_time()
-        ev = reference_events(scene, label=label, cached=False, cache=cache)
-        log(f"{label:24s} {len(ev):3d} events, {time.process_time() - start:.1f} s")
-        done.append((label, ev))
-    if cache is not None:
-        log(f"wrote {cache}")
-    return done
