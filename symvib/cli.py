@@ -280,7 +280,9 @@ BENCH_OUT = "symvib-bench"
 def build_bench_parser() -> argparse.ArgumentParser:
     """The options of ``symvib bench`` (jobs in :mod:`symvib.checks.bench`)."""
     from symvib.checks.accuracy import ACCURACY_REFERENCE_NAME
-    from symvib.checks.bench import PEER_BUDGET, RANDOM_SCENES, REFERENCE_NAME
+    from symvib.checks.bench.paper_references import REFERENCE_NAME
+    from symvib.checks.bench.scenes import RANDOM_SCENES
+    from symvib.checks.bench.settings import PEER_BUDGET
 
     parser = _BenchParser(prog="symvib bench", description="work-precision charts and the stability suite")
     sub = parser.add_subparsers(dest="job", required=True)
@@ -313,7 +315,9 @@ def bench_main(argv) -> int:
     """``symvib bench``: returns an exit status (2 for bad options)."""
     from pathlib import Path
 
-    from symvib.checks import bench
+    from symvib.checks.bench.paper_references import references
+    from symvib.checks.bench.stability_job import stability
+    from symvib.checks.bench.work_precision_job import work_precision
     from symvib.paths import check_output_dir
 
     try:
@@ -329,17 +333,17 @@ def bench_main(argv) -> int:
     if args.job not in ("reference", "accuracy-reference") or args.write:
         check_output_dir(args.out, "--out folder")
     if args.job == "work-precision":
-        bench.work_precision(Path(args.out), quick=args.quick, n_random=args.random, workers=args.workers,
-                             budget=args.budget)
+        work_precision(Path(args.out), quick=args.quick, n_random=args.random, workers=args.workers,
+                       budget=args.budget)
     elif args.job == "stability":
-        bench.stability(Path(args.out), quick=args.quick, workers=args.workers, budget=args.budget)
+        stability(Path(args.out), quick=args.quick, workers=args.workers, budget=args.budget)
     elif args.job == "accuracy-reference":
         from symvib.checks.accuracy import regenerate
 
         differs = regenerate(Path(args.out) if args.write else None, workers=args.workers)
         return 1 if differs and not args.write else 0
     else:
-        bench.references(Path(args.out) if args.write else None)
+        references(Path(args.out) if args.write else None)
     return 0
 
 

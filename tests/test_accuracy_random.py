@@ -34,7 +34,7 @@ from symvib.checks.accuracy import (
     write_references,
 )
 from symvib.checks.arclength import ReferenceRun, curve_frame, reference_run, scene_scales
-from symvib.checks.bench import shipped
+from symvib.checks.shipped import shipped
 from symvib.cli import build_bench_parser
 from symvib.numeric.events import EventKind, Status
 from symvib.numeric.scene import scene_from_dict

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from symvib import simulate
-from symvib.checks import bench
+from symvib.checks.bench.scenes import paper_scenes
 from symvib.checks.reference_time import time_reference_states
 from symvib.numeric.scene import scene_from_dict
 
 #: The issue's bar: the dense output agrees with the 30-digit reference to 1e-12.
 TOL = 1e-12
-PAPER = dict(bench.paper_scenes())
+PAPER = dict(paper_scenes())
 
 
 def run(scene):

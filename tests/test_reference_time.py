@@ -4,9 +4,11 @@ import math
 import mpmath
 import pytest
 
-from symvib.checks import bench
+from symvib.checks.bench.paper_references import REFERENCE_NAME, reference_events
+from symvib.checks.bench.scenes import paper_scenes, scene_key
 from symvib.checks.reference import phase_reference
 from symvib.checks.reference_time import TimeReferenceBudget, time_reference
+from symvib.checks.shipped import shipped
 from symvib.numeric.scene import scene_from_dict
 
 
@@ -41,7 +43,7 @@ def test_agrees_with_the_phase_reference_to_1e_20(name, k):
     The phase reference runs at 45 digits: its reversal times lose about half
     its digits (a 1/sqrt quadrature across a root known to the working precision).
     """
-    scene = dict(bench.paper_scenes())[f"{name} k={k:g}"]
+    scene = dict(paper_scenes())[f"{name} k={k:g}"]
     a = time_reference(scene, dps=30)
     b = phase_reference(scene, dps=45)
     assert [e.kind for e in a] == [e.kind for e in b]
@@ -51,12 +53,12 @@ def test_agrees_with_the_phase_reference_to_1e_20(name, k):
 
 def test_cached_references_are_current():
     """The shipped references hold every paper scene, and one of them recomputes to the same digits."""
-    data = bench.shipped(bench.REFERENCE_NAME)
-    scenes = bench.paper_scenes()
-    assert all(bench.scene_key(s) in data for _, s in scenes)
+    data = shipped(REFERENCE_NAME)
+    scenes = paper_scenes()
+    assert all(scene_key(s) in data for _, s in scenes)
     label, scene = scenes[5]  # paper-circle-3.8 k=0.8: four events, under a second
-    cached = bench.reference_events(scene)
-    fresh = bench.reference_events(scene, cached=False)
+    cached = reference_events(scene)
+    fresh = reference_events(scene, cached=False)
     assert [e[0] for e in cached] == [e[0] for e in fresh]
     assert all(math.isclose(a[1], b[1], abs_tol=1e-15) and a[2] == pytest.approx(b[2], abs=1e-15)
                for a, b in zip(cached, fresh))

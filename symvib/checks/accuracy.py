@@ -62,6 +62,7 @@ import numpy as np
 from symvib.checks import arclength, randomscenes
 from symvib.checks.arclength import CONE_RTOL, ReferenceRun, curve_frame, reference_run, scene_scales
 from symvib.checks.randomscenes import CATEGORIES, QUOTAS, TRACKS, RandomScene, random_scenes
+from symvib.checks.shipped import shipped
 from symvib.numeric.scene import scene_from_dict
 
 __all__ = ["Verdict", "Reference", "Record", "Report", "VERDICTS", "DT_BINS", "TIME_TOL", "reference_for",
@@ -704,8 +705,6 @@ def read_references(data: dict | str | Path) -> StoredReferences:
 
 def stored_references() -> StoredReferences:
     """The shipped references (``symvib/checks/data/accuracy_reference.json``, package data)."""
-    from symvib.checks.bench import shipped
-
     return read_references(shipped(ACCURACY_REFERENCE_NAME))
 
 

@@ -29,7 +29,7 @@ downhill).
 
 It is slow (about 10 ms per step at 30 digits); results used by the
 benchmarks ship in ``symvib/checks/data/time_reference.json`` (see
-:mod:`symvib.checks.bench`, ``symvib bench reference``).
+:mod:`symvib.checks.bench.paper_references`, ``symvib bench reference``).
 
 Examples
 --------
