@@ -11,7 +11,7 @@ Commands (paths default to every ``*.ipynb`` next to this file)::
     python derivations/nbtool.py clean [NOTEBOOK ...]   # strip outputs, normalize (in place)
     python derivations/nbtool.py check [NOTEBOOK ...]   # exit 1 if one is not stored clean
     python derivations/nbtool.py run [NOTEBOOK ...] [--output DIR] [--timeout SECONDS]
-    python derivations/nbtool.py render [NOTEBOOK ...] [--out DIR]   # executed copies for docs/notebooks/
+    python derivations/nbtool.py render [NOTEBOOK ...] [--out DIR]   # pages for docs/notebooks/
 
 ``run`` executes each notebook top to bottom on a fresh Jupyter kernel
 (nbclient + ipykernel, Matplotlib on ``Agg``) in this folder, and exits 1 on
@@ -19,10 +19,33 @@ the first error of any notebook; ``--output DIR`` writes the executed copies
 (with their outputs and figures) there, never over the stored ones.
 
 ``render`` runs them the same way with the plain-Python engine (``SYMVIB_BACKEND=python``:
-nothing waits for a compiler) and writes each executed notebook, outputs and figures
-included, to ``docs/notebooks/NAME.ipynb`` (GitHub renders it), plus a Markdown export
-``NAME.md`` with its figures in ``NAME_files/``.  :func:`rendered_problems` says why a
-rendered copy is not current (``tests/test_notebooks_rendered.py``).
+nothing waits for a compiler) and writes each executed notebook as one Markdown page,
+``docs/notebooks/NAME.md``, with its figures as PNG files in ``docs/notebooks/NAME_files/``.
+:func:`rendered_problems` says why a rendered page is not current
+(``tests/test_notebooks_rendered.py``).
+
+Why a page and figure files, and no executed ``.ipynb``: a figure is stored once, as the
+PNG that the page links (an executed notebook would hold the same figure again as base64,
+a third larger, and rewrite it whole on each render); a figure that did not change is the
+same file and adds nothing to the history, and a page diffs as text.  GitHub shows a
+Markdown page at once, with its math and figures, where it renders a large notebook
+slowly or not at all.  The notebooks themselves are in ``derivations/`` (``run --output``
+writes executed copies for Jupyter).  PNG, not SVG: an SVG figure holds every plotted point as
+path text, 3.4 times the PNG's bytes in a checkout for the explorer's figures.
+
+A render is deterministic: the same notebook rendered twice on the same code and machine
+gives byte-identical files.  Each kernel starts with a fixed environment of its own (a
+fresh ``IPYTHONDIR`` whose config makes PNG figures without the ``Software`` text chunk,
+a ``matplotlibrc`` of the render's instead of the user's, ``PYTHONHASHSEED=0``, a fresh
+``$SYMVIB_CACHE``: kernels of user curves are generated as on a first run); nbclient
+records no cell timings and merges stream outputs (``coalesce_streams``: ipykernel
+flushes ``print`` output in chunks whose borders depend on timing); the page holds no
+metadata, ids, execution counts or dates, only a digest of the notebook's cells; figures
+are numbered in order.  What the notebooks print must not depend on the clock or the
+machine either (no wall times, no absolute paths): ``tests/test_notebooks_rendered.py``
+renders one twice and compares.  One thing stays outside: ``derive`` tries its routes under
+wall-clock budgets, so on a machine loaded several times over a route that takes a second
+may time out and a page show another route; render on a quiet machine.
 
 ``clean`` and ``check`` need only the standard library (``check`` also
 validates against the nbformat schema when :mod:`nbformat` is installed);
@@ -45,10 +68,14 @@ Examples
 from __future__ import annotations
 
 import argparse
+import base64
+import hashlib
 import json
 import os
 import re
+import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -64,10 +91,26 @@ KERNEL_NAME = "python3"
 CELL_METADATA = ("tags",)
 #: Environment of the kernel: figures render off-screen.
 KERNEL_ENV = {"MPLBACKEND": "Agg"}
-#: Where ``render`` writes the executed copies.
+#: Where ``render`` writes the pages.
 RENDERED = HERE.parent / "docs" / "notebooks"
-#: The engine a rendering runs on: plain Python, so no notebook waits for a numba compile.
-RENDER_ENV = {"SYMVIB_BACKEND": "python"}
+#: The environment a rendering runs in: the plain-Python engine (no notebook waits for a numba
+#: compile) and a fixed hash seed (SymPy's set and dict orders are then those of every render).
+RENDER_ENV = {"SYMVIB_BACKEND": "python", "PYTHONHASHSEED": "0"}
+#: The kernel's IPython configuration in a render (``IPYTHONDIR/profile_default``): PNG figures
+#: without the ``Software`` text chunk (Matplotlib's version) and compressed as tightly as zlib can.
+KERNEL_CONFIG = """\
+c.InlineBackend.figure_formats = {"png"}
+c.InlineBackend.print_figure_kwargs = {"bbox_inches": "tight", "metadata": {"Software": None},
+                                       "pil_kwargs": {"optimize": True}}
+c.InlineBackend.rc = {}
+c.HistoryManager.enabled = False
+"""
+#: The Matplotlib configuration of a render (``$MATPLOTLIBRC``), in place of the user's.
+MATPLOTLIBRC = "backend: Agg\nsvg.hashsalt: symvib\n"
+#: The figure types a page takes from an output, best first, with the extension of their file.
+FIGURE_TYPES = {"image/png": "png", "image/svg+xml": "svg"}
+#: PNG chunks a rendered figure may hold (text and time chunks would be metadata that churns).
+PNG_CHUNKS = {b"IHDR", b"PLTE", b"tRNS", b"pHYs", b"IDAT", b"IEND"}
 
 
 def notebooks(paths=None) -> list:
@@ -164,7 +207,8 @@ def execute(path, *, timeout: float = CELL_TIMEOUT, env: dict | None = None):
     """Run a notebook top to bottom on a fresh kernel; returns the executed notebook.
 
     The kernel starts in the notebook's folder with ``MPLBACKEND=Agg`` added to
-    ``env`` (default: this process's environment).  Raises
+    ``env`` (default: this process's environment).  No cell timings are recorded and each
+    cell's stream outputs are merged, one per stream.  Raises
     ``nbclient.exceptions.CellExecutionError`` on the first cell that fails and
     ``CellTimeoutError`` when one runs longer than ``timeout`` seconds.
     """
@@ -175,7 +219,7 @@ def execute(path, *, timeout: float = CELL_TIMEOUT, env: dict | None = None):
     nb = nbformat.read(path, as_version=4)
     kernel_env = {**(os.environ if env is None else env), **KERNEL_ENV}
     client = nbclient.NotebookClient(nb, timeout=timeout, startup_timeout=STARTUP_TIMEOUT,
-                                     kernel_name=KERNEL_NAME,
+                                     kernel_name=KERNEL_NAME, record_timing=False, coalesce_streams=True,
                                      resources={"metadata": {"path": str(path.parent.resolve())}})
     client.execute(env=kernel_env)
     return nb
@@ -202,118 +246,179 @@ def run(paths=None, *, output=None, timeout: float = CELL_TIMEOUT) -> int:
     return failed
 
 
-def _volatile_free(nb: dict) -> dict:
-    """An executed notebook without what changes on every run but says nothing (timings, kernel versions)."""
-    for cell in nb.get("cells", []):
-        cell["metadata"] = {k: v for k, v in cell.get("metadata", {}).items() if k in CELL_METADATA}
-    meta = nb.get("metadata", {})
-    nb["metadata"] = {k: meta[k] for k in ("kernelspec",) if k in meta}
-    nb["metadata"]["language_info"] = {"name": meta.get("language_info", {}).get("name", "python")}
-    return nb
-
-
 def _text(value) -> str:
     return "".join(value) if isinstance(value, list) else str(value)
 
 
+def cells_digest(cells) -> str:
+    """16 hex digits of SHA-256 over the cells' types and sources: what a page records of its notebook."""
+    pairs = [[c["cell_type"], _text(c.get("source", ""))] for c in cells]
+    text = json.dumps(pairs, ensure_ascii=False, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
+def _header(name: str, digest: str) -> str:
+    return (f"<!-- Rendered from derivations/{name}.ipynb (cells {digest}) by "
+            "`python derivations/nbtool.py render`; do not edit. -->\n\n")
+
+
+def _cell_block(cell) -> str:
+    """A cell's own text on the page: a markdown cell as it is, a code cell in a ``python`` fence."""
+    source = _text(cell.get("source", ""))
+    return source if cell["cell_type"] == "markdown" else f"```python\n{source}\n```"
+
+
 def markdown_export(nb: dict, name: str, files: Path) -> str:
     """A Markdown page of an executed notebook: its markdown cells, code in fences, text outputs,
-    LaTeX and Markdown outputs as they are, and figures written as PNG into ``files``."""
-    import base64
+    LaTeX and Markdown outputs as they are, and each figure written once, as a file in ``files``
+    (``figure-01.png``, ... in order) that the page links.
 
+    The page starts with a comment naming the notebook and the digest of its cells
+    (:func:`cells_digest`); it holds nothing else of the run (no metadata, ids, counts or
+    dates).  An error output is refused (``ValueError``): a page shows a notebook that ran.
+    """
     lines = []
     figure = 0
-    for cell in nb["cells"]:
-        source = _text(cell.get("source", ""))
-        if cell["cell_type"] == "markdown":
-            lines += [source, ""]
+    for i, cell in enumerate(nb["cells"], 1):
+        if cell["cell_type"] not in ("markdown", "code"):
             continue
-        if cell["cell_type"] != "code":
-            continue
-        lines += ["```python", source, "```", ""]
+        lines += [_cell_block(cell), ""]
         for out in cell.get("outputs", []):
             kind = out.get("output_type")
             if kind == "stream":
                 lines += ["```text", _text(out.get("text", "")).rstrip("\n"), "```", ""]
-            elif kind == "error":
-                lines += ["```text", f"{out.get('ename')}: {out.get('evalue')}", "```", ""]
-            else:
-                data = out.get("data", {})
-                if "image/png" in data:
-                    figure += 1
-                    files.mkdir(parents=True, exist_ok=True)
-                    png = files / f"figure-{figure:02d}.png"
-                    png.write_bytes(base64.b64decode(_text(data["image/png"])))
-                    lines += [f"![figure {figure}]({files.name}/{png.name})", ""]
-                elif "text/markdown" in data:
-                    lines += [_text(data["text/markdown"]), ""]
-                elif "text/latex" in data:
-                    lines += [_text(data["text/latex"]).strip(), ""]
-                elif "text/plain" in data:
-                    lines += ["```text", _text(data["text/plain"]), "```", ""]
-    head = (f"<!-- Rendered from derivations/{name}.ipynb by `python derivations/nbtool.py render`; "
-            "do not edit. -->\n\n")
-    return head + "\n".join(lines).rstrip() + "\n"
+                continue
+            if kind == "error":
+                raise ValueError(f"{name}: cell {i} failed: {out.get('ename')}: {out.get('evalue')}")
+            data = out.get("data", {})
+            image = next((t for t in FIGURE_TYPES if t in data), None)
+            if image is not None:
+                figure += 1
+                files.mkdir(parents=True, exist_ok=True)
+                file = files / f"figure-{figure:02d}.{FIGURE_TYPES[image]}"
+                body = _text(data[image])
+                file.write_bytes(base64.b64decode(body) if image == "image/png" else body.encode("utf-8"))
+                lines += [f"![figure {figure}]({files.name}/{file.name})", ""]
+            elif "text/markdown" in data:
+                lines += [_text(data["text/markdown"]), ""]
+            elif "text/latex" in data:
+                lines += [_text(data["text/latex"]).strip(), ""]
+            elif "text/plain" in data:
+                lines += ["```text", _text(data["text/plain"]), "```", ""]
+    return _header(name, cells_digest(nb["cells"])) + "\n".join(lines).rstrip() + "\n"
+
+
+def render_environment(folder) -> dict:
+    """The variables a rendering kernel runs with, its configuration files written into ``folder``:
+    :data:`RENDER_ENV`, a fresh ``IPYTHONDIR`` holding :data:`KERNEL_CONFIG` (no user's profile
+    or startup files), ``MATPLOTLIBRC`` (:data:`MATPLOTLIBRC`, not the user's) and a fresh
+    ``SYMVIB_CACHE`` (user curves' kernels generated as on a first run)."""
+    folder = Path(folder)
+    profile = folder / "ipython" / "profile_default"
+    profile.mkdir(parents=True, exist_ok=True)
+    (profile / "ipython_kernel_config.py").write_text(KERNEL_CONFIG, encoding="utf-8")
+    (folder / "matplotlibrc").write_text(MATPLOTLIBRC, encoding="utf-8")
+    (folder / "kernels").mkdir(mode=0o700, exist_ok=True)
+    return {**RENDER_ENV, "IPYTHONDIR": str(folder / "ipython"), "MATPLOTLIBRC": str(folder / "matplotlibrc"),
+            "SYMVIB_CACHE": str(folder / "kernels")}
 
 
 def render(paths=None, *, out=RENDERED, timeout: float = CELL_TIMEOUT) -> int:
-    """Execute notebooks (plain-Python engine) and write their rendered copies; returns the failures."""
-    import shutil
-
-    import nbformat
-
+    """Execute notebooks in :func:`render_environment` and write their pages; returns the failures."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     failed = 0
-    for path in notebooks(paths):
-        start = time.perf_counter()
-        try:
-            nb = execute(path, timeout=timeout, env={**os.environ, **RENDER_ENV})
-        except Exception as exc:  # noqa: BLE001 - report every notebook, then fail
-            failed += 1
-            text = re.sub(r"\x1b\[[0-9;]*m", "", str(exc)).strip()
-            print(f"FAIL {path.name} ({time.perf_counter() - start:.1f} s): {type(exc).__name__}\n{text}")
-            continue
-        data = _volatile_free(json.loads(nbformat.writes(nb)))
-        (out / path.name).write_text(json.dumps(data, sort_keys=True, indent=1, ensure_ascii=False) + "\n",
-                                     encoding="utf-8")
-        files = out / f"{path.stem}_files"
-        if files.exists():
-            shutil.rmtree(files)
-        (out / f"{path.stem}.md").write_text(markdown_export(data, path.stem, files), encoding="utf-8")
-        print(f"ok   {path.name} ({time.perf_counter() - start:.1f} s) -> {out / path.name}")
+    with tempfile.TemporaryDirectory(prefix="nbtool-render-") as scratch:
+        env = {**os.environ, **render_environment(scratch)}
+        for path in notebooks(paths):
+            start = time.perf_counter()
+            try:
+                nb = execute(path, timeout=timeout, env=env)
+                files = out / f"{path.stem}_files"
+                with tempfile.TemporaryDirectory(prefix="figures-", dir=scratch) as staged:
+                    page = markdown_export(nb, path.stem, Path(staged) / files.name)
+                    if files.exists():
+                        shutil.rmtree(files)
+                    if (Path(staged) / files.name).exists():
+                        shutil.copytree(Path(staged) / files.name, files)
+            except Exception as exc:  # noqa: BLE001 - report every notebook, then fail
+                failed += 1
+                text = re.sub(r"\x1b\[[0-9;]*m", "", str(exc)).strip()
+                print(f"FAIL {path.name} ({time.perf_counter() - start:.1f} s): {type(exc).__name__}\n{text}")
+                continue
+            (out / f"{path.stem}.md").write_text(page, encoding="utf-8")
+            print(f"ok   {path.name} ({time.perf_counter() - start:.1f} s) -> {out / path.stem}.md")
     return failed
 
 
-def rendered_problems(path, rendered_dir=RENDERED) -> list:
-    """Why the rendered copy of notebook ``path`` is not current (empty when it is).
+def png_chunks(data: bytes) -> list:
+    """The chunk types of a PNG file, in order (``ValueError`` when it is not one)."""
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        raise ValueError("not a PNG file")
+    chunks, at = [], 8
+    while at + 8 <= len(data):
+        size = int.from_bytes(data[at:at + 4], "big")
+        chunks.append(data[at + 4:at + 8])
+        at += 12 + size
+    return chunks
 
-    Current means: it exists, its cells are the stored notebook's (same types and
-    sources, in order), every code cell was executed, at least one has an output, no
-    output is an error, and its Markdown export exists.
+
+def figure_problems(file) -> list:
+    """Why a figure file is not as a render writes it: a PNG with text or time chunks (metadata
+    that changes with the Matplotlib version or the clock), an SVG with a date."""
+    file = Path(file)
+    data = file.read_bytes()
+    if file.suffix == ".png":
+        try:
+            extra = sorted({c.decode("latin-1") for c in png_chunks(data)} - {c.decode() for c in PNG_CHUNKS})
+        except ValueError as exc:
+            return [f"{file.name}: {exc}"]
+        return [f"{file.name} carries PNG chunks {', '.join(extra)}"] if extra else []
+    if file.suffix == ".svg":
+        return [f"{file.name} carries a date"] if b"<dc:date>" in data else []
+    return [f"{file.name}: not a figure type of a page"]
+
+
+def rendered_problems(path, rendered_dir=RENDERED) -> list:
+    """Why the rendered page of notebook ``path`` is not current (empty when it is).
+
+    Current means: ``NAME.md`` exists and records the digest of the stored notebook's cells
+    (:func:`cells_digest`: the same cells, types and sources, in order); every cell's text
+    is on the page, in order (no hand edit of a page goes unseen); each figure it links is a
+    file of ``NAME_files/``, every file there is linked once, and none carries metadata
+    (:func:`figure_problems`).
     """
     path = Path(path)
-    copy = Path(rendered_dir) / path.name
-    if not copy.is_file():
-        return [f"no rendered copy {copy.name}"]
-    stored = json.loads(path.read_text(encoding="utf-8"))["cells"]
-    try:
-        shown = json.loads(copy.read_text(encoding="utf-8"))["cells"]
-    except (json.JSONDecodeError, KeyError) as exc:
-        return [f"rendered copy unreadable: {exc}"]
+    rendered_dir = Path(rendered_dir)
+    page_path = rendered_dir / f"{path.stem}.md"
+    if not page_path.is_file():
+        return [f"no rendered page {page_path.name}"]
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    page = page_path.read_text(encoding="utf-8")
     found = []
-    if [(c["cell_type"], _text(c["source"])) for c in stored] != [(c["cell_type"], _text(c["source"]))
-                                                                   for c in shown]:
+    if not page.startswith(_header(path.stem, cells_digest(cells))):
         found.append("cells differ from the stored notebook (run: python derivations/nbtool.py render)")
-    code = [c for c in shown if c["cell_type"] == "code"]
-    if any(c.get("execution_count") is None for c in code):
-        found.append("a code cell was not executed")
-    if not any(c.get("outputs") for c in code):
-        found.append("no outputs")
-    if any(o.get("output_type") == "error" for c in code for o in c.get("outputs", [])):
-        found.append("an output is an error")
-    if not copy.with_suffix(".md").is_file():
-        found.append(f"no Markdown export {copy.with_suffix('.md').name}")
+    at = 0
+    for i, cell in enumerate(cells, 1):
+        block = _cell_block(cell)
+        where = page.find(block, at)
+        if where < 0:
+            found.append(f"cell {i} is not on the page as it is in the notebook")
+            break
+        at = where + len(block)
+    files = rendered_dir / f"{path.stem}_files"
+    linked = re.findall(r"^!\[figure \d+\]\(([^)]+)\)$", page, re.M)
+    for link in linked:
+        if not (rendered_dir / link).is_file():
+            found.append(f"figure {link} is missing")
+    stored = sorted(f"{files.name}/{f.name}" for f in files.iterdir()) if files.is_dir() else []
+    unlinked = sorted(set(stored) - set(linked))
+    if unlinked:
+        found.append(f"figure files the page does not link: {', '.join(unlinked)}")
+    if len(set(linked)) != len(linked):
+        found.append("a figure is linked twice")
+    for file in sorted(files.iterdir()) if files.is_dir() else ():
+        found += figure_problems(file)
     return found
 
 
@@ -323,13 +428,13 @@ def main(argv=None) -> int:
     for name, text in (("clean", "strip outputs and normalize, in place"),
                        ("check", "exit 1 if a notebook carries outputs or is not normalized"),
                        ("run", "execute every notebook on a fresh kernel; exit 1 on any error"),
-                       ("render", "execute every notebook and write rendered copies (docs/notebooks/)")):
+                       ("render", "execute every notebook and write its page (docs/notebooks/)")):
         p = sub.add_parser(name, help=text)
         p.add_argument("paths", nargs="*", help="notebooks (default: every *.ipynb in derivations/)")
         if name == "run":
             p.add_argument("--output", help="folder for the executed copies (with outputs)")
         if name == "render":
-            p.add_argument("--out", default=str(RENDERED), help="folder of the copies (default: docs/notebooks)")
+            p.add_argument("--out", default=str(RENDERED), help="folder of the pages (default: docs/notebooks)")
         if name in ("run", "render"):
             p.add_argument("--timeout", type=float, default=CELL_TIMEOUT, help="seconds per cell")
     args = parser.parse_args(argv)
