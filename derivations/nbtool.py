@@ -413,13 +413,14 @@ def rendered_problems(path, rendered_dir=RENDERED) -> list:
     for link in linked:
         if not (rendered_dir / link).is_file():
             found.append(f"figure {link} is missing")
-    stored = sorted(f"{files.name}/{f.name}" for f in files.iterdir()) if files.is_dir() else []
+    present = sorted(files.iterdir()) if files.is_dir() else []
+    stored = [f"{files.name}/{f.name}" for f in present]
     unlinked = sorted(set(stored) - set(linked))
     if unlinked:
         found.append(f"figure files the page does not link: {', '.join(unlinked)}")
     if len(set(linked)) != len(linked):
         found.append("a figure is linked twice")
-    for file in sorted(files.iterdir()) if files.is_dir() else ():
+    for file in present:
         found += figure_problems(file)
     return found
 
