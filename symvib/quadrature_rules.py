@@ -22,11 +22,18 @@ the rule for degree ``2n - 1``,
 and ``Integral_{-1}^{y} P_k = (P_{k+1}(y) - P_{k-1}(y)) / (2k + 1)`` (``y + 1``
 for ``k = 0``), ``(x + 1) P_k = ((k + 1) P_{k+1} + k P_{k-1}) / (2k + 1) + P_k``.
 
-The rules the project uses are tabulated in ``generated/gauss_rules.py``
+The rules the project uses are tabulated in ``generated/gauss_rules.json``
 (written by ``symvib generate`` through :mod:`symvib.codegen.gauss`, checked by
 ``symvib generate --check``), so running the driver needs no mpmath; other node
 counts :func:`symvib.numeric.quadrature.rule` computes here on first use (mpmath,
-imported only then, ships with SymPy; this module needs no SymPy).
+imported only then, ships with SymPy; this module needs no SymPy).  The table's
+format is defined here, where its writer and its reader both find it
+(:func:`table_text`, :func:`read_table`): data, not code, so a process reads it
+with :func:`json.loads` in milliseconds, with no syntax tree to check and
+nothing to execute (as a Python module it cost a third of a second of every
+run's start-up).  Its first line holds the SHA-256 of the rest, so a table
+edited by hand is refused; JSON writes each double as its shortest ``repr``,
+which reads back to the same double, so the table is exact.
 
 Examples
 --------
@@ -38,12 +45,91 @@ True
 """
 from __future__ import annotations
 
-__all__ = ["rule_mp", "MAX_NODES", "DPS"]
+import hashlib
+import json
+import math
+
+from symvib.kernelformat import KernelError
+
+__all__ = ["rule_mp", "MAX_NODES", "DPS", "TABLE_FILE", "table_text", "read_table", "TableError"]
 
 #: Largest node count a rule may have (64 takes about 5 s to compute).
 MAX_NODES = 64
 #: Working digits: every entry is exact to far below half an ulp before rounding.
 DPS = 40
+#: The table's file in the generated folder.
+TABLE_FILE = "gauss_rules.json"
+#: The table's first line up to the digest: ``{"body_sha256": "<hex of the rest of the file>",``.
+TABLE_HEAD = '{"body_sha256": "'
+#: What the table says of itself.
+TABLE_ABOUT = ("Gauss-Legendre rules and integration matrices, correctly rounded (written by `symvib generate` "
+               "from symvib.quadrature_rules.rule_mp; do not edit)")
+
+
+class TableError(KernelError):
+    """The Gauss-Legendre table is missing, edited by hand or malformed (``symvib generate`` rewrites it)."""
+
+
+def table_text(rules: dict) -> str:
+    """The text of the table file of ``rules`` (``n -> (x, w, S, SW)``, as :func:`rule_mp` returns).
+
+    One JSON object: ``body_sha256`` on the first line (the SHA-256 of every line after it), then
+    ``about``, ``dps`` and ``rules`` (``"n": {"x": [...], "w": [...], "S": [[...]], "SW": [[...]]}``,
+    one matrix row per line).
+
+    Examples
+    --------
+    >>> text = table_text({1: rule_mp(1)})
+    >>> read_table(text, "t")[1][1]                  # the 1-point rule's weight
+    (2.0,)
+    """
+    lines = [f' "about": {json.dumps(TABLE_ABOUT)},', f' "dps": {DPS},', ' "rules": {']
+    for position, (n, (x, w, S, SW)) in enumerate(sorted(rules.items())):
+        lines.append(f'  "{int(n)}": {{')
+        lines.append(f'   "x": {json.dumps([float(v) for v in x])},')
+        lines.append(f'   "w": {json.dumps([float(v) for v in w])},')
+        for name, rows, end in (("S", S, ","), ("SW", SW, "")):
+            lines.append(f'   "{name}": [')
+            lines += [f'    {json.dumps([float(v) for v in row])}' + ("," if i < len(rows) - 1 else "")
+                      for i, row in enumerate(rows)]
+            lines.append(f'   ]{end}')
+        lines.append("  }" + ("," if position < len(rules) - 1 else ""))
+    lines.append(" }")
+    lines.append("}")
+    body = "\n".join(lines) + "\n"
+    return TABLE_HEAD + hashlib.sha256(body.encode()).hexdigest() + '",\n' + body
+
+
+def read_table(text: str, origin) -> dict:
+    """The rules of a table file's ``text``: ``n -> (x, w, S, SW)`` as tuples of floats.
+
+    Raises
+    ------
+    TableError
+        Naming ``origin`` when the digest does not match the text (edited by hand or
+        truncated), or the data are not ``n`` finite nodes, weights and ``n x n``
+        matrices for each ``n``.
+    """
+    first, _, body = text.partition("\n")
+    digest = first[len(TABLE_HEAD):-2] if first.startswith(TABLE_HEAD) and first.endswith('",') else None
+    if digest is None or digest != hashlib.sha256(body.encode()).hexdigest():
+        raise TableError(f"{origin}: the Gauss-Legendre table was edited by hand or is truncated (its body "
+                         "digest does not match); run `symvib generate`")
+    try:
+        data = json.loads(text)
+        rules = {}
+        for key, entry in data["rules"].items():
+            n = int(key)
+            x, w = tuple(entry["x"]), tuple(entry["w"])
+            S, SW = (tuple(tuple(row) for row in entry[m]) for m in ("S", "SW"))
+            values = x + w + sum(S, ()) + sum(SW, ())
+            if not (len(x) == len(w) == len(S) == len(SW) == n and all(len(r) == n for r in S + SW)
+                    and all(isinstance(v, float) and math.isfinite(v) for v in values)):
+                raise ValueError(f"rule {key} is not n finite nodes, weights and n x n matrices")
+            rules[n] = (x, w, S, SW)
+    except (ValueError, KeyError, TypeError, AttributeError) as err:
+        raise TableError(f"{origin}: not a Gauss-Legendre table ({err}); run `symvib generate`") from None
+    return rules
 
 
 def _legendre(n: int, x) -> list:

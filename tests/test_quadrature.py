@@ -1,4 +1,4 @@
-"""Gauss-Legendre rules of the driver (symvib/quadrature.py, symvib/gauss.py, generated/gauss_rules.py)."""
+"""Gauss-Legendre rules of the driver: the table (generated/gauss_rules.json), its format and its reader."""
 from pathlib import Path
 
 import mpmath
@@ -65,3 +65,55 @@ def test_long_run_of_turning_points_meets_the_reference_to_a_few_ulp():
         assert [e.kind.value for e in run.events] == [r.kind for r in ref]
         err = max(abs(e.t - float(r.t)) for e, r in zip(run.events, ref))
         assert err < 2e-14, (nodes, err)
+
+
+def test_the_table_reads_back_every_double_exactly():
+    from symvib.quadrature_rules import read_table, table_text
+
+    rules = {n: rule_mp_tuple(n) for n in (1, 5, 16)}
+    assert read_table(table_text(rules), "t") == rules
+
+
+def rule_mp_tuple(n):
+    x, w, S, SW = gauss.rule_mp(n)
+    return tuple(x), tuple(w), tuple(map(tuple, S)), tuple(map(tuple, SW))
+
+
+@pytest.mark.parametrize("damage", ["digit", "truncated", "head", "empty"])
+def test_a_table_edited_by_hand_or_truncated_is_refused_naming_the_file(damage):
+    from symvib.quadrature_rules import TableError, read_table, table_text
+
+    text = table_text({n: rule_mp_tuple(n) for n in (1, 2, 3)})
+    bad = {"digit": text.replace("0.5773502691896257", "0.5773502691896258", 1),
+           "truncated": text[: len(text) // 2],
+           "head": text.replace('{"body_sha256": "', '{"body_sha": "', 1),
+           "empty": ""}[damage]
+    assert bad != text
+    with pytest.raises(TableError, match=r"gauss_rules\.json.*run `symvib generate`"):
+        read_table(bad, "generated/gauss_rules.json")
+
+
+def test_a_table_with_a_valid_digest_but_wrong_shapes_is_refused():
+    import hashlib
+
+    from symvib.quadrature_rules import TABLE_HEAD, TableError, read_table, table_text
+
+    text = table_text({2: rule_mp_tuple(2)})
+    body = text.partition("\n")[2].replace('"2": {', '"3": {', 1)        # a 2-point rule under the key 3
+    forged = TABLE_HEAD + hashlib.sha256(body.encode()).hexdigest() + '",\n' + body
+    with pytest.raises(TableError, match="rule 3 is not n finite nodes"):
+        read_table(forged, "t")
+    body = text.partition("\n")[2].replace("1.0, 1.0", "NaN, 1.0", 1)     # a weight that is not finite
+    forged = TABLE_HEAD + hashlib.sha256(body.encode()).hexdigest() + '",\n' + body
+    with pytest.raises(TableError, match="not n finite"):
+        read_table(forged, "t")
+
+
+def test_the_table_is_data_read_without_executing_code():
+    # The table used to be a Python module, checked by the kernel whitelist and executed;
+    # now it is JSON, and no module of that name exists in the generated folder.
+    from symvib.numeric.kernels import generated_dir
+
+    assert (generated_dir() / gauss.TABLE_FILE).suffix == ".json"
+    assert not (generated_dir() / gauss.LEGACY_MODULE).exists()
+    assert not list(generated_dir().glob("gauss*.py"))

@@ -2,5 +2,5 @@
 
 :mod:`symvib.codegen.generate` writes a curve's kernel module (``generated/``
 for the catalogue, the kernel cache for user curves); :mod:`symvib.codegen.gauss`
-computes the Gauss rules the numeric wing reads from ``generated/gauss_rules.py``.
+computes the Gauss rules the numeric wing reads from ``generated/gauss_rules.json``.
 """

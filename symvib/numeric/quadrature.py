@@ -27,12 +27,9 @@ from functools import cache
 
 import numpy as np
 
-from symvib.quadrature_rules import MAX_NODES  # (no mpmath at import)
+from symvib.quadrature_rules import MAX_NODES, TABLE_FILE, read_table  # (no mpmath at import)
 
-__all__ = ["GaussRule", "rule", "MAX_NODES"]
-
-#: Name of the table module in the generated folder (as :data:`symvib.codegen.gauss.TABLE_MODULE`).
-TABLE_MODULE = "gauss_rules"
+__all__ = ["GaussRule", "rule", "table", "MAX_NODES"]
 
 
 @dataclass(frozen=True)
@@ -47,20 +44,39 @@ class GaussRule:
 
 
 @cache
+def table() -> dict:
+    """The tabulated rules, ``n -> (x, w, S, SW)``, read once from ``generated/gauss_rules.json``
+    (:func:`symvib.quadrature_rules.read_table`: its digest and shapes checked).
+
+    Examples
+    --------
+    >>> 16 in table()
+    True
+    """
+    from symvib.numeric.kernels import KernelError, generated_dir
+
+    path = generated_dir() / TABLE_FILE
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise KernelError(f"{path}: the Gauss-Legendre table cannot be read ({err.strerror}); "
+                          "run `symvib generate`") from None
+    return read_table(text, path)
+
+
+@cache
 def rule(n: int) -> GaussRule:
     """The :class:`GaussRule` with ``n`` nodes (cached; arrays read-only).
 
     Nodes, weights and both integration matrices are correctly rounded (see
     :mod:`symvib.quadrature_rules` for why the last ulp matters): read from the generated
-    table ``symvib.generated.gauss_rules`` for the tabulated ``n``, computed
+    table (:func:`table`) for the tabulated ``n``, computed
     with mpmath on first use otherwise (:func:`symvib.quadrature_rules.rule_mp`).
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_NODES:
         raise ValueError(f"nodes: must be an integer in [1, {MAX_NODES}], got {n!r}")
     n = int(n)
-    from symvib.numeric.kernels import load_generated
-
-    data = load_generated(TABLE_MODULE).RULES.get(n)
+    data = table().get(n)
     if data is None:
         from symvib.quadrature_rules import rule_mp  # imports mpmath
 
