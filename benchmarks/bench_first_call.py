@@ -23,6 +23,11 @@ start-up included, and reports the wall time beside issue 15's target:
   later process, which loads the compiled engine from disk (target >= 10,000 scenes/s);
 * the plain-Python engine's sweep speed on ``--plain-scenes`` scenes (where numba is
   missing);
+* ``--startup N``: the start-up of ``symvib sweep`` (issue 28's target < 0.7 s): a sweep of 4
+  paper-parabola scenes in a fresh process whose caches hold the compiled engine, N times,
+  alternated with two floors measured in the same run: a process that only imports NumPy,
+  and one that loads a single cached numba function (numba's own import, target set-up,
+  cache load and teardown); wall and CPU (user + system) medians;
 * ``--prepared``: a user curve with a pole inside its domain (``x**2 + 1/(x - 0.3)``),
   its first run (derivation, singular points), the same run again in a new process with
   the caches of the first (issue 25's target <= 0.5 s, no SymPy), and a run from a start
@@ -143,6 +148,50 @@ def prepared_runs() -> None:
               f"{len(modules)} generated module(s) for both starts: {', '.join(modules)}")
 
 
+#: The numba floor of ``--startup``: one cached numba function loaded and called.
+NUMBA_FLOOR = """
+import numba, numpy as np
+@numba.njit(cache=True)
+def f(x):
+    return np.sin(x).sum()
+f(np.ones(3))
+"""
+
+
+def startup(n: int) -> None:
+    """Issue 28: the start-up of ``symvib sweep`` against the floors of NumPy and numba, alternated."""
+    import resource
+    import statistics
+
+    def child_cpu():
+        usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return usage.ru_utime + usage.ru_stime
+
+    with tempfile.TemporaryDirectory() as tmp:
+        caches = Path(tmp) / "caches"
+        (Path(tmp) / "floor.py").write_text(NUMBA_FLOOR, encoding="utf-8")
+        env = dict(os.environ, SYMVIB_CACHE=str(caches / "kernels"), NUMBA_CACHE_DIR=str(caches / "numba"))
+        env.pop("SYMVIB_BACKEND", None)
+        sweep = [sys.executable, "-m", "symvib.cli", "sweep", "paper-parabola", "--vary", "qdot=3:12:4", "--quiet",
+                 "-o"]
+        cases = {"symvib sweep, 4 scenes (engine on disk)": lambda i: sweep + [str(Path(tmp) / f"s{i}")],
+                 "floor: python -c 'import numpy'": lambda i: [sys.executable, "-c", "import numpy"],
+                 "floor: one cached numba function": lambda i: [sys.executable, str(Path(tmp) / "floor.py")]}
+        for make in cases.values():   # warm: compile the engine and the floor function into the caches
+            subprocess.run(make("warm"), env=env, cwd=tmp, capture_output=True, check=True)
+        walls = {k: [] for k in cases}
+        cpus = {k: [] for k in cases}
+        for i in range(n):
+            for name, make in cases.items():
+                cpu, start = child_cpu(), time.perf_counter()
+                subprocess.run(make(i), env=env, cwd=tmp, capture_output=True, check=True)
+                walls[name].append(time.perf_counter() - start)
+                cpus[name].append(child_cpu() - cpu)
+    for name in cases:
+        print(f"{name:48s} {statistics.median(walls[name]):8.2f}s   CPU {statistics.median(cpus[name]):.2f} s"
+              + ("   < 0.7 s (issue 28)" if name.startswith("symvib") else ""))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sweep-scenes", type=int, default=200_000)
@@ -150,6 +199,7 @@ def main(argv=None) -> int:
     ap.add_argument("--closed-form", default="auto", help="curve.closed_form of the new curves (or a comma list)")
     ap.add_argument("--only-new-curves", action="store_true", help="time the new curves' first runs only")
     ap.add_argument("--prepared", action="store_true", help="time a prepared user curve's runs only (issue 25)")
+    ap.add_argument("--startup", type=int, metavar="N", help="time the start-up of symvib sweep only, N rounds")
     args = ap.parse_args(argv)
     try:
         import numba  # noqa: F401
@@ -161,6 +211,9 @@ def main(argv=None) -> int:
     print(f"{'what':48s} {'wall':>9s}   target")
     if args.prepared:
         prepared_runs()
+        return 0
+    if args.startup:
+        startup(args.startup)
         return 0
     from symvib.checks.corpus import entry
 

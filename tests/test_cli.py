@@ -75,3 +75,36 @@ def test_forwarded_subcommands_take_a_leading_option():
         assert out.stdout.startswith(f"usage: symvib {name}")
     listing = cli("--help")
     assert listing.returncode == 0 and "bench" in listing.stdout and "sweep" in listing.stdout
+
+
+def test_the_command_leaves_with_its_status_after_exit_handlers_and_every_byte_of_output():
+    # symvib.cli.leave skips the interpreter's teardown (os._exit): the exit handlers must
+    # still run, both streams reach the reader whole, and the status is the command's.
+    code = ("import atexit, sys\n"
+            "atexit.register(lambda: print('handler ran', file=sys.stderr))\n"
+            "from symvib.cli import leave\n"
+            "sys.stdout.write('x' * 200_000)\n"
+            "leave(3)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 3
+    assert out.stdout == "x" * 200_000
+    assert "handler ran" in out.stderr
+    none = subprocess.run([sys.executable, "-c", "from symvib.cli import leave; leave(None)"], timeout=120)
+    assert none.returncode == 0
+
+
+def test_the_command_reports_output_it_could_not_deliver_as_a_failure():
+    # A stream whose flush fails at the end (a reader that closed the pipe) turns success into 1.
+    code = ("import sys\n"
+            "class Closed:\n"
+            "    def write(self, text): return len(text)\n"
+            "    def flush(self): raise BrokenPipeError(32, 'Broken pipe')\n"
+            "sys.stdout = Closed()\n"
+            "from symvib.cli import leave\n"
+            "leave(0)\n")
+    assert subprocess.run([sys.executable, "-c", code], timeout=120).returncode == 1
+
+
+def test_python_dash_m_symvib_cli_exits_with_main_s_status():
+    bad = cli("run", "no-such-scene")
+    assert bad.returncode == 2 and "error" in bad.stderr
