@@ -365,6 +365,13 @@ class Result:
         """The samples as a pandas DataFrame, one column per field of :class:`Samples`."""
         return tables.samples_frame(self)
 
+    def sensitivities(self, wrt=("mu", "k", "qdot0", "q0", "left", "right"), **options):
+        """Exact derivatives of the events and the final state with respect to ``wrt``
+        (:func:`symvib.numeric.sensitivity.sensitivities`; physics.md, "Sensitivities")."""
+        from symvib.numeric.sensitivity import sensitivities
+
+        return sensitivities(self, wrt, **options)
+
     def to_pandas(self):
         """``(events_frame(), samples_frame())``."""
         return tables.to_pandas(self)

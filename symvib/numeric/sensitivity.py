@@ -1,0 +1,453 @@
+"""Exact derivatives of a run's events with respect to its parameters (physics.md, "Sensitivities").
+
+Every event of a run is defined by a closed-form condition on the phase trajectory
+(paper eq. 2): an impact where the particle reaches a limiter, a turning point
+where ``G(q) = C - 2 g F_s(q)`` vanishes, and so on.  So the derivatives of an
+event's position, speeds and time with respect to ``mu``, ``k``, the initial
+state and the limiters follow from the implicit function theorem, interval by
+interval, with the jumps at impacts and reversals carried through; nothing is
+differenced.  Within an interval on branch ``s`` that starts at ``(q_a, w_a)``,
+with ``E(q) = exp(2 s mu alpha(q))`` and ``f = F_s' = E (z' + s mu x')``:
+
+    G(q)  = w_a E(q_a) - 2 g Integral_{q_a}^{q} f du,          w(q) = G(q) / E(q),
+    dG/dp = D(w_a E(q_a)) + 2 g f(q_a) Dq_a - 2 g Dmu Integral_{q_a}^{q} df/dmu du,
+
+and at its end ``q_e``: a limiter, ``Dq_e = D(limiter)``; a turning point
+(``G(q*) = 0``), ``Dq* = (dG/dp)(q*) / (2 g f(q*))``, and ``w`` stays 0.  The
+time ``T = Integral h dq / sqrt(w)`` is differentiated on ``q = q_a + (q_e -
+q_a) u`` at fixed ``u``; the total derivative of ``w`` along the interval
+vanishes at an end where ``w = 0``, so the derivative's integrand has the same
+inverse-square-root ends as ``T``'s, which ``u = (1 - cos theta) / 2`` removes
+(Gauss-Legendre panels in ``theta``, refined until two levels agree).
+
+An impact maps ``w -> k^2 w``; the impact loss and (by the energy budget) the
+friction work follow.  Where an event is not differentiable the table says so
+instead of a number: a turning point on the friction cone's edge (arrest or
+reversal changes with the parameters), a turning point on a limiter (grazing),
+a Zeno accumulation, a start at rest for ``qdot0`` (its sign chooses the
+direction), and (not yet derived) a sign change of the normal force.
+
+Examples
+--------
+>>> from symvib import simulate
+>>> res = simulate("paper-parabola")
+>>> sens = sensitivities(res, wrt=("mu", "qdot0"))
+>>> sens.events[0].kind.value, round(float(sens.t[0, 1]), 6)   # d t / d qdot0: faster, earlier
+('impact', -0.027878)
+>>> round(float(sens.final["t_final"][0]), 3)                  # d t_arrest / d mu
+139.592
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from symvib.numeric.events import EventKind, Result, Status
+
+__all__ = ["sensitivities", "Sensitivities", "PARAMETERS"]
+
+#: Parameters a run's events can be differentiated with respect to.
+PARAMETERS = ("mu", "k", "qdot0", "q0", "left", "right")
+#: Relative distance of ``|sin alpha|`` from ``mu |cos alpha|`` below which a turning point is on
+#: the friction cone's edge (the engine's rest test decides there within ``1e-9``).
+CONE_EDGE = 1e-7
+#: Distance of a turning point from a limiter, in units of ``q_scale``, below which it grazes it.
+GRAZING = 1e-9
+#: Gauss-Legendre nodes per panel of the time derivative's integral in ``theta``.
+NODES = 20
+#: Agreement of two refinement levels (relative to the integral of the integrand's magnitude) that ends
+#: the refinement of a time derivative: far below what the derivatives of event times computed to
+#: 1e-12 can mean, and above the rounding of the integrand next to a turning point.
+RTOL = 1e-10
+#: The largest such difference a time derivative is kept with when no level reaches ``RTOL``.
+ACCEPT = 1e-8
+#: Most panels a time derivative may take (then its entries are NaN and the reason says why).
+MAX_PANELS = 256
+#: Nodes of the fixed rule that integrates ``F_s'``, ``F_s''`` and ``df/dmu`` between neighbouring nodes.
+INNER_NODES = 8
+#: Agreement of two piece counts that ends the integral of ``df/dmu`` over a whole interval.
+INTEGRAL_RTOL = 1e-14
+#: Statuses whose final state has derivatives (the run ended on an event).
+FINAL_STATUSES = (Status.ARRESTED, Status.RESTING_ON_LIMITER)
+
+
+@dataclass(frozen=True)
+class Sensitivities:
+    """Derivatives of a run's events and final state (an immutable record).
+
+    Attributes
+    ----------
+    wrt : tuple of str
+        The parameters, in the order of the columns.
+    events : tuple of Event
+        The run's events (rows).
+    t, q, v_before, v_after : ndarray, shape (events, parameters)
+        Derivatives of each event's time, position and speed ``v = h qdot`` just before
+        and after it; NaN where the event is not differentiable.
+    reasons : tuple of str
+        Per event, why its row is NaN (empty where it is differentiable).
+    final : dict
+        ``t_final``, ``q_final``, ``friction_work``, ``impact_loss`` -> derivatives, shape
+        (parameters,); NaN when the run did not end on an event or an event before is not
+        differentiable.
+    notes : dict
+        Parameter -> why its whole column is NaN (a start at rest has no derivative in ``qdot0``).
+    """
+
+    wrt: tuple
+    events: tuple
+    t: np.ndarray
+    q: np.ndarray
+    v_before: np.ndarray
+    v_after: np.ndarray
+    reasons: tuple
+    final: dict
+    notes: dict
+
+    def rows(self) -> list:
+        """One dict per event and parameter: ``event``, ``kind``, ``wrt``, ``dt``, ``dq``,
+        ``dv_before``, ``dv_after``, ``reason`` (a long table, as a DataFrame wants it)."""
+        out = []
+        for i, event in enumerate(self.events):
+            for j, name in enumerate(self.wrt):
+                out.append({"event": i, "kind": event.kind.value, "wrt": name, "dt": float(self.t[i, j]),
+                            "dq": float(self.q[i, j]), "dv_before": float(self.v_before[i, j]),
+                            "dv_after": float(self.v_after[i, j]), "reason": self.reasons[i]})
+        return out
+
+    def to_dataframe(self):
+        """:meth:`rows` as a pandas DataFrame (extra ``symvib[pandas]``)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Sensitivities.to_dataframe needs pandas: pip install 'symvib[pandas]'") from None
+        return pd.DataFrame(self.rows())
+
+
+class _Curve:
+    """The kernels of a run's curve as functions of ``q`` (NumPy arrays), its parameters bound."""
+
+    def __init__(self, kernels, scene):
+        cp = tuple(scene.param_values)
+        self.g, self.mu, self.m = scene.g, scene.mu, scene.m
+        self.scale = float(kernels.q_scale_scalar(*cp))
+        for name in ("h", "dh", "alpha", "dalpha", "dx", "dz", "z"):
+            fn = getattr(kernels, name)
+            setattr(self, name, lambda q, fn=fn: np.asarray(fn(np.asarray(q, dtype=float), *cp), dtype=float))
+        self._F = {1: kernels.F_p, -1: kernels.F_m}
+        self._ddF = {1: kernels.ddF_p, -1: kernels.ddF_m}
+        self._N = kernels.N_w
+        self._cp = cp
+
+    def F(self, s, q):
+        return np.asarray(self._F[s](np.asarray(q, dtype=float), self.mu, *self._cp), dtype=float)
+
+    def f(self, s, q):
+        """``F_s' = exp(2 s mu alpha) (z' + s mu x')``."""
+        return np.exp(2 * s * self.mu * self.alpha(q)) * (self.dz(q) + s * self.mu * self.dx(q))
+
+    def df(self, s, q):
+        """``F_s''`` (the generated ``ddF`` kernel)."""
+        return np.asarray(self._ddF[s](np.asarray(q, dtype=float), self.mu, *self._cp), dtype=float)
+
+    def df_dmu(self, s, q):
+        """``d F_s' / d mu`` at fixed ``q``."""
+        E = np.exp(2 * s * self.mu * self.alpha(q))
+        return E * (2 * s * self.alpha(q) * (self.dz(q) + s * self.mu * self.dx(q)) + s * self.dx(q))
+
+    def N(self, q, w):
+        return float(self._N(float(q), float(w), self.g, *self._cp))
+
+
+def _gauss(n):
+    x, w = np.polynomial.legendre.leggauss(n)
+    return x, w
+
+
+class _Interval:
+    """One motion interval from ``(q_a, w_a)`` to ``q_e`` on branch ``s``, with the tangents of its start.
+
+    ``G``, its total derivative along the interval and ``F_s'`` differences are integrals from an
+    anchor, the start for ``u <= 1/2`` and the end beyond: next to a turning point ``G`` is a small
+    difference of ``F_s`` values, and an integral of ``F_s'`` from the root keeps its relative
+    accuracy where a difference of two ``F_s`` would not.
+    """
+
+    def __init__(self, curve, q_a, w_a, q_e, s, turning_end, Dq_a, Dw_a, Dmu):
+        c = curve
+        self.c, self.q_a, self.q_e, self.s, self.turning_end = c, q_a, q_e, s, turning_end
+        self.Dq_a, self.Dmu = Dq_a, Dmu
+        self.E_a = math.exp(2 * s * c.mu * float(c.alpha(q_a)))
+        self.G_a = w_a * self.E_a
+        alpha_a, dalpha_a = float(c.alpha(q_a)), float(c.dalpha(q_a))
+        self.f_a = float(c.f(s, q_a))
+        # total derivative of G at the start: D(w_a E(q_a))
+        self.DG_a = Dw_a * self.E_a + self.G_a * 2 * s * (alpha_a * Dmu + c.mu * dalpha_a * Dq_a)
+        # dG/dp at fixed q, the part that does not depend on q: (dG/dp)(q) = A - 2 g Dmu I_mu(q)
+        self.A = self.DG_a + 2 * c.g * self.f_a * Dq_a
+        self.f_e = float(c.f(s, q_e))
+        self.I_mu_e = self.integral(lambda q: c.df_dmu(s, q), q_a, q_e - q_a) if np.any(Dmu) else 0.0
+        self.G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(c.F(s, q_e) - c.F(s, q_a))
+
+    def dG_fixed_q_end(self):
+        """``dG/dp`` at fixed ``q = q_e``."""
+        return self.A - 2 * self.c.g * self.Dmu * self.I_mu_e
+
+    def set_end(self, Dq_e):
+        """The end's tangent ``Dq_e``; the total derivative of ``G`` there (0 at a turning point)."""
+        self.Dq_e = Dq_e
+        self.DG_e = np.zeros_like(Dq_e) if self.turning_end else \
+            self.dG_fixed_q_end() - 2 * self.c.g * self.f_e * Dq_e
+
+    @staticmethod
+    def cumulative(fn, anchor, D, x_sorted):
+        """``Integral_{anchor}^{anchor + D x} fn(q) dq`` at offsets ``x_sorted`` (ascending, from 0): a
+        fixed Gauss rule between neighbours, summed.  Integrated in the offset, whose differences
+        keep their relative accuracy next to the anchor where differences of ``q`` would not."""
+        x, w = _gauss(INNER_NODES)
+        ends = np.concatenate(([0.0], x_sorted))
+        a, b = ends[:-1], ends[1:]
+        mid, half = (a + b) / 2, (b - a) / 2
+        nodes = anchor + D * (mid[:, None] + half[:, None] * x[None, :])
+        vals = fn(nodes.ravel()).reshape(nodes.shape)
+        return D * np.cumsum(half * (vals @ w))
+
+    @classmethod
+    def integral(cls, fn, anchor, D):
+        """``Integral_{anchor}^{anchor + D} fn(q) dq``: :meth:`cumulative` over 8, 16, ... equal pieces
+        until two agree to rounding (``INTEGRAL_RTOL`` of the integral of ``|fn|``)."""
+        pieces, previous = 8, None
+        while pieces <= MAX_PANELS * NODES:
+            x = np.arange(1, pieces + 1) / pieces
+            current = cls.cumulative(fn, anchor, D, x)[-1]
+            magnitude = abs(cls.cumulative(lambda v: np.abs(fn(v)), anchor, D, x)[-1])
+            if previous is not None and abs(current - previous) <= INTEGRAL_RTOL * max(magnitude, 1e-300):
+                return current
+            previous, pieces = current, 2 * pieces
+        return previous
+
+    def along(self, u, d=None):
+        """``w`` and its total derivative ``W = D[w(q(u))]`` at the nodes ``u`` (any order; ``d = 1 - u``,
+        given exactly where the caller has it), each from its nearer anchor."""
+        c, s = self.c, self.s
+        d = 1.0 - u if d is None else d
+        delta = self.q_e - self.q_a
+        q = np.where(u <= 0.5, self.q_a + delta * u, self.q_e - delta * d)
+        Dq = np.outer(1 - u, self.Dq_a) + np.outer(u, self.Dq_e)
+        G = np.empty_like(u)
+        DG = np.empty((len(u), len(self.Dq_a)))
+        for from_start in (True, False):
+            pick = np.flatnonzero(u <= 0.5) if from_start else np.flatnonzero(u > 0.5)
+            if not len(pick):
+                continue
+            offset = u[pick] if from_start else d[pick]
+            order = pick[np.argsort(offset)]
+            x = np.sort(offset)
+            q_c, D, G_c, DG_c, f_c = ((self.q_a, delta, self.G_a, self.DG_a, self.f_a) if from_start
+                                      else (self.q_e, -delta, self.G_e, self.DG_e, self.f_e))
+            int_f = self.cumulative(lambda v: c.f(s, v), q_c, D, x)
+            int_df = self.cumulative(lambda v: c.df(s, v), q_c, D, x)          # f(q) - f(q_c)
+            G[order] = G_c - 2 * c.g * int_f
+            # Dq(u) - Dq(anchor): u (Dq_e - Dq_a) from the start, -(1 - u) (Dq_e - Dq_a) from the end
+            step = np.outer(x if from_start else -x, self.Dq_e - self.Dq_a)
+            dg = DG_c - 2 * c.g * (int_df[:, None] * Dq[order] + f_c * step)
+            if np.any(self.Dmu):
+                dg -= 2 * c.g * self.cumulative(lambda v: c.df_dmu(s, v), q_c, D, x)[:, None] * self.Dmu[None, :]
+            DG[order] = dg
+        alpha, dalpha = c.alpha(q), c.dalpha(q)
+        E = np.exp(2 * s * c.mu * alpha)
+        W = (DG - G[:, None] * 2 * s * (np.outer(alpha, self.Dmu) + c.mu * dalpha[:, None] * Dq)) / E[:, None]
+        return G / E, W, q, Dq
+
+    def dT(self):
+        """Derivative of the interval's duration (shape (P,)), or None when the refinement fails."""
+        c = self.c
+        delta = self.q_e - self.q_a
+        sigma = 1.0 if delta > 0 else -1.0
+        length = abs(delta)
+        d_delta = self.Dq_e - self.Dq_a
+        x, wts = _gauss(NODES)
+
+        def integral(panels):
+            edges = np.linspace(0.0, math.pi, panels + 1)
+            a, b = edges[:-1], edges[1:]
+            theta = (((a + b) / 2)[:, None] + ((b - a) / 2)[:, None] * x[None, :]).ravel()
+            weights = (((b - a) / 2)[:, None] * wts[None, :]).ravel() * np.sin(theta) / 2
+            u, d = np.sin(theta / 2) ** 2, np.cos(theta / 2) ** 2      # u and 1 - u, each to its last bit
+            w, W, q, Dq = self.along(u, d)
+            h, dh = c.h(q), c.dh(q)
+            root = np.sqrt(w)
+            J = ((dh[:, None] * Dq * length + (h * sigma)[:, None] * d_delta[None, :]) / root[:, None]
+                 - 0.5 * (h * length)[:, None] * W / (w * root)[:, None])
+            return weights @ J, weights @ np.abs(J)
+
+        # Differences of two levels relative to the integral of |integrand|: a column that is 0
+        # (a parameter the interval does not see), or a small difference of two large terms (a
+        # short swing between two turning points), converges to rounding noise, not to 0.  Next to
+        # the roots the rounding grows as panels shrink, so the level whose difference from the
+        # one before is smallest is kept once no level reaches RTOL, if it is within ACCEPT.
+        panels = 2
+        previous, _ = integral(panels)
+        best, best_gap = None, math.inf
+        while panels < MAX_PANELS:
+            panels *= 2
+            current, magnitude = integral(panels)
+            if not np.all(np.isfinite(current)):
+                return None
+            gap = float(np.max(np.abs(current - previous) / np.maximum(magnitude, 1e-300)))
+            if gap <= RTOL:
+                return current
+            if gap < best_gap:
+                best, best_gap = previous, gap
+            previous = current
+        return best if best_gap <= ACCEPT else None
+
+
+def sensitivities(result: Result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
+    """Derivatives of ``result``'s events and final state with respect to ``wrt``.
+
+    Parameters
+    ----------
+    result : Result
+        A run of :func:`symvib.simulate` (its scene and events are read; nothing runs again).
+    wrt : sequence of str
+        Names from :data:`PARAMETERS` (``left``/``right`` only where the scene has that limiter).
+    prepared : Prepared, optional
+        The scene's prepared curve (default: :func:`symvib.numeric.prepared.prepared_of`).
+
+    Returns
+    -------
+    Sensitivities
+
+    Raises
+    ------
+    ValueError
+        Naming ``wrt`` for an unknown or repeated parameter or a missing limiter, and
+        ``result`` for a failed run (its numbers are not a result).
+    """
+    from symvib.numeric.prepared import prepared_of
+
+    scene = result.scene
+    wrt = tuple(wrt)
+    unknown = [p for p in wrt if p not in PARAMETERS]
+    if unknown or len(set(wrt)) != len(wrt) or not wrt:
+        raise ValueError(f"wrt: {unknown[0] if unknown else wrt!r} is not a list of distinct parameters from "
+                         f"{', '.join(PARAMETERS)}")
+    for side in ("left", "right"):
+        if side in wrt and getattr(scene, side) is None:
+            raise ValueError(f"wrt: the scene has no {side} limiter to differentiate with respect to")
+    if result.status.is_error:
+        raise ValueError(f"result: the run failed ({result.status.value}); its events have no derivatives")
+    kernels = (prepared or prepared_of(scene)).kernels
+    c = _Curve(kernels, scene)
+    P = len(wrt)
+    unit = {name: np.eye(P)[wrt.index(name)] if name in wrt else np.zeros(P) for name in PARAMETERS}
+    Dmu, Dk = unit["mu"], unit["k"]
+    limiter_D = {scene.left: unit["left"], scene.right: unit["right"]}
+
+    q_a, qdot0 = scene.q0, scene.qdot0
+    h0, dh0 = float(c.h(q_a)), float(c.dh(q_a))
+    w_a = h0 ** 2 * qdot0 ** 2
+    Dq_a = unit["q0"].copy()
+    Dw_a = 2 * h0 ** 2 * qdot0 * unit["qdot0"] + 2 * h0 * dh0 * qdot0 ** 2 * unit["q0"]
+    Dt_a = np.zeros(P)
+    broken, first_broken = "", None
+    notes = {}
+    if qdot0 == 0 and "qdot0" in wrt:
+        notes["qdot0"] = "the run starts at rest: the sign of qdot0 chooses the direction (no derivative)"
+    DE0 = c.m * (Dw_a / 2 + c.g * float(c.dz(q_a)) * Dq_a)
+
+    n = len(result.events)
+    T, Q, VB, VA = (np.full((n, P), np.nan) for _ in range(4))
+    reasons = []
+    D_impact_loss = np.zeros(P)
+    Dq_last = Dw_last = None
+    for i, ev in enumerate(result.events):
+        kind = ev.kind
+        own = _not_differentiable(ev, scene, c, kind)
+        if broken or own:
+            reasons.append(own or f"follows event {first_broken}, which has no derivatives ({broken})")
+            if not broken:
+                broken, first_broken = own, i
+            continue
+        q_e = ev.q
+        turning = kind in (EventKind.REVERSAL, EventKind.ARREST)
+        if q_e == q_a:                      # no motion in between (a rest test at the start)
+            Dq_e, Dw_minus, dT = Dq_a.copy(), Dw_a.copy(), np.zeros(P)
+            w_minus = w_a
+        else:
+            sigma = 1 if q_e > q_a else -1
+            mid_q = q_a + (q_e - q_a) / 2
+            s = _branch(c, q_a, w_a, sigma, mid_q)
+            iv = _Interval(c, q_a, w_a, q_e, s, turning, Dq_a, Dw_a, Dmu)
+            if turning:
+                Dq_e = iv.dG_fixed_q_end() / (2 * c.g * iv.f_e)
+            else:
+                Dq_e = limiter_D.get(q_e, np.zeros(P)) if kind in (EventKind.IMPACT, EventKind.REST_ON_LIMITER) \
+                    else np.zeros(P)
+            iv.set_end(Dq_e)
+            w_end, W_end, _, _ = iv.along(np.array([1.0]))
+            w_minus, Dw_minus = (0.0, np.zeros(P)) if turning else (float(w_end[0]), W_end[0])
+            dT = iv.dT()
+            if dT is None:
+                broken, first_broken = "the time derivative's quadrature did not converge", i
+                reasons.append(broken)
+                continue
+        sigma_in = 1.0 if ev.qdot_before >= 0 else -1.0
+        v_minus = sigma_in * math.sqrt(max(w_minus, 0.0))
+        Dv_minus = sigma_in * Dw_minus / (2 * math.sqrt(w_minus)) if w_minus > 0 else np.zeros(P)
+        if kind == EventKind.IMPACT:
+            k = scene.k
+            w_plus, Dw_plus = k * k * w_minus, 2 * k * Dk * w_minus + k * k * Dw_minus
+            Dv_plus = -(Dk * v_minus + k * Dv_minus)
+            D_impact_loss += c.m / 2 * (-2 * k * Dk * w_minus + (1 - k * k) * Dw_minus)
+        else:
+            w_plus, Dw_plus, Dv_plus = w_minus, Dw_minus, Dv_minus
+            if turning:
+                Dv_plus = np.zeros(P)
+        Dt_e = Dt_a + dT
+        T[i], Q[i], VB[i], VA[i] = Dt_e, Dq_e, Dv_minus, Dv_plus
+        reasons.append("")
+        q_a, w_a, Dq_a, Dw_a, Dt_a = q_e, w_plus, Dq_e, Dw_plus, Dt_e
+        Dq_last, Dw_last = Dq_e, Dw_plus
+    final = {name: np.full(P, np.nan) for name in ("t_final", "q_final", "friction_work", "impact_loss")}
+    if not broken and result.status in FINAL_STATUSES and n and Dq_last is not None:
+        q_f = result.events[-1].q
+        DE_final = c.m * (Dw_last / 2 + c.g * float(c.dz(q_f)) * Dq_last)
+        final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=D_impact_loss,
+                     friction_work=DE0 - DE_final - D_impact_loss)
+    for name in notes:
+        j = wrt.index(name)
+        for column in (T, Q, VB, VA, *final.values()):
+            column[..., j] = np.nan
+    return Sensitivities(wrt, tuple(result.events), T, Q, VB, VA, tuple(reasons), final, notes)
+
+
+def _branch(c, q_a, w_a, sigma, mid_q) -> int:
+    """The branch ``s = sigma sign(N)`` of an interval (no sign change of ``N`` inside: the engine
+    ends an interval there), from ``N`` at its middle on the branch that assumes ``N > 0``."""
+    G_a = w_a * math.exp(2 * sigma * c.mu * float(c.alpha(q_a)))
+    G_mid = G_a - 2 * c.g * float(c.F(sigma, mid_q) - c.F(sigma, q_a))
+    w_mid = G_mid / math.exp(2 * sigma * c.mu * float(c.alpha(mid_q)))
+    return sigma if c.N(mid_q, w_mid) >= 0 else -sigma
+
+
+def _not_differentiable(ev, scene, c, kind) -> str:
+    """Why event ``ev`` has no derivatives (empty when it has)."""
+    if kind == EventKind.NORMAL_SIGN_CHANGE:
+        return "a sign change of the normal force (not derived yet); this event and the ones after it"
+    if kind == EventKind.LEFT_CURVE:
+        return "the particle leaves the curve"
+    if ev.detail and "zeno" in ev.detail.lower():
+        return "a Zeno accumulation of impacts (infinitely many events); this event and the ones after it"
+    if kind in (EventKind.REVERSAL, EventKind.ARREST):
+        a = float(c.alpha(ev.q))
+        edge = abs(abs(math.sin(a)) - scene.mu * abs(math.cos(a)))
+        if edge <= CONE_EDGE * max(abs(math.sin(a)), scene.mu * abs(math.cos(a)), 1e-300):
+            return "a turning point on the edge of the friction cone (arrest or reversal changes with the parameters)"
+        for limiter in (scene.left, scene.right):
+            if limiter is not None and abs(ev.q - limiter) <= GRAZING * c.scale:
+                return "a turning point on a limiter (grazing)"
+    return ""
