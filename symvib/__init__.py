@@ -19,6 +19,7 @@ module on first use.  The four verbs:
 * ``symvib.simulate(scene)``: a :class:`~symvib.numeric.events.Result` (events, samples,
   dense output ``result.state(t)``, DataFrames ``result.events_frame()``);
 * ``symvib.sweep(scene, vary)``: many scenes at once;
+* ``symvib.fit(scene, observed, free=("mu", "k"))``: parameters from measured event times;
 * ``symvib.derive(curve)``: eqs. 1-2 of a curve (SymPy, imported only here).
 
 >>> import symvib
@@ -37,6 +38,7 @@ _LAZY = {
     "load_scene": "symvib.api",
     "simulate": "symvib.api",
     "sweep": "symvib.api",
+    "fit": "symvib.api",
     "derive": "symvib.symbolic.derive",
     "graph": "symvib.symbolic.curve",
     "parametric": "symvib.symbolic.curve",

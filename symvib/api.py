@@ -91,3 +91,32 @@ def sweep(scene, vary: dict, **options):
     if options.get("prepared") is None:
         options["prepared"] = prepare(scene)
     return _sweep(scene, vary, **options)
+
+
+def fit(scene, observed, free=("mu", "k"), **options):
+    """Fit the ``free`` parameters of a scene (any form :func:`load_scene` takes; its values are the
+    start) to observed events: a CSV file (``t[, kind][, q]``), a list of impact times, or
+    :func:`symvib.numeric.fit.observed_events` (any kinds, positions); ``options`` are :func:`symvib.numeric.fit.fit`'s
+    (``bounds``, ``weights``).
+
+    Returns
+    -------
+    FitResult
+        Estimates, standard errors, covariance and correlation, residuals, a status.
+    """
+    from pathlib import Path
+
+    from symvib.numeric.driver import simulate as _simulate
+    from symvib.numeric.fit import Observed, observed_events, read_events
+    from symvib.numeric.fit import fit as _fit
+    from symvib.prepare import prepare
+
+    scene = load_scene(scene)
+    if isinstance(observed, (str, Path)):
+        observed = read_events(observed)
+    elif not isinstance(observed, Observed):
+        times = list(observed)
+        observed = observed_events(times, kinds=["impact"] * len(times))   # what a microphone hears
+    prepared = prepare(scene)
+    return _fit(scene, observed, free, run=lambda s: _simulate(s, samples=False, prepared=prepared), **options)
+

@@ -20,6 +20,7 @@ import argparse
 import dataclasses
 import importlib
 import logging
+import math
 import os
 import sys
 
@@ -185,6 +186,29 @@ def _inside(path, folder):
     if not inside(path, folder):  # pragma: no cover - file names come from safe stems
         raise UserPathError(path, f"would be written outside {folder}")
     return path
+
+
+def _cmd_fit(args) -> int:
+    from symvib.api import fit
+    from symvib.numeric.fit import read_events
+    from symvib.paths import check_output_file
+
+    if args.plot:
+        check_output_file(args.plot, "--plot file")
+    free = tuple(p.strip() for p in args.free.split(",") if p.strip())
+    observed = read_events(args.data)
+    weights = None
+    if args.sigma is not None:
+        if not (math.isfinite(args.sigma) and args.sigma > 0):
+            raise ValueError(f"--sigma: must be a positive number of seconds, got {args.sigma!r}")
+        count = len(observed.t) * (1 if observed.q is None else 2)
+        weights = [1 / args.sigma] * count
+    result = fit(args.scene, observed, free, weights=weights)
+    print(result.summary())
+    if args.plot:
+        result.plot(args.plot)
+        print(f"residual figure: {args.plot}")
+    return 0 if result.status in ("converged", "no_error_estimate") else 1
 
 
 def _cmd_run(args) -> int:
@@ -392,6 +416,16 @@ def build_parser() -> argparse.ArgumentParser:
                         "when its kernels are first generated (auto: closed-form routes briefly, else numeric; "
                         "required: every route, fail without one; never: numeric at once)")
     p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("fit", help="fit mu, k, ... of a scene to measured event times (CSV: t[, kind][, q])")
+    p.add_argument("scene", help="scene TOML file (its values of the free parameters are the start)")
+    p.add_argument("data", help="CSV file of observed events with a header: t (s), optional kind and q")
+    p.add_argument("--free", default="mu,k", help="parameters to fit, comma-separated (default mu,k; also "
+                   "qdot0, q0, left, right)")
+    p.add_argument("--sigma", type=float, default=None, help="standard deviation of each time, s (default: "
+                   "estimated from the residuals)")
+    p.add_argument("--plot", metavar="PATH", help="write the residual figure (PNG)")
+    p.set_defaults(func=_cmd_fit)
 
     p = sub.add_parser("generate", help="write the numeric kernel modules (generated/)")
     p.add_argument("shapes", nargs="*", help="catalogue shapes (default: all)")

@@ -1,0 +1,417 @@
+"""Parameters from measured event times: least squares with the exact Jacobian (physics.md, "Sensitivities").
+
+A researcher who records the impacts of the paper's device (a microphone, an
+accelerometer) or tracks the particle on video has event times, sometimes their
+positions, and wants ``mu``, ``k``, the initial speed or the limiters with error
+bars.  :func:`fit` runs the scene, matches its events to the observed ones,
+differentiates the matched times exactly (:mod:`symvib.numeric.sensitivity`) and
+takes Levenberg-Marquardt steps (Moré's scaling, bounds kept by projection)
+until the parameters stop moving.
+
+**Matching.** Observed events are matched in order to the model's events of the
+kinds the data name (all kinds when the data name none), as long as the kinds
+agree.  An observed event the model does not make (it stops, or reverses where
+the data bounce, earlier) keeps its place in the residual vector with a fixed
+residual, the span of the observed times (positions: of the observed positions
+about ``q0``), and no derivative: a step that makes the event again lowers the
+cost, so the fit is drawn to parameters that make every observed event, while
+the matched ones give the direction.  The result's ``matched`` says how many
+were matched at the end, and its message names a shortfall.  Extra model events
+are not compared.  An event without derivatives (physics.md, "Sensitivities")
+is left out of the steps, and the result says so.
+
+**Errors.** ``weights`` are ``1 / sigma`` of each observation; without them the
+covariance is scaled by the residual variance (``cost / (m - n)``, as SciPy's
+``curve_fit`` with ``absolute_sigma=False``).  Parameters the data do not
+separate (a near-singular Jacobian, ``|correlation| > 1 - 1e-6``) are named in
+the status ``not_identified``.
+
+Examples
+--------
+>>> from symvib.numeric.scene import resolve_scene
+>>> from symvib.numeric.driver import simulate
+>>> truth = resolve_scene("paper-parabola").replace(mu=0.03, k=0.8)
+>>> times = [e.t for e in simulate(truth, samples=False).events if e.kind.value == "impact"][:6]
+>>> start = truth.replace(mu=0.05, k=0.7)
+>>> result = fit(start, observed_events(times, kinds=["impact"] * 6), free=("mu", "k"))
+>>> result.status, round(result.estimates["mu"], 9), round(result.estimates["k"], 9)
+('converged', 0.03, 0.8)
+"""
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from symvib.numeric.events import EventKind
+from symvib.numeric.scene import Scene
+from symvib.numeric.sensitivity import PARAMETERS, sensitivities
+
+__all__ = ["fit", "observed_events", "read_events", "FitResult", "Observed", "STATUSES"]
+
+#: Outcomes of a fit.
+STATUSES = {
+    "converged": "the parameters stopped moving (relative step below xtol)",
+    "not_identified": "converged, but the data do not separate some parameters (see message)",
+    "max_iterations": "the iteration bound was reached before the parameters settled",
+    "no_error_estimate": "converged; as many observations as parameters, so no error estimate without weights",
+    "no_events": "the model makes none of the observed events at the start; give another start",
+}
+#: Largest ``|correlation|`` of two estimates that still counts as separated.
+IDENTIFIED = 1 - 1e-6
+#: Steps of ``lambda`` (Levenberg-Marquardt) up and down.
+LAMBDA_UP, LAMBDA_DOWN = 10.0, 0.3
+#: Columns a file of observed events may have.
+CSV_COLUMNS = ("t", "kind", "q")
+
+
+@dataclass(frozen=True)
+class Observed:
+    """Observed events: times (ascending), optional kinds and positions."""
+
+    t: np.ndarray
+    kinds: tuple | None = None
+    q: np.ndarray | None = None
+
+
+def observed_events(t, kinds=None, q=None) -> Observed:
+    """Check and hold observed events.
+
+    Raises
+    ------
+    ValueError
+        Naming ``observed.t`` (not finite, not ascending, empty), ``observed.kind`` (not an
+        event kind), ``observed.q`` (not finite, or not one per time).
+    """
+    t = np.asarray(t, dtype=float).ravel()
+    if not len(t):
+        raise ValueError("observed.t: no event times")
+    if not np.all(np.isfinite(t)):
+        raise ValueError(f"observed.t: time {int(np.flatnonzero(~np.isfinite(t))[0]) + 1} is not a finite number")
+    if np.any(np.diff(t) < 0):
+        bad = int(np.flatnonzero(np.diff(t) < 0)[0])
+        raise ValueError(f"observed.t: the times must be ascending (time {bad + 2}, {t[bad + 1]!r}, comes before "
+                         f"time {bad + 1}, {t[bad]!r})")
+    if kinds is not None:
+        kinds = tuple(str(k).strip().lower() for k in kinds)
+        valid = {k.value for k in EventKind}
+        for i, k in enumerate(kinds):
+            if k not in valid:
+                raise ValueError(f"observed.kind: event {i + 1} is {k!r}, not one of {', '.join(sorted(valid))}")
+        if len(kinds) != len(t):
+            raise ValueError(f"observed.kind: {len(kinds)} kinds for {len(t)} times")
+    if q is not None:
+        q = np.asarray(q, dtype=float).ravel()
+        if len(q) != len(t) or not np.all(np.isfinite(q)):
+            raise ValueError("observed.q: one finite position per time")
+    return Observed(t, kinds, q)
+
+
+def read_events(path) -> Observed:
+    """Observed events from a CSV file with a header: ``t`` (s), optional ``kind`` and ``q``.
+
+    Read as text with :mod:`csv` (nothing is evaluated); errors name the file and the row.
+    """
+    from symvib.paths import read_user_file
+
+    text = read_user_file(path, what="events file")
+    rows = list(csv.reader(text.splitlines()))
+    if not rows:
+        raise ValueError(f"{path}: empty; give a header row with the columns t[, kind][, q]")
+    header = [h.strip().lower() for h in rows[0]]
+    unknown = [h for h in header if h not in CSV_COLUMNS]
+    if "t" not in header or unknown:
+        raise ValueError(f"{path}: header {rows[0]!r}: needs a column t and only {', '.join(CSV_COLUMNS)}")
+    columns = {h: [] for h in header}
+    for number, row in enumerate(rows[1:], start=2):
+        if not any(cell.strip() for cell in row):
+            continue
+        if len(row) != len(header):
+            raise ValueError(f"{path}: row {number} has {len(row)} cells for {len(header)} columns")
+        for h, cell in zip(header, row):
+            if h == "kind":
+                columns[h].append(cell)
+                continue
+            try:
+                columns[h].append(float(cell))
+            except ValueError:
+                raise ValueError(f"{path}: row {number}, column {h}: {cell!r} is not a number") from None
+    return observed_events(columns["t"], columns.get("kind"), columns.get("q"))
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """The outcome of :func:`fit` (immutable).
+
+    Attributes
+    ----------
+    status : str
+        A key of :data:`STATUSES`; ``message`` says more.
+    scene : Scene
+        The start scene with the estimates.
+    free : tuple of str
+    estimates, stderr : dict
+        Parameter -> value, standard error.
+    covariance, correlation : ndarray
+        In the order of ``free``.
+    residuals : ndarray
+        Model minus observed (times in s, then positions), unweighted.
+    matched : int
+        Observed events matched to model events (the others were compared with the final time).
+    iterations : int
+    cost : float
+        Half the weighted sum of squared residuals.
+    """
+
+    status: str
+    message: str
+    scene: Scene
+    free: tuple
+    estimates: dict
+    stderr: dict
+    covariance: np.ndarray
+    correlation: np.ndarray
+    residuals: np.ndarray
+    matched: int
+    iterations: int
+    cost: float
+    history: tuple = field(default=(), repr=False)
+
+    def summary(self) -> str:
+        """Estimates with standard errors, the correlation, the status (plain text)."""
+        lines = [f"fit: {self.status} after {self.iterations} iterations ({self.message})",
+                 f"matched {self.matched} of {len(self.residuals)} observations; cost {self.cost:.6g}"]
+        for name in self.free:
+            lines.append(f"  {name:6s} = {self.estimates[name]:.10g} +- {self.stderr[name]:.3g}")
+        if len(self.free) > 1:
+            lines.append("correlation:")
+            for name, row in zip(self.free, self.correlation):
+                lines.append(f"  {name:6s} " + " ".join(f"{v:+.4f}" for v in row))
+        return "\n".join(lines)
+
+    def plot(self, path=None):
+        """The residuals against the observation number (a Matplotlib figure; written to ``path`` if
+        given)."""
+        import matplotlib
+
+        if path is not None:
+            matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(6, 3.2))
+        n = len(self.residuals)
+        ax.axhline(0.0, color="0.6", lw=0.8)
+        ax.plot(np.arange(1, n + 1), self.residuals * 1e3, "o", ms=4)
+        ax.set_xlabel("observation")
+        ax.set_ylabel("model - observed (ms)")
+        ax.set_title(", ".join(f"{k} = {self.estimates[k]:.5g} ± {self.stderr[k]:.2g}" for k in self.free),
+                     fontsize=9)
+        fig.tight_layout()
+        if path is not None:
+            fig.savefig(path, dpi=120)
+            plt.close(fig)
+        return fig
+
+
+def _default_bounds(scene: Scene, name: str) -> tuple:
+    left = scene.left if scene.left is not None else -math.inf
+    right = scene.right if scene.right is not None else math.inf
+    return {"mu": (0.0, math.inf), "k": (0.0, 1.0), "qdot0": (-math.inf, math.inf),
+            "q0": (left, right), "left": (-math.inf, scene.q0), "right": (scene.q0, math.inf)}[name]
+
+
+def _model(scene, observed, free, run):
+    """Residuals (model - observed, unweighted), their Jacobian, and how many events matched."""
+    result = run(scene)
+    if result.status.is_error:
+        raise ValueError(f"scene: the run at {dict((k, getattr(scene, k)) for k in free)} failed "
+                         f"({result.status.value}): {result.message}")
+    sens = sensitivities(result, wrt=free)
+    wanted = set(observed.kinds) if observed.kinds else None
+    index = [i for i, e in enumerate(result.events) if wanted is None or e.kind.value in wanted]
+    n_obs = len(observed.t)
+    matched = 0
+    while matched < min(n_obs, len(index)) and (
+            observed.kinds is None or result.events[index[matched]].kind.value == observed.kinds[matched]):
+        matched += 1
+    span_t = max(float(observed.t[-1] - observed.t[0]), float(observed.t[-1]), 1e-300)
+    r_t = np.full(n_obs, span_t)
+    J_t = np.zeros((n_obs, len(free)))
+    for k in range(matched):
+        r_t[k], J_t[k] = result.events[index[k]].t - observed.t[k], sens.t[index[k]]
+    r, J = [r_t], [J_t]
+    usable = np.concatenate([np.all(np.isfinite(J_t[:matched]), axis=1), np.ones(n_obs - matched, dtype=bool)])
+    if observed.q is not None:
+        span_q = max(float(np.max(np.abs(observed.q - scene.q0))), 1e-300)
+        r_q, J_q = np.full(n_obs, span_q), np.zeros((n_obs, len(free)))
+        for k in range(matched):
+            r_q[k], J_q[k] = result.events[index[k]].q - observed.q[k], sens.q[index[k]]
+        r.append(r_q)
+        J.append(J_q)
+        usable = np.concatenate([usable, np.all(np.isfinite(J_q[:matched]), axis=1),
+                                 np.ones(n_obs - matched, dtype=bool)])
+    r, J = np.concatenate(r), np.vstack(J)
+    J[~usable] = 0.0
+    return r, J, matched, usable
+
+
+def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weights=None, max_iterations=50,
+        xtol=1e-10, run=None) -> FitResult:
+    """Fit the ``free`` parameters of ``scene`` to ``observed`` events (least squares, exact Jacobian).
+
+    Parameters
+    ----------
+    scene : Scene
+        The start: its values of the free parameters are the first guess, the others fixed.
+    observed : Observed
+        From :func:`observed_events` or :func:`read_events`.
+    free : sequence of str
+        Names from :data:`symvib.numeric.sensitivity.PARAMETERS`.
+    bounds : dict, optional
+        Parameter -> ``(low, high)``; default: the physical ranges (``mu >= 0``, ``0 <= k <= 1``,
+        ``q0`` between the limiters, a limiter on its side of ``q0``).
+    weights : array, optional
+        ``1 / sigma`` of each observation (times, then positions).
+    run : callable, optional
+        ``scene -> Result`` (default :func:`symvib.numeric.driver.simulate` without samples).
+
+    Raises
+    ------
+    ValueError
+        Naming ``free`` (unknown, repeated, a missing limiter, more parameters than
+        observations), ``observed.kind`` (a kind the scene cannot make), ``weights`` (not
+        one positive finite number per observation) or ``scene`` (a run that failed).
+    """
+    from symvib.numeric.driver import simulate
+
+    free = tuple(free)
+    if not free or len(set(free)) != len(free) or any(p not in PARAMETERS for p in free):
+        raise ValueError(f"free: {free!r} must be distinct names from {', '.join(PARAMETERS)}")
+    for side in ("left", "right"):
+        if side in free and getattr(scene, side) is None:
+            raise ValueError(f"free: the scene has no {side} limiter to fit")
+    m = len(observed.t) * (1 if observed.q is None else 2)
+    if m < len(free):
+        raise ValueError(f"free: {len(free)} parameters from {m} observations; give at least as many observations "
+                         "as free parameters")
+    if observed.kinds and ("impact" in observed.kinds or "rest_on_limiter" in observed.kinds) \
+            and scene.left is None and scene.right is None:
+        raise ValueError("observed.kind: impacts observed, but the scene has no limiter to make them")
+    w = np.ones(m) if weights is None else np.asarray(weights, dtype=float).ravel()
+    if len(w) != m or not np.all(np.isfinite(w)) or np.any(w <= 0):
+        raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {len(w)}")
+    bounds = {name: (bounds or {}).get(name, _default_bounds(scene, name)) for name in free}
+    run = run or (lambda s: simulate(s, samples=False))
+    x = np.array([getattr(scene, name) for name in free], dtype=float)
+    lo, hi = (np.array([bounds[n][i] for n in free]) for i in (0, 1))
+    if np.any(x < lo) or np.any(x > hi):
+        raise ValueError(f"scene: the start {dict(zip(free, x))} is outside the bounds {bounds}")
+
+    def at(values):
+        return scene.replace(**{name: float(v) for name, v in zip(free, values)})
+
+    def solve(observed, w, x):
+        r, J, matched, usable = _model(at(x), observed, free, run)
+        if matched == 0:
+            return _result("no_events", STATUSES["no_events"], at(x), free, x, J, r, w, weights is not None, matched,
+                           0, ())
+        cost = 0.5 * float(np.sum((w * r) ** 2))
+        lam, history, status = 1e-3, [(x.copy(), cost)], "max_iterations"
+        iterations = 0
+        while iterations < max_iterations:
+            iterations += 1
+            A = w[:, None] * J
+            scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)          # Moré's column scaling
+            g = A.T @ (w * r)
+            H = A.T @ A
+            while True:
+                step = np.linalg.lstsq(H + lam * np.diag(scale ** 2), -g, rcond=None)[0]
+                trial = np.clip(x + step, lo, hi)
+                try:
+                    r_new, J_new, m_new, u_new = _model(at(trial), observed, free, run)
+                    new_cost = 0.5 * float(np.sum((w * r_new) ** 2))
+                except ValueError:
+                    new_cost = math.inf
+                if new_cost <= cost:
+                    break
+                lam *= LAMBDA_UP
+                if lam > 1e16:
+                    break
+            if new_cost > cost:                     # no step lowers the cost: a minimum (to rounding)
+                status = "converged"
+                break
+            moved = np.abs(trial - x) <= xtol * (np.abs(x) + xtol)
+            x, r, J, matched, usable, cost = trial, r_new, J_new, m_new, u_new, new_cost
+            lam = max(lam * LAMBDA_DOWN, 1e-12)
+            history.append((x.copy(), cost))
+            if np.all(moved):
+                status = "converged"
+                break
+        message = STATUSES[status]
+        if not np.all(usable):
+            message += f"; {int(np.sum(~usable))} observation(s) without derivatives left out of the steps"
+        if matched < len(observed.t):
+            message += (f"; the model makes only {matched} of the {len(observed.t)} observed events in their "
+                        "order and kinds (the fit is not a fit of them all: try another start)")
+        return _result(status, message, at(x), free, x, J, r, w, weights is not None, matched, iterations,
+                       tuple(history))
+
+    # Continuation in the number of events: the first events depend least on how far the start is
+    # from the answer, so fit them first, then twice as many, ..., then all (each stage starts from
+    # the last one's estimates); a fit of every event from a distant start can stop in a minimum
+    # where the model's later events are matched to the wrong observed ones.
+    n_obs = len(observed.t)
+    stages = []
+    n = min(n_obs, max(len(free), 2))
+    while n < n_obs:
+        stages.append(n)
+        n *= 2
+    stages.append(n_obs)
+    total, history = 0, []
+    for n in stages:
+        part = Observed(observed.t[:n], observed.kinds[:n] if observed.kinds else None,
+                        observed.q[:n] if observed.q is not None else None)
+        part_w = w[:n] if observed.q is None else np.concatenate([w[:n], w[n_obs:n_obs + n]])
+        result = solve(part, part_w, x)
+        total += result.iterations
+        history += list(result.history)
+        x = np.array([result.estimates[name] for name in free])
+        if result.status == "no_events":
+            return result
+    return dataclasses.replace(result, iterations=total, history=tuple(history))
+
+def _result(status, message, scene, free, x, J, r, w, absolute, matched, iterations, history) -> FitResult:
+    """The result at ``x``: covariance ``(A^T A)^-1`` of the weighted Jacobian ``A``, scaled by the
+    residual variance unless the weights are ``1 / sigma`` (``absolute``)."""
+    A = w[:, None] * J
+    m, n = A.shape
+    cost = 0.5 * float(np.sum((w * r) ** 2))
+    try:
+        inverse = np.linalg.inv(A.T @ A)
+    except np.linalg.LinAlgError:
+        inverse = np.full((n, n), np.inf)
+    variance = 1.0 if absolute else (2 * cost / (m - n) if m > n else math.nan)
+    cov = inverse * variance
+    se = np.sqrt(np.abs(np.diag(cov)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        # from (A^T A)^-1 itself: the correlation needs no estimate of the noise
+        d = np.sqrt(np.abs(np.diag(inverse)))
+        corr = inverse / np.outer(d, d)
+    if status == "converged" and n > 1:
+        pairs = [(free[i], free[j], corr[i, j]) for i in range(n) for j in range(i + 1, n)
+                 if not abs(corr[i, j]) <= IDENTIFIED]
+        if not np.all(np.isfinite(inverse)):
+            pairs = pairs or [(free[0], free[-1], math.nan)]
+        if pairs:
+            status = "not_identified"
+            a, b, c = pairs[0]
+            message = (f"{STATUSES['not_identified']}: {a} and {b} correlate at {c:+.7f}; the data fix a "
+                       f"combination of them, not each (observe more events, or fix one)") + message[len(
+                           STATUSES["converged"]):]
+    if status == "converged" and m == n and not absolute:
+        status, message = "no_error_estimate", STATUSES["no_error_estimate"] + message[len(STATUSES["converged"]):]
+    return FitResult(status, message, scene, free, dict(zip(free, map(float, x))), dict(zip(free, map(float, se))),
+                     cov, corr, r, matched, iterations, cost, history)

@@ -1,0 +1,154 @@
+"""Fitting parameters to observed event times (symvib/numeric/fit.py, symvib.fit, symvib fit)."""
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+from readme_blocks import run_section
+
+import symvib
+from symvib.numeric.driver import simulate
+from symvib.numeric.fit import fit, observed_events, read_events
+from symvib.numeric.scene import resolve_scene, scene_from_dict
+
+TRUTH = resolve_scene("paper-parabola").replace(mu=0.03, k=0.8)
+
+
+def impact_times(scene, n):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        events = simulate(scene, samples=False).events
+    return [e.t for e in events if e.kind.value == "impact"][:n]
+
+
+def test_noise_free_impacts_give_back_mu_and_k_from_a_start_that_makes_fewer_of_them():
+    times = impact_times(TRUTH, 6)
+    start = TRUTH.replace(mu=0.05, k=0.7)
+    assert len(impact_times(start, 6)) < 6          # the start makes fewer impacts than observed
+    result = fit(start, observed_events(times, kinds=["impact"] * 6), free=("mu", "k"))
+    assert result.status == "converged"
+    assert result.estimates["mu"] == pytest.approx(0.03, rel=1e-9)
+    assert result.estimates["k"] == pytest.approx(0.8, rel=1e-9)
+    assert result.matched == 6 and np.max(np.abs(result.residuals)) < 1e-10
+
+
+def test_noisy_impacts_give_estimates_within_their_standard_errors_and_errors_that_match_the_spread():
+    # 1 ms of noise on 6 impact times; over 12 noise draws the estimates scatter as their reported
+    # standard errors say (within the sampling error of 12 draws) and cover the truth.
+    times = np.array(impact_times(TRUTH, 6))
+    rng = np.random.default_rng(7)
+    estimates, errors = [], []
+    for _ in range(12):
+        noisy = times + rng.normal(0.0, 1e-3, len(times))
+        result = fit(TRUTH.replace(mu=0.04, k=0.75), observed_events(noisy, kinds=["impact"] * 6),
+                     free=("mu", "k"), weights=np.full(6, 1e3))
+        assert result.status == "converged", result.message
+        estimates.append([result.estimates["mu"], result.estimates["k"]])
+        errors.append([result.stderr["mu"], result.stderr["k"]])
+    estimates, errors = np.array(estimates), np.array(errors)
+    spread, reported = estimates.std(axis=0, ddof=1), errors.mean(axis=0)
+    assert np.all(spread / reported > 0.5) and np.all(spread / reported < 1.7), (spread, reported)
+    assert np.all(np.abs(estimates.mean(axis=0) - [0.03, 0.8]) < 3 * reported / np.sqrt(12) + 1e-12)
+
+
+def test_two_impacts_fix_mu_and_qdot0_but_say_how_strongly_they_correlate():
+    times = impact_times(TRUTH, 2)
+    start = TRUTH.replace(mu=0.05, qdot0=6.5)
+    result = fit(start, observed_events(times, kinds=["impact"] * 2), free=("mu", "qdot0"))
+    assert result.status == "no_error_estimate"      # as many observations as parameters, no sigma
+    assert result.estimates["qdot0"] == pytest.approx(7.0, rel=1e-9)
+    assert 0.9 < result.correlation[0, 1] < 1.0
+    with_sigma = fit(start, observed_events(times, kinds=["impact"] * 2), free=("mu", "qdot0"),
+                     weights=[1e3, 1e3])
+    assert with_sigma.status == "converged" and with_sigma.stderr["mu"] > 0.1 * with_sigma.estimates["mu"]
+
+
+def test_a_parameter_the_data_do_not_see_is_named_not_identified():
+    # Only the first impact (at the right limiter), time and position: the left limiter plays no part.
+    first = simulate(TRUTH, samples=False).events[0]
+    observed = observed_events([first.t], kinds=["impact"], q=[first.q])
+    result = fit(TRUTH.replace(mu=0.035), observed, free=("mu", "left"))
+    assert result.status == "not_identified"
+    assert "left" in result.message
+
+
+@pytest.mark.slow
+def test_a_user_curve_s_mu_k_and_qdot0_come_back_from_its_event_times():
+    # Impacts, reversals and the arrest (a video gives them all), three free parameters.
+    truth = scene_from_dict({"curve": {"name": "fit-quartic", "z": "x**2/2 + x**4/4"},
+                             "physics": {"mu": 0.05, "restitution": 0.8},
+                             "limiters": {"left": -0.6, "right": 0.5}, "initial": {"q": -0.3, "qdot": 4.0}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        events = symvib.simulate(truth, samples=False).events
+    observed = observed_events([e.t for e in events], kinds=[e.kind.value for e in events])
+    result = symvib.fit(truth.replace(mu=0.06, k=0.75, qdot0=3.8), observed, free=("mu", "k", "qdot0"))
+    assert result.status == "converged", result.message
+    assert result.matched == len(events)
+    for name, value in (("mu", 0.05), ("k", 0.8), ("qdot0", 4.0)):
+        assert result.estimates[name] == pytest.approx(value, rel=1e-8)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"t": [0.3, 0.2]}, "observed.t: the times must be ascending"),
+    ({"t": [0.1, float("nan")]}, "observed.t: time 2 is not a finite number"),
+    ({"t": []}, "observed.t: no event times"),
+    ({"t": [0.1, 0.2], "kinds": ["impact", "bounce"]}, "observed.kind: event 2 is 'bounce'"),
+    ({"t": [0.1, 0.2], "kinds": ["impact"]}, "observed.kind: 1 kinds for 2 times"),
+    ({"t": [0.1, 0.2], "q": [0.1]}, "observed.q"),
+])
+def test_bad_observations_are_refused_naming_the_field(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        observed_events(kwargs["t"], kwargs.get("kinds"), kwargs.get("q"))
+
+
+def test_bad_fits_are_refused_naming_the_cause():
+    one = observed_events([0.17], kinds=["impact"])
+    with pytest.raises(ValueError, match="free: 2 parameters from 1 observations"):
+        fit(TRUTH, one, free=("mu", "k"))
+    with pytest.raises(ValueError, match="free: .* must be distinct names"):
+        fit(TRUTH, one, free=("nu",))
+    no_limiters = TRUTH.replace(left=None, right=None)
+    with pytest.raises(ValueError, match="observed.kind: impacts observed, but the scene has no limiter"):
+        fit(no_limiters, observed_events([0.1, 0.2], kinds=["impact"] * 2), free=("mu",))
+    with pytest.raises(ValueError, match="weights: one positive finite"):
+        fit(TRUTH, observed_events([0.1, 0.2]), free=("mu",), weights=[1.0, -1.0])
+    with pytest.raises(ValueError, match="outside the bounds"):
+        fit(TRUTH.replace(k=0.8), observed_events([0.1, 0.2]), free=("k",), bounds={"k": (0.9, 1.0)})
+
+
+def test_an_events_file_is_read_as_data_and_its_errors_name_the_row(tmp_path):
+    good = tmp_path / "events.csv"
+    good.write_text("t,kind,q\n0.1,impact,0.78\n\n0.4,reversal,-0.2\n", encoding="utf-8")
+    observed = read_events(good)
+    assert observed.t.tolist() == [0.1, 0.4] and observed.kinds == ("impact", "reversal")
+    assert observed.q.tolist() == [0.78, -0.2]
+    for text, match in (("time,kind\n0.1,impact\n", "needs a column t"),
+                        ("t\n__import__('os').system('true')\n", "row 2, column t: .* is not a number"),
+                        ("t,kind\n0.1\n", "row 2 has 1 cells for 2 columns"),
+                        ("", "empty")):
+        bad = tmp_path / "bad.csv"
+        bad.write_text(text, encoding="utf-8")
+        with pytest.raises(ValueError, match=match):
+            read_events(bad)
+
+
+def test_symvib_fit_on_the_command_line_prints_the_estimates_and_writes_the_residual_figure(tmp_path):
+    times = impact_times(TRUTH, 6)
+    data = tmp_path / "impacts.csv"
+    data.write_text("t,kind\n" + "".join(f"{t!r},impact\n" for t in times), encoding="utf-8")
+    out = subprocess.run([sys.executable, "-m", "symvib.cli", "fit", "paper-parabola", str(data), "--free", "mu,k",
+                          "--plot", str(tmp_path / "res.png")], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert "mu     = 0.03" in out.stdout and "k      = 0.8" in out.stdout
+    assert (tmp_path / "res.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = subprocess.run([sys.executable, "-m", "symvib.cli", "fit", "paper-parabola", str(data), "--free", "mu,nu"],
+                         capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and "free" in bad.stderr
+
+
+def test_the_readme_s_fit_example_gives_back_mu_and_k(capsys):
+    namespace = run_section("## Fit", "readme_fit")
+    assert namespace["fit"].estimates["mu"] == pytest.approx(0.03, rel=1e-9)
+    assert "k      = 0.8" in capsys.readouterr().out
