@@ -118,6 +118,10 @@ class PanelColumn:
 
 #: Columns of a row of :class:`PanelColumn`.
 PANEL_COLUMNS = 9
+#: :class:`PanelColumn` as module-level ints (numba takes them as compile-time constants).
+P_HALF, P_R1, P_R2, P_G1, P_G2, P_TAU1, P_TAU2, P_ROOT, P_DELTA = (
+    PanelColumn.half, PanelColumn.r1, PanelColumn.r2, PanelColumn.G1, PanelColumn.G2, PanelColumn.tau1,
+    PanelColumn.tau2, PanelColumn.root, PanelColumn.delta)
 
 
 #: What :func:`quad` reports: the tolerance was met (or the interval is done); the budget of
@@ -142,6 +146,10 @@ class SampleColumn:
 
 #: Columns of a sample (:class:`SampleColumn`).
 SAMPLE_COLUMNS = 1 + max(v for k, v in vars(SampleColumn).items() if not k.startswith("_"))
+#: :class:`SampleColumn` as module-level ints (numba takes them as compile-time constants).
+C_T, C_Q, C_W, C_N, C_S, C_PATH, C_WF, C_WIMP, C_BRANCH, C_SIGMA = (
+    SampleColumn.t, SampleColumn.q, SampleColumn.w, SampleColumn.N, SampleColumn.s, SampleColumn.path,
+    SampleColumn.W, SampleColumn.W_impacts, SampleColumn.branch, SampleColumn.sigma)
 #: Panels a sample buffer grows by at least, times the rule's nodes (both halves of a piece).
 SAMPLE_GROWTH = 2 * MAX_PANELS
 
@@ -333,9 +341,9 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, Xr, Wr, Sr, Tr, wo
             work[fp + j] = hdj
             work[fw + j] = mu * abs(N) * hdj
             P += wj * hdj
-            out[o + j, 1] = work[qn + j]
-            out[o + j, 2] = w
-            out[o + j, 3] = N
+            out[o + j, C_Q] = work[qn + j]
+            out[o + j, C_W] = w
+            out[o + j, C_N] = N
     floor_T = ROUND_TAIL * EPS * T
     r_geom = 0.0
     if not weighted and max(abs(b1), abs(b2)) > floor_T:
@@ -471,8 +479,10 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                 unsure += eG + rG
                 sens_half += sens
                 if mode == PANELS:
-                    out[o, 0], out[o, 1], out[o, 2], out[o, 3], out[o, 4] = kh, r1, r2, Gstart, Gstart + dG
-                    out[o, 5], out[o, 6], out[o, 7], out[o, 8] = tau0, tau0 + Tq, 1.0 if root else 0.0, delta
+                    out[o, P_HALF], out[o, P_R1], out[o, P_R2] = kh, r1, r2
+                    out[o, P_G1], out[o, P_G2] = Gstart, Gstart + dG
+                    out[o, P_TAU1], out[o, P_TAU2] = tau0, tau0 + Tq
+                    out[o, P_ROOT], out[o, P_DELTA] = 1.0 if root else 0.0, delta
                     o += 1
                 elif mode == SAMPLES:
                     # Time, path and friction work at every node: the same cumulative
@@ -484,13 +494,13 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                     acc = W_ACC * n
                     cumulate(St, work, W_FT * n, n, work, acc)
                     for j in range(n):
-                        out[o + j, 0] = tau0 + hw * work[acc + j]
+                        out[o + j, C_T] = tau0 + hw * work[acc + j]
                     cumulate(St, work, W_FP * n, n, work, acc)
                     for j in range(n):
-                        out[o + j, 4] = path0 + hw * work[acc + j]
+                        out[o + j, C_S] = path0 + hw * work[acc + j]  # (the path from the anchor, for now)
                     cumulate(St, work, W_FW * n, n, work, acc)
                     for j in range(n):
-                        out[o + j, 5] = work0 + hw * work[acc + j]
+                        out[o + j, C_PATH] = work0 + hw * work[acc + j]  # (the friction work, for now)
                     o += n
                 tau0 += Tq
                 path0 += Pq
@@ -521,9 +531,9 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
     if mode == SAMPLES:
         # The half anchored at qb was integrated from qb backwards.
         for j in range(half_b, o):
-            out[j, 0] = T - out[j, 0]
-            out[j, 4] = P - out[j, 4]
-            out[j, 5] = Wf - out[j, 5]
+            out[j, C_T] = T - out[j, C_T]
+            out[j, C_S] = P - out[j, C_S]
+            out[j, C_PATH] = Wf - out[j, C_PATH]
     return T, Wf, err, flag, o, q_ok, G_ok, q_neg
 
 
@@ -599,9 +609,9 @@ def grown(a, n, rows):
 
 def put_sample(out, index, o, t, q, w, N, coord, path, Wf, Wimp, s, sigma, motion):
     """Write the sample at a piece's end into row ``o`` (columns :class:`SampleColumn`); returns ``o + 1``."""
-    out[o, 0], out[o, 1], out[o, 2], out[o, 3] = t, q, w, N
-    out[o, 4], out[o, 5], out[o, 6], out[o, 7] = coord, path, Wf, Wimp
-    out[o, 8], out[o, 9] = s, sigma
+    out[o, C_T], out[o, C_Q], out[o, C_W], out[o, C_N] = t, q, w, N
+    out[o, C_S], out[o, C_PATH], out[o, C_WF], out[o, C_WIMP] = coord, path, Wf, Wimp
+    out[o, C_BRANCH], out[o, C_SIGMA] = s, sigma
     index[o] = motion
     return o + 1
 
@@ -672,13 +682,15 @@ def samples(ivs, ni, S, K, cp, R, pieces):
             start = o
             Tq, Wq, _, _, o, _, _, _ = quad(q1, q2, G1, G2, s, sigma, S, K, cp, R, work, SAMPLES, out, o, roots, count)
             for j in range(start, o):
-                dp, dw = out[j, 4], out[j, 5]
-                out[j, 0] += tp
-                out[j, 4] = coord + sigma * dp
-                out[j, 5] = path + dp
-                out[j, 6] = Wf + dw
-                out[j, 7] = Wimp
-                out[j, 8], out[j, 9] = s, sigma
+                # quad left the path and the friction work from the piece's start in the columns
+                # s and path: now the arc-length coordinate, the path and the work since the start
+                dp, dw = out[j, C_S], out[j, C_PATH]
+                out[j, C_T] += tp
+                out[j, C_S] = coord + sigma * dp
+                out[j, C_PATH] = path + dp
+                out[j, C_WF] = Wf + dw
+                out[j, C_WIMP] = Wimp
+                out[j, C_BRANCH], out[j, C_SIGMA] = s, sigma
                 index[j] = motion
             L = arc_length(q1, q2, S, K, cp, R)
             if last:  # the interval's end: its logged time and friction work
