@@ -158,9 +158,9 @@ HOT_INLINE = ("cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
 #: call.  Reference counts had been a third of a sweep's time (``benchmarks/profile_sweep.py``;
 #: docs/benchmarks.md, "Cost of error control").  ``tests/test_engine_refcount.py`` checks that none
 #: of them returns an array (a returned array would be freed under its new owner).
-NO_REFCOUNT = ("panel", "quad", "anchored_G", "root_anchored", "tail_time", "turn_departure", "time_excess",
-               "root_time", "locate", "walk", "map_extend", "extend_side", "crossing", "branch_cut", "add_root",
-               "room")
+NO_REFCOUNT = ("panel", "quad", "interval", "turning_point", "stop_at_t_max", "impacts_at", "anchored_G",
+               "root_anchored", "tail_time", "turn_departure", "time_excess", "root_time", "locate", "walk",
+               "map_extend", "extend_side", "crossing", "branch_cut", "add_root", "room")
 #: numba's error model of the compiled engine and kernels: a division by zero gives inf or NaN (as
 #: numpy does; the run then ends ``non_finite``), not a Python exception, so no division carries a
 #: test and a branch to raise it (a few per cent of a sweep's time; docs/benchmarks.md).
@@ -245,7 +245,7 @@ def engine_digest() -> str:
     for origin in (*(mod.__file__ for mod in ENGINE_MODULES), *(importlib.util.find_spec(n).origin for n in names)):
         digest.update(Path(origin).read_bytes())
     # (and the compile options, which numba's cache does not key on either)
-    digest.update(repr((INNER, HOT_INLINE, NO_REFCOUNT)).encode())
+    digest.update(repr((INNER, HOT_INLINE, loop.RUN_STEPS, NO_REFCOUNT)).encode())
     return digest.hexdigest()[:20]
 
 
@@ -373,7 +373,7 @@ def _specialized_engine(module, ncp: int) -> dict:
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
     options["sweep_bound"] = {"cache": cache, "nogil": True, **ERRORS}
     options.update({name: {"inline": "always", **INNER}
-                    for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE)})
+                    for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE, *loop.RUN_STEPS)})
     options.update({name: {"_nrt": False, **INNER} for name in NO_REFCOUNT})
     names = {"params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
