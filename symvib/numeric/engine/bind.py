@@ -81,7 +81,7 @@ from functools import cache, partial
 from pathlib import Path
 from typing import NamedTuple
 
-from symvib.numeric.engine import loop
+from symvib.numeric.engine import loop, timing
 from symvib.numeric.engine.plain import plain_entries
 from symvib.numeric.engine.rebind import ENGINE_MODULES, rebound_functions
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
@@ -245,7 +245,7 @@ def engine_digest() -> str:
     for origin in (*(mod.__file__ for mod in ENGINE_MODULES), *(importlib.util.find_spec(n).origin for n in names)):
         digest.update(Path(origin).read_bytes())
     # (and the compile options, which numba's cache does not key on either)
-    digest.update(repr((INNER, HOT_INLINE, loop.RUN_STEPS, NO_REFCOUNT)).encode())
+    digest.update(repr((INNER, HOT_INLINE, loop.RUN_STEPS, timing.QUAD_STEPS, NO_REFCOUNT)).encode())
     return digest.hexdigest()[:20]
 
 
@@ -373,7 +373,8 @@ def _specialized_engine(module, ncp: int) -> dict:
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
     options["sweep_bound"] = {"cache": cache, "nogil": True, **ERRORS}
     options.update({name: {"inline": "always", **INNER}
-                    for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE, *loop.RUN_STEPS)})
+                    for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE, *loop.RUN_STEPS,
+                                 *timing.QUAD_STEPS)})
     options.update({name: {"_nrt": False, **INNER} for name in NO_REFCOUNT})
     names = {"params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
