@@ -242,3 +242,49 @@ def test_the_start_and_the_finish():
     assert ev.kind == NO_EVENT and x.impact_next and x.w == pytest.approx(h(RIGHT) ** 2, rel=1e-14)
     done, qdot, E = finish(x._replace(status=StatusCode.MAX_EVENTS, w=0.0), S, K, cp)
     assert done.sigma == 0 and qdot == 0.0 and E == pytest.approx(M * G * z(RIGHT), rel=1e-14)
+
+
+# --- time: the steps of the quadrature --------------------------------------------------------------
+def test_a_half_anchored_on_a_turning_point_is_integrated_in_the_square_root_of_the_distance():
+    from symvib.numeric.engine.timing import half_anchor
+
+    K, cp, S, _ = parabola(mu=0.05)
+    roots, count = np.empty((4, 1)), np.zeros(4, dtype=np.int64)
+    qa, qb, half = 0.0, 0.4, 0.2
+    # the half from qb, where G = 0 (a turning point), walked back towards qa
+    e, d, gd, Ge, root, delta, r_lo, r_hi, Gstart, tau0 = half_anchor(1, qa, qb, 4.0, 0.0, 1, 1, half, S, K, cp,
+                                                                      roots, count)
+    assert (e, d, Ge, Gstart, tau0) == (qb, -1.0, 0.0, 0.0, 0.0)
+    assert gd == 2 * G  # G' = -2 g F_s' d, walking back (d = -1)
+    assert root and delta == 0.0 and r_lo == 0.0 and r_hi == math.sqrt(half)
+    # the half from qa, where G is far from 0: the plain variable
+    e, d, _, Ge, root, delta, r_lo, r_hi, _, _ = half_anchor(0, qa, qb, 4.0, 0.0, 1, 1, half, S, K, cp, roots, count)
+    assert (e, d, Ge) == (qa, 1.0, 4.0) and not root and (delta, r_lo, r_hi) == (0.0, 0.0, half)
+
+
+def test_a_panels_error_and_the_halves_disagreement():
+    from symvib.numeric.engine.timing import midpoint_error, panel_error
+
+    # away from a root: the truncation error of T plus dT/dG times that of G is what halving fixes
+    tol, fixable, spread = panel_error(0.0, 0.1, 0.0, 0.4, False, 0.5, 2.0, 1e-9, 1e-8, 3.0, 1e-15, 1e-14, 1e-10, 1e-12)
+    assert tol == 1e-10 * 2.0 + 1e-12 * 0.25 and fixable == 1e-9 + 3.0 * 1e-8
+    assert spread == 3.0 * (1e-14 + 1e-8 + 1e-15)
+    # from the root itself G's errors are relative: the time's is half of theirs
+    _, fixable, _ = panel_error(0.0, 0.1, 0.0, 0.4, True, 0.5, 2.0, 1e-9, 1e-8, 3.0, 1e-15, 0.0, 1e-10, 1e-12)
+    assert fixable == 1e-9 + 0.5 * 2.0 / 0.5 * 1e-8
+    # halves that agree at the midpoint add nothing; a disagreement dG costs dT/dG dG
+    assert midpoint_error(False, 2.0, 2.0, 1.0, 0.5, 7.0) == 0.0
+    assert midpoint_error(False, 2.0 + 1e-12, 2.0, 1.0, 0.5, 7.0) == 7.0 * abs((2.0 + 1e-12) - 2.0)
+
+
+def test_an_accepted_panel_is_recorded_by_column_name():
+    from symvib.numeric.engine.timing import PANEL_COLUMNS, PANELS, PanelColumn, record_panel
+
+    out = np.zeros((2, PANEL_COLUMNS))
+    o = record_panel(PANELS, out, 0, 1, 0.25, 0.5, 3.0, -1.0, 0.125, 0.0625, True, 1e-3, 0.0, 0.0, None, None)
+    assert o == 1
+    row = out[0]
+    assert (row[PanelColumn.half], row[PanelColumn.r1], row[PanelColumn.r2]) == (1, 0.25, 0.5)
+    assert (row[PanelColumn.G1], row[PanelColumn.G2]) == (3.0, 2.0)
+    assert (row[PanelColumn.tau1], row[PanelColumn.tau2]) == (0.125, 0.1875)
+    assert (row[PanelColumn.root], row[PanelColumn.delta]) == (1.0, 1e-3)
