@@ -151,9 +151,9 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
     else :func:`arrive` at its end (an impact next, ``N = 0`` (event 3), the domain's end
     (event 4)) and at a turning point :func:`turning_point` (event 2, the rest test); last
     :func:`finish`.  Each step returns the new state and at most one
-    :class:`~symvib.numeric.engine.state.Event`, which the loop logs: the steps take and give
-    numbers only (the arrays the run owns are passed to the steps that need them, compiled
-    without reference counting), so they cost nothing compiled.
+    :class:`~symvib.numeric.engine.state.Event` (numbers only), which the loop logs.  Compiled,
+    the split costs nothing: the steps on numbers alone (:data:`RUN_STEPS`) are inlined, and
+    those that read the run's arrays are calls without reference counting.
     """
     region, roots, count = map_new(q0, S.lo, S.hi, S.mu, K, cp, CRIT_STEP * S.scale)
     work = scratch(1, WORK_ROWS * max(len(R.Xw), len(R.Xp)))[0]
