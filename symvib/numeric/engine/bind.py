@@ -20,6 +20,51 @@ no source text is pasted or executed.
 Either way every engine function is compiled from its own code object with its
 calls bound to its compiled siblings (:func:`_compiled_functions`).
 
+The binding's contract
+----------------------
+What a kernel set must provide to the engine, and what the engine promises (an
+implementer of a new kernel source, or of a new binding, reads this list):
+
+1. **The module.** A kernel set is a module with one function per entry of
+   :data:`~symvib.numeric.engine.state.KERNEL_INTERFACE`, named as the entry says
+   (``F_p_scalar``, ..., ``domain``), and ``PARAMS``, the names of the curve's
+   parameters (``ncp = len(PARAMS)``).  ``__file__``, ``__name__`` and ``INPUT_HASH``
+   name its compiled engine on disk; a module without a file (a prepared view) is
+   compiled for its process only.
+2. **Argument order.** Every kernel takes its leading arguments (the entry's second
+   field: ``(q, mu)`` for ``F_s, dF_s, ddF_s, node_s``; ``(q,)`` for the geometry;
+   ``(q, w, g)`` for ``N_w``; none for ``q_scale`` and ``domain``) and then the ``ncp``
+   parameter values, each a separate positional float (the engine calls ``K.F_p(q, mu, *cp)``).
+3. **Dtypes.** Every argument is a float64; a kernel returns a float64, or a tuple of as
+   many float64 as the entry's third field: ``node_s`` gives ``(F_s', h, exp(s mu alpha),
+   kappa, cos alpha)`` at once, ``domain`` the open interval ``(lo, hi)`` of ``q``.
+4. **Scalar code only.** A kernel calls only ``math`` and the module's own ``*_scalar``
+   functions (numba compiles it in nopython mode with its signature from (2)-(3), the
+   error model ``numpy``: a division by zero gives ``inf`` or ``nan``, never an
+   exception); it keeps no state, so the engine may call it in any order, any number
+   of times, from several threads.
+5. **Accuracy.** Inside ``domain`` every kernel is finite and agrees with its
+   expression to a few rounding errors; ``F_s`` is the antiderivative of ``dF_s``
+   (the engine takes differences of it and rebuilds ``G`` from ``dF_s``), ``ddF_s``
+   its derivative.  Outside ``domain`` nothing is asked.
+6. **What the engine receives per call.** The curve's parameters as a tuple of
+   ``ncp`` float64 (``cp``), a scene as a C-contiguous float64 row of
+   :class:`~symvib.numeric.layout.SceneRow` values, the rules ``R``
+   (:class:`~symvib.numeric.engine.state.Rules`: C-contiguous float64 vectors ``Xw,
+   Ww, Xp, Wp, Tw, Tp``, matrices ``Sw, SWw, Sp``, floats ``rtol, atol``); a sweep
+   C-contiguous float64 matrices of scene rows and parameter rows (one row per scene).
+7. **What the engine promises.** :class:`Engine`'s three calls:
+   ``simulate(cp, row, R, keep)`` returns an :class:`~symvib.numeric.engine.state.Outcome`
+   (events in :class:`~symvib.numeric.layout.EventColumn` columns; the motion
+   intervals too when ``keep``); ``samples(cp, row, R, intervals, n, pieces)`` the
+   samples (:class:`~symvib.numeric.engine.timing.SampleColumn`) and their interval
+   index; ``sweep(rows, cp_rows, R, max_log)`` the summary
+   (:class:`~symvib.numeric.layout.Summary`) and each scene's first ``max_log``
+   events.  It writes none of its arguments, keeps no reference to them after the
+   call.  Every binding runs the same engine code (the plain one sums the
+   cumulative integrals in another order, which changes the last bits:
+   :mod:`~symvib.numeric.engine.plain`).
+
 Examples
 --------
 >>> from symvib.numeric.kernels import load
@@ -36,7 +81,7 @@ from functools import cache, partial
 from pathlib import Path
 from typing import NamedTuple
 
-from symvib.numeric.engine import loop
+from symvib.numeric.engine import loop, timing
 from symvib.numeric.engine.plain import plain_entries
 from symvib.numeric.engine.rebind import ENGINE_MODULES, rebound_functions
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
@@ -113,9 +158,9 @@ HOT_INLINE = ("cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
 #: call.  Reference counts had been a third of a sweep's time (``benchmarks/profile_sweep.py``;
 #: docs/benchmarks.md, "Cost of error control").  ``tests/test_engine_refcount.py`` checks that none
 #: of them returns an array (a returned array would be freed under its new owner).
-NO_REFCOUNT = ("panel", "quad", "anchored_G", "root_anchored", "tail_time", "turn_departure", "time_excess",
-               "root_time", "locate", "walk", "map_extend", "extend_side", "crossing", "branch_cut", "add_root",
-               "room")
+NO_REFCOUNT = ("panel", "quad", "interval", "turning_point", "stop_at_t_max", "impacts_at", "anchored_G",
+               "root_anchored", "tail_time", "turn_departure", "time_excess", "root_time", "locate", "walk",
+               "map_extend", "extend_side", "crossing", "branch_cut", "add_root", "room")
 #: numba's error model of the compiled engine and kernels: a division by zero gives inf or NaN (as
 #: numpy does; the run then ends ``non_finite``), not a Python exception, so no division carries a
 #: test and a branch to raise it (a few per cent of a sweep's time; docs/benchmarks.md).
@@ -200,7 +245,7 @@ def engine_digest() -> str:
     for origin in (*(mod.__file__ for mod in ENGINE_MODULES), *(importlib.util.find_spec(n).origin for n in names)):
         digest.update(Path(origin).read_bytes())
     # (and the compile options, which numba's cache does not key on either)
-    digest.update(repr((INNER, HOT_INLINE, NO_REFCOUNT)).encode())
+    digest.update(repr((INNER, HOT_INLINE, loop.RUN_STEPS, timing.QUAD_STEPS, NO_REFCOUNT)).encode())
     return digest.hexdigest()[:20]
 
 
@@ -328,7 +373,8 @@ def _specialized_engine(module, ncp: int) -> dict:
     # that costs about 3 s more of compile (the parfor passes) for the same sweep speed.
     options["sweep_bound"] = {"cache": cache, "nogil": True, **ERRORS}
     options.update({name: {"inline": "always", **INNER}
-                    for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE)})
+                    for name in ("simulate_scene", "sample_scene", "sweep_block", *HOT_INLINE, *loop.RUN_STEPS,
+                                 *timing.QUAD_STEPS)})
     options.update({name: {"_nrt": False, **INNER} for name in NO_REFCOUNT})
     names = {"params_of": _params_of(ncp),
              "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}

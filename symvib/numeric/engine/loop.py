@@ -44,12 +44,13 @@ from symvib.numeric.engine.laws import (
     zeno_series,
 )
 from symvib.numeric.engine.scan import CRIT_STEP, End, curve_scale, grown_roots, locate, map_new, scratch
-from symvib.numeric.engine.state import Outcome, Setup, Zeno
+from symvib.numeric.engine.state import NO_EVENT, Event, Interval, Outcome, RunState, Setup, Zeno
 from symvib.numeric.engine.timing import (
     EPS,
     NONE,
     QUAD_BUDGET,
     QUAD_NEGATIVE,
+    QUAD_OK,
     WORK_ROWS,
     grown,
     quad,
@@ -70,7 +71,9 @@ from symvib.numeric.layout import (
     Summary,
 )
 
-__all__ = ["run", "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene",
+__all__ = ["run", "start", "with_status", "checked", "impact_step", "after_impact", "impacts_at", "depart",
+           "interval", "within_tolerance", "stop_at_t_max", "arrive", "turning_point", "finish", "RUN_STEPS",
+           "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene",
            "sample_scene", "sweep_scenes", "sweep_block", "sweep_arrays"]
 
 #: Rows the event log starts with (it doubles when full).
@@ -86,39 +89,48 @@ EVENT_WIDTH, INTERVAL_WIDTH, SUMMARY_WIDTH = len(EVENT_COLUMNS), len(INTERVAL_CO
 #: quadrature aims at the tolerance, and a miss this large is not rounding of the estimate but an
 #: integral it could not resolve, or ``G`` lost to cancellation (physics.md, "Accuracy").
 TOLERANCE_FACTOR = 100.0
+#: The steps of :func:`run` that take and give numbers only: the compiled engine inlines them into
+#: ``run`` (:mod:`~symvib.numeric.engine.bind`), where their state stays in registers.  The steps that
+#: take the run's arrays (:func:`interval`, :func:`turning_point`, :func:`stop_at_t_max`,
+#: :func:`impacts_at`) are calls compiled without reference counting instead: an array passed
+#: to an inlined function is counted (atomically) on the way in and out.
+RUN_STEPS = ("start", "with_status", "checked", "impact_step", "after_impact", "depart", "within_tolerance",
+             "arrive", "finish")
 #: Column indices as plain ints (numpy indexes faster with an int than with an IntEnum).
 E_KIND, E_T, E_Q, E_BEFORE, E_AFTER, E_ENERGY, E_TERR = (int(c) for c in EventColumn)
 I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W, I_TERR = (int(c) for c in IntervalColumn)
 
 
-def put_event(events, ne, kind, t, q, before, after, e, t_err):
-    """Append an event (columns :class:`~symvib.numeric.layout.EventColumn`); the log doubles when full."""
+def put_event(events, ne, ev):
+    """Append the event ``ev`` (an :class:`~symvib.numeric.engine.state.Event`; columns
+    :class:`~symvib.numeric.layout.EventColumn`); the log doubles when full."""
     if ne == events.shape[0]:
         events = grown(events, ne, 2 * events.shape[0])
-    events[ne, E_KIND] = kind.value
-    events[ne, E_T] = t
-    events[ne, E_Q] = q
-    events[ne, E_BEFORE] = before
-    events[ne, E_AFTER] = after
-    events[ne, E_ENERGY] = e
-    events[ne, E_TERR] = t_err
+    events[ne, E_KIND] = ev.kind
+    events[ne, E_T] = ev.t
+    events[ne, E_Q] = ev.q
+    events[ne, E_BEFORE] = ev.before
+    events[ne, E_AFTER] = ev.after
+    events[ne, E_ENERGY] = ev.energy
+    events[ne, E_TERR] = ev.t_err
     return events, ne + 1
 
 
-def put_interval(ivs, ni, qa, qb, Ga, Gb, s, sigma, t0, T, Wi, T_err):
-    """Append a motion interval (columns :class:`~symvib.numeric.layout.IntervalColumn`)."""
+def put_interval(ivs, ni, iv, t0):
+    """Append the motion interval ``iv`` (an :class:`~symvib.numeric.engine.state.Interval`) that
+    starts at ``t0`` (columns :class:`~symvib.numeric.layout.IntervalColumn`)."""
     if ni == ivs.shape[0]:
         ivs = grown(ivs, ni, 2 * ivs.shape[0])
-    ivs[ni, I_QA] = qa
-    ivs[ni, I_QB] = qb
-    ivs[ni, I_GA] = Ga
-    ivs[ni, I_GB] = Gb
-    ivs[ni, I_S] = s
-    ivs[ni, I_SIGMA] = sigma
+    ivs[ni, I_QA] = iv.qa
+    ivs[ni, I_QB] = iv.qb
+    ivs[ni, I_GA] = iv.Ga
+    ivs[ni, I_GB] = iv.Gb
+    ivs[ni, I_S] = iv.s
+    ivs[ni, I_SIGMA] = iv.sigma
     ivs[ni, I_T0] = t0
-    ivs[ni, I_T] = T
-    ivs[ni, I_W] = Wi
-    ivs[ni, I_TERR] = T_err
+    ivs[ni, I_T] = iv.T
+    ivs[ni, I_W] = iv.W
+    ivs[ni, I_TERR] = iv.T_err
     return ivs, ni + 1
 
 
@@ -129,214 +141,336 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
     ``S.unilateral`` the curve only pushes along its normal, so where ``N`` reaches 0
     (or is negative at the start of an interval) the run ends with ``LEFT_CURVE``
     (physics.md, "Events").  Returns an :class:`~symvib.numeric.engine.state.Outcome`.
+
+    The run is a loop over named steps, in the order of physics.md's "Events", on one
+    state ``x`` (:class:`~symvib.numeric.engine.state.RunState`): :func:`start`; then, until
+    the status is no longer ``RUNNING``, :func:`checked` (deadline, overflow), at a limiter
+    :func:`impact_step` (event 1) and :func:`after_impact` (a plastic impact's rest test, or
+    a Zeno series summed), :func:`depart` (the branch and the start of the next interval),
+    :func:`interval` (its end and time: physics.md, "Time"), :func:`stop_at_t_max` inside it,
+    else :func:`arrive` at its end (an impact next, ``N = 0`` (event 3), the domain's end
+    (event 4)) and at a turning point :func:`turning_point` (event 2, the rest test); last
+    :func:`finish`.  Each step returns the new state and at most one
+    :class:`~symvib.numeric.engine.state.Event` (numbers only), which the loop logs.  Compiled,
+    the split costs nothing: the steps on numbers alone (:data:`RUN_STEPS`) are inlined, and
+    those that read the run's arrays are calls without reference counting.
     """
-    g, m, mu, k, scale = S.g, S.m, S.mu, S.k, S.scale
-    region, roots, count = map_new(q0, S.lo, S.hi, mu, K, cp, CRIT_STEP * scale)
-    X = R.Xw
-    work = scratch(1, WORK_ROWS * max(len(X), len(R.Xp)))[0]
+    region, roots, count = map_new(q0, S.lo, S.hi, S.mu, K, cp, CRIT_STEP * S.scale)
+    work = scratch(1, WORK_ROWS * max(len(R.Xw), len(R.Xp)))[0]
     dummy = np.empty((1, 4))
     events = np.zeros((min(max_events + EVENT_LOG_SPARE, EVENT_LOG_START), EVENT_WIDTH))
     ne = 0
     ivs = np.zeros((INTERVAL_LOG_START if keep_intervals else 1, INTERVAL_WIDTH))
     ni = 0
-    t = 0.0
-    Wf = 0.0
-    Wimp = 0.0
-    t_err = 0.0
-    q_bad = math.nan
-    # The time from a turning point to the double before it that the next interval starts on.
-    tail_next = 0.0
     zeno = Zeno(0.0, 0.0, 0.0, 0.0)
-    status = StatusCode.RUNNING
-    q = q0
-    w = (K.h(q, *cp) * qdot0) ** 2
-    # At rest also when w underflows to 0 (qdot0 = 1e-300): the rest test decides.
-    sigma = 0 if qdot0 == 0.0 or w == 0.0 else (1 if qdot0 > 0.0 else -1)
-    E0 = energy(q, w, m, g, K, cp)
-    flip = False
-    nsign = 1
-    side = side_at(q, S.has_left, S.left, S.has_right, S.right)
-    pending_impact = sigma != 0 and side == sigma
-    if not (math.isfinite(E0) and finite_state(t, q, w, Wf, Wimp)):
-        status = StatusCode.NON_FINITE  # e.g. qdot0 = 1e200: w = inf from the start
-    elif S.unilateral and K.N_w(q, w, g, *cp) < 0.0:
-        # Unilateral contact and N < 0 at the start: the particle leaves the curve at once.
-        events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, q, qdot0, qdot0, E0, t_err)
-        status = StatusCode.LEFT_CURVE
-    elif sigma == 0:
-        what, direction = rest(q, side, mu, K, cp)
-        if what != SLIDE:
-            code, status = rest_outcome(what)
-            events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp), t_err)
-        sigma = direction
-    while status == StatusCode.RUNNING:
-        if S.deadline > 0.0 and clock() > S.deadline:
-            status = StatusCode.WALL_TIME_LIMIT  # (the plain engine only: the compiled one has no clock)
+    q_bad = math.nan
+    x, E0, ev = start(S, K, cp, q0, qdot0)
+    if ev.kind != NO_EVENT:
+        events, ne = put_event(events, ne, ev)
+    while x.status == StatusCode.RUNNING:
+        x = checked(x, S)
+        if x.status != StatusCode.RUNNING:
             break
-        if not finite_state(t, q, w, Wf, Wimp):
-            status = StatusCode.NON_FINITE  # overflow: stop at once rather than run max_events impacts at inf
-            break
-        if pending_impact:
-            # An impact at q with squared speed w moving sigma.
-            pending_impact = False
-            qd = qdot_of(q, w, sigma, K, cp)
-            qd_after, w_after, loss = impact(qd, w, k, m)
-            Wimp += loss
-            events, ne = put_event(events, ne, EventCode.IMPACT, t, q, qd, qd_after, energy(q, w_after, m, g, K, cp),
-                                   t_err)
-            side = int(sigma)
-            w_before = w
-            w = w_after
-            sigma = -sigma
-            if w == 0.0:
-                what, direction = rest(q, side, mu, K, cp)
-                if what != SLIDE:
-                    code, status = rest_outcome(what)
-                    events, ne = put_event(events, ne, code, t, q, 0.0, 0.0, energy(q, 0.0, m, g, K, cp), t_err)
-                    break
-                sigma = direction
-            else:
-                applies, ratio, remaining, w_imp, w_fric = zeno_series(q, w_before, sigma, g, mu, k, m, scale, K, cp)
-                if applies:
-                    Wimp += w_imp
-                    Wf += w_fric
-                    simulated = 0
-                    for j in range(ne - 1, -1, -1):
-                        if int(events[j, E_KIND]) == EventCode.IMPACT and events[j, E_Q] == q:
-                            simulated += 1
-                        elif int(events[j, E_KIND]) != EventCode.REVERSAL:
-                            break
-                    t += remaining
-                    t_err += 4.0 * EPS * remaining
-                    zeno = Zeno(ratio, float(simulated), remaining, float(side))
-                    events, ne = put_event(events, ne, EventCode.REST_ON_LIMITER, t, q, 0.0, 0.0,
-                                           energy(q, 0.0, m, g, K, cp), t_err)
-                    w = 0.0
-                    status = StatusCode.RESTING_ON_LIMITER
-                    break
-            if ne >= max_events:
-                status = StatusCode.MAX_EVENTS
+        if x.impact_next:
+            w_before = x.w
+            x, ev = impact_step(x, S, K, cp)
+            events, ne = put_event(events, ne, ev)
+            x, ev, series, ratio, remaining = after_impact(x, w_before, S, K, cp)
+            if ev.kind != NO_EVENT:
+                if series:  # a Zeno series, after the impacts simulated at this limiter
+                    zeno = Zeno(ratio, float(impacts_at(events, ne, x.q)), remaining, float(x.side))
+                events, ne = put_event(events, ne, ev)
                 break
         if ne >= max_events:
-            status = StatusCode.MAX_EVENTS
+            x = with_status(x, StatusCode.MAX_EVENTS)
             break
-        if flip:
-            nsign = -nsign
-        else:
-            nsign = nsign_of(q, w, g, K, cp)
-        flip = False
-        if S.unilateral and nsign < 0:
-            # N < 0 here (at the start, or after an impact): the particle is not held.
-            events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, q, qdot_of(q, w, sigma, K, cp),
-                                   qdot_of(q, w, sigma, K, cp), energy(q, w, m, g, K, cp), t_err)
-            status = StatusCode.LEFT_CURVE
+        x, ev, s = depart(x, S, K, cp, t_max)
+        if ev.kind != NO_EVENT:
+            events, ne = put_event(events, ne, ev)
             break
-        s = sigma * nsign
-        q_next = np.nextafter(q, q + sigma)
-        if abs(K.alpha(q_next, *cp) - K.alpha(q, *cp)) > math.pi:
-            # q is on the tangent angle's branch cut (a start, an impact or a turn there): go on
-            # from the first double beyond it, on the branch the motion is on (as at End.CUT).
-            q = q_next
-        if tail_next > 0.0:
-            t = min(t + tail_next, t_max)  # from the turning point, past the double it was stopped on, to q
-            t_err += 4.0 * EPS * tail_next
-            tail_next = 0.0
-        Ga = w * math.exp(2.0 * s * mu * K.alpha(q, *cp))
-        end, qb, Gb = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, R.Xp, R.Wp)
-        while end == End.ROOM:
+        iv = interval(x, s, S, K, cp, R, region, roots, count, work, dummy)
+        while iv.end == End.ROOM:
             roots = grown_roots(roots, count)
-            end, qb, Gb = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, X, R.Xp, R.Wp)
-        T, Wi, Te, flag, _, q_ok, G_ok, q_neg = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
-                                                     roots, count)
-        if flag == QUAD_NEGATIVE:
-            # G < 0 inside: a turning point the search stepped over (a narrow dip of G).
-            G_neg = anchored_G(q_neg, q_ok, G_ok, s, S, K, cp, R.Xp, R.Wp, roots, count)
-            if G_neg < 0.0 < G_ok:
-                qb, Gb = root_anchored(q_ok, G_ok, q_neg, G_neg, math.nan, s, S, K, cp, R.Xp, R.Wp, roots, count)
-                end = End.TURN
-                T, Wi, Te, flag, _, _, _, _ = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
-                                                   roots, count)
-            if flag == QUAD_NEGATIVE:
-                flag = QUAD_BUDGET
-        if end == End.TURN and Gb > 0.0:
-            T += tail_time(qb, Gb, s, S, K, cp, roots, count)  # to the root, past the double it stops on
-        if flag == QUAD_BUDGET or not Te <= TOLERANCE_FACTOR * (R.rtol * (t + T) + R.atol):
+            iv = interval(x, s, S, K, cp, R, region, roots, count, work, dummy)
+        if not within_tolerance(x, iv, R):
             # The interval's time could not be brought within its tolerance: stop at its start.
-            status = StatusCode.TOLERANCE_NOT_MET
-            q_bad = qb
+            x = with_status(x, StatusCode.TOLERANCE_NOT_MET)
+            q_bad = iv.qb
             break
-        if t + T > t_max:
-            # Stop inside this interval where t reaches t_max.
-            target = t_max - t
-            C = Ga + 2.0 * g * Fs(s, q, mu, K, cp)
-            pt = (q, Ga, C, s, sigma, S, K, cp, R, work, dummy, target, roots, count)
-            qe = root_time(pt, q, qb, -target, T - target)
-            Ge = max(C - 2.0 * g * Fs(s, qe, mu, K, cp), 0.0)
-            Tq, Wq, Tqe, _, _, _, _, _ = quad(q, qe, Ga, Ge, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
-                                              roots, count)
-            if keep_intervals:
-                ivs, ni = put_interval(ivs, ni, q, qe, Ga, Ge, s, sigma, t, Tq, Wq, Tqe)
-            Wf += m * Wq
-            t = t_max
-            t_err += Tqe
-            q = qe
-            w = math.exp(-2.0 * s * mu * K.alpha(qe, *cp)) * Ge
-            status = StatusCode.T_MAX
-            break
-        wb = math.exp(-2.0 * s * mu * K.alpha(qb, *cp)) * Gb
-        if keep_intervals:
-            ivs, ni = put_interval(ivs, ni, q, qb, Ga, Gb, s, sigma, t, T, Wi, Te)
-        t += T
-        t_err += Te
-        Wf += m * Wi
-        if end == End.TURN:
-            side = side_at(qb, S.has_left, S.left, S.has_right, S.right)
-            what, direction = rest(qb, side, mu, K, cp)
-            q, w = qb, 0.0
-            code = EventCode.REVERSAL
-            if what != SLIDE:
-                code, status = rest_outcome(what)
-            else:
-                sigma = direction
-                if Gb > 0.0:
-                    # The turning point lies a fraction of an ulp beyond qb: the particle passes qb
-                    # again, with the G of its new branch over that stretch, after tail_next.
-                    s_out = sigma * nsign_of(qb, 0.0, g, K, cp)
-                    G_out = turn_departure(qb, Gb, s, s_out, S, K, cp, roots, count)
-                    w = G_out * math.exp(-2.0 * s_out * mu * K.alpha(qb, *cp))
-                    tail_next = tail_time(qb, G_out, s_out, S, K, cp, roots, count)
-            events, ne = put_event(events, ne, code, t, qb, 0.0, 0.0, energy(qb, 0.0, m, g, K, cp), t_err)
-        elif end == End.LIMIT:
-            q, w = qb, wb
-            pending_impact = True
-        elif end == End.NSIGN and S.unilateral:
-            qd = qdot_of(qb, wb, sigma, K, cp)
-            events, ne = put_event(events, ne, EventCode.LEFT_CURVE, t, qb, qd, qd, energy(qb, wb, m, g, K, cp),
-                                   t_err)
-            q, w = qb, wb
-            status = StatusCode.LEFT_CURVE
-        elif end == End.NSIGN:
-            qd = qdot_of(qb, wb, sigma, K, cp)
-            events, ne = put_event(events, ne, EventCode.NORMAL_SIGN_CHANGE, t, qb, qd, qd,
-                                   energy(qb, wb, m, g, K, cp), t_err)
-            q, w = qb, wb
-            flip = True
-        elif end == End.PASS:
-            q, w = qb, wb
-        elif end == End.CUT:
-            # The tangent angle's branch cut: go on from the first double beyond it, where the
-            # kernels' alpha is the other branch's (w is continuous; one ulp of motion is not timed).
-            q, w = np.nextafter(qb, qb + sigma), wb
+        t0 = x.t
+        if t0 + iv.T > t_max:
+            x, iv = stop_at_t_max(x, iv, t_max, S, K, cp, R, work, dummy, roots, count)
         else:
-            q, w = qb, wb
-            status = StatusCode.LEFT_DOMAIN
-    if (status == StatusCode.MAX_EVENTS or status == StatusCode.WALL_TIME_LIMIT) and w == 0.0:
+            x, ev = arrive(x, iv, S, K, cp)
+            if iv.end == End.TURN:
+                x, ev = turning_point(x, iv, S, K, cp, roots, count)
+            if ev.kind != NO_EVENT:
+                events, ne = put_event(events, ne, ev)
+        if keep_intervals:
+            ivs, ni = put_interval(ivs, ni, iv, t0)
+    x, qdot, E = finish(x, S, K, cp)
+    return Outcome(x.status.value, ne, events, ni, ivs, x.t, x.q, qdot, x.W_friction, x.W_impacts, E0, E, zeno,
+                   S.scale, x.t_err, q_bad)
+
+
+def start(S, K, cp, q0, qdot0):
+    """The state at the start, its energy ``E0`` and its event (a start at rest: the rest test).
+
+    A start on a limiter moving into it is an impact next; ``qdot0`` with ``w`` of
+    ``inf`` ends the run ``NON_FINITE`` at once; a unilateral contact with ``N < 0``
+    ``LEFT_CURVE``.  Returns ``(x, E0, event)``.
+    """
+    t = 0.0
+    t_err = 0.0
+    w = (K.h(q0, *cp) * qdot0) ** 2
+    # At rest also when w underflows to 0 (qdot0 = 1e-300): the rest test decides.
+    sigma = 0 if qdot0 == 0.0 or w == 0.0 else (1 if qdot0 > 0.0 else -1)
+    E0 = energy(q0, w, S.m, S.g, K, cp)
+    side = side_at(q0, S.has_left, S.left, S.has_right, S.right)
+    impact_next = sigma != 0 and side == sigma
+    status = StatusCode.RUNNING
+    ev = Event(NO_EVENT, t, q0, 0.0, 0.0, 0.0, t_err)
+    if not (math.isfinite(E0) and finite_state(t, q0, w, 0.0, 0.0)):
+        status = StatusCode.NON_FINITE  # e.g. qdot0 = 1e200: w = inf from the start
+    elif S.unilateral and K.N_w(q0, w, S.g, *cp) < 0.0:
+        # Unilateral contact and N < 0 at the start: the particle leaves the curve at once.
+        ev = Event(EventCode.LEFT_CURVE.value, t, q0, qdot0, qdot0, E0, t_err)
+        status = StatusCode.LEFT_CURVE
+    elif sigma == 0:
+        what, direction = rest(q0, side, S.mu, K, cp)
+        if what != SLIDE:
+            code, status = rest_outcome(what)
+            ev = Event(code.value, t, q0, 0.0, 0.0, energy(q0, 0.0, S.m, S.g, K, cp), t_err)
+        sigma = direction
+    return RunState(t, q0, w, sigma, side, 1, False, impact_next, 0.0, 0.0, 0.0, t_err, status), E0, ev
+
+
+def with_status(x, status):
+    """The state ``x`` with the status ``status``."""
+    return RunState(x.t, x.q, x.w, x.sigma, x.side, x.nsign, x.flip, x.impact_next, x.tail_next, x.W_friction,
+                    x.W_impacts, x.t_err, status)
+
+
+def checked(x, S):
+    """``x``, ended ``WALL_TIME_LIMIT`` past the plain engine's deadline, or ``NON_FINITE`` on an
+    overflow (stop at once rather than run ``max_events`` impacts at ``inf``)."""
+    if S.deadline > 0.0 and clock() > S.deadline:
+        return with_status(x, StatusCode.WALL_TIME_LIMIT)  # (the plain engine only: the compiled one has no clock)
+    if not finite_state(x.t, x.q, x.w, x.W_friction, x.W_impacts):
+        return with_status(x, StatusCode.NON_FINITE)
+    return x
+
+
+def impact_step(x, S, K, cp):
+    """The impact at the limiter ``x.q`` reached with ``w = x.w`` moving ``x.sigma`` (physics.md,
+    "Events" 1, :func:`~symvib.numeric.engine.laws.impact`): ``qdot -> -k qdot``, so ``w -> k^2 w``,
+    the direction flips and ``(1 - k^2) m w / 2`` is lost.  Returns ``(x, event)``."""
+    qd = qdot_of(x.q, x.w, x.sigma, K, cp)
+    qd_after, w_after, loss = impact(qd, x.w, S.k, S.m)
+    ev = Event(EventCode.IMPACT.value, x.t, x.q, qd, qd_after, energy(x.q, w_after, S.m, S.g, K, cp), x.t_err)
+    return RunState(x.t, x.q, w_after, -x.sigma, int(x.sigma), x.nsign, x.flip, False, x.tail_next, x.W_friction,
+                    x.W_impacts + loss, x.t_err, x.status), ev
+
+
+def after_impact(x, w_before, S, K, cp):
+    """After an impact (``w_before`` the squared speed before it): at rest (``k = 0``) the rest
+    test (:func:`~symvib.numeric.engine.laws.rest`) says whether the particle stays on the limiter or
+    slides off; else, where the bounces form a Zeno series (physics.md, "Events"), its infinitely many
+    bounces are summed and the particle rests on the limiter.
+
+    Returns ``(x, event, series, ratio, remaining)``: the event of a rest (or none), whether a
+    series was summed, its ratio and its time.
+    """
+    q, side = x.q, x.side
+    if x.w == 0.0:
+        what, direction = rest(q, side, S.mu, K, cp)
+        if what != SLIDE:
+            code, status = rest_outcome(what)
+            ev = Event(code.value, x.t, q, 0.0, 0.0, energy(q, 0.0, S.m, S.g, K, cp), x.t_err)
+            return with_status(x, status), ev, False, 0.0, 0.0
+        slides = RunState(x.t, q, x.w, direction, side, x.nsign, x.flip, x.impact_next, x.tail_next, x.W_friction,
+                          x.W_impacts, x.t_err, x.status)
+        return slides, Event(NO_EVENT, x.t, q, 0.0, 0.0, 0.0, x.t_err), False, 0.0, 0.0
+    applies, ratio, remaining, w_imp, w_fric = zeno_series(q, w_before, x.sigma, S.g, S.mu, S.k, S.m, S.scale, K, cp)
+    if not applies:
+        return x, Event(NO_EVENT, x.t, q, 0.0, 0.0, 0.0, x.t_err), False, 0.0, 0.0
+    t = x.t + remaining
+    t_err = x.t_err + 4.0 * EPS * remaining
+    ev = Event(EventCode.REST_ON_LIMITER.value, t, q, 0.0, 0.0, energy(q, 0.0, S.m, S.g, K, cp), t_err)
+    return RunState(t, q, 0.0, x.sigma, side, x.nsign, x.flip, x.impact_next, x.tail_next, x.W_friction + w_fric,
+                    x.W_impacts + w_imp, t_err, StatusCode.RESTING_ON_LIMITER), ev, True, ratio, remaining
+
+
+def impacts_at(events, ne, q):
+    """The impacts at ``q`` that end the log's first ``ne`` events (reversals between them
+    skipped): the bounces simulated before a Zeno series."""
+    simulated = 0
+    for j in range(ne - 1, -1, -1):
+        if int(events[j, E_KIND]) == EventCode.IMPACT and events[j, E_Q] == q:
+            simulated += 1
+        elif int(events[j, E_KIND]) != EventCode.REVERSAL:
+            break
+    return simulated
+
+
+def depart(x, S, K, cp, t_max):
+    """The start of the next motion interval: the normal force's sign (flipped after ``N = 0``,
+    physics.md, "Events" 3; a unilateral contact with ``N < 0`` leaves the curve), the branch ``s
+    = sigma sign(N)``, one double past the tangent angle's branch cut, and the time from a turning
+    point to the double the interval starts on.  Returns ``(x, event, s)``."""
+    t, q, w, sigma, t_err, tail_next = x.t, x.q, x.w, x.sigma, x.t_err, x.tail_next
+    nsign = -x.nsign if x.flip else nsign_of(q, w, S.g, K, cp)
+    if S.unilateral and nsign < 0:
+        # N < 0 here (at the start, or after an impact): the particle is not held.
+        qd = qdot_of(q, w, sigma, K, cp)
+        ev = Event(EventCode.LEFT_CURVE.value, t, q, qd, qd, energy(q, w, S.m, S.g, K, cp), t_err)
+        return RunState(t, q, w, sigma, x.side, nsign, False, x.impact_next, tail_next, x.W_friction, x.W_impacts,
+                        t_err, StatusCode.LEFT_CURVE), ev, 0
+    s = sigma * nsign
+    q_next = np.nextafter(q, q + sigma)
+    if abs(K.alpha(q_next, *cp) - K.alpha(q, *cp)) > math.pi:
+        # q is on the tangent angle's branch cut (a start, an impact or a turn there): go on
+        # from the first double beyond it, on the branch the motion is on (as at End.CUT).
+        q = q_next
+    if tail_next > 0.0:
+        t = min(t + tail_next, t_max)  # from the turning point, past the double it was stopped on, to q
+        t_err += 4.0 * EPS * tail_next
+        tail_next = 0.0
+    return RunState(t, q, w, sigma, x.side, nsign, False, x.impact_next, tail_next, x.W_friction, x.W_impacts, t_err,
+                    x.status), Event(NO_EVENT, t, q, 0.0, 0.0, 0.0, t_err), s
+
+
+def interval(x, s, S, K, cp, R, region, roots, count, work, dummy):
+    """The motion interval from ``x`` on the branch ``s``: where it ends
+    (:func:`~symvib.numeric.engine.scan.locate`: a limiter, a turning point, ``N = 0``, the search
+    window's or the domain's end) and its time and friction work
+    (:func:`~symvib.numeric.engine.timing.quad`; physics.md, "Time"); an
+    :class:`~symvib.numeric.engine.state.Interval`, whose ``end`` is ``End.ROOM`` when ``roots`` is
+    full (grow it and ask again).  A turning point the search stepped over (``G < 0`` at a node:
+    a narrow dip of ``G``) is found and the interval ends there."""
+    q, sigma = x.q, x.sigma
+    Ga = x.w * math.exp(2.0 * s * S.mu * K.alpha(q, *cp))
+    end, qb, Gb = locate(q, sigma, s, Ga, S, K, cp, region, roots, count, R.Xw, R.Xp, R.Wp)
+    if end == End.ROOM:
+        return Interval(q, qb, Ga, Gb, s, sigma, end, 0.0, 0.0, 0.0, QUAD_OK)
+    T, Wi, Te, flag, _, q_ok, G_ok, q_neg = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
+                                                 roots, count)
+    if flag == QUAD_NEGATIVE:
+        # G < 0 inside: a turning point the search stepped over (a narrow dip of G).
+        G_neg = anchored_G(q_neg, q_ok, G_ok, s, S, K, cp, R.Xp, R.Wp, roots, count)
+        if G_neg < 0.0 < G_ok:
+            qb, Gb = root_anchored(q_ok, G_ok, q_neg, G_neg, math.nan, s, S, K, cp, R.Xp, R.Wp, roots, count)
+            end = End.TURN
+            T, Wi, Te, flag, _, _, _, _ = quad(q, qb, Ga, Gb, s, sigma, S, K, cp, R, work, NONE, dummy, 0,
+                                               roots, count)
+        if flag == QUAD_NEGATIVE:
+            flag = QUAD_BUDGET
+    if end == End.TURN and Gb > 0.0:
+        T += tail_time(qb, Gb, s, S, K, cp, roots, count)  # to the root, past the double it stops on
+    return Interval(q, qb, Ga, Gb, s, sigma, end, T, Wi, Te, flag)
+
+
+def within_tolerance(x, iv, R):
+    """Whether the interval's time is within its tolerance: the quadrature's budget was enough and
+    its estimated error at most :data:`TOLERANCE_FACTOR` times the tolerance of the time at its end."""
+    return iv.flag != QUAD_BUDGET and iv.T_err <= TOLERANCE_FACTOR * (R.rtol * (x.t + iv.T) + R.atol)
+
+
+def stop_at_t_max(x, iv, t_max, S, K, cp, R, work, dummy, roots, count):
+    """The state where ``t`` reaches ``t_max`` inside the interval ``iv`` (status ``T_MAX``), and the
+    part of ``iv`` before it: the point is where the time from the interval's start is ``t_max - t``
+    (:func:`~symvib.numeric.engine.timing.root_time`).  Returns ``(x, interval)``."""
+    g, mu = S.g, S.mu
+    q, Ga, s, sigma = iv.qa, iv.Ga, iv.s, iv.sigma
+    target = t_max - x.t
+    C = Ga + 2.0 * g * Fs(s, q, mu, K, cp)
+    pt = (q, Ga, C, s, sigma, S, K, cp, R, work, dummy, target, roots, count)
+    qe = root_time(pt, q, iv.qb, -target, iv.T - target)
+    Ge = max(C - 2.0 * g * Fs(s, qe, mu, K, cp), 0.0)
+    Tq, Wq, Tqe, flag, _, _, _, _ = quad(q, qe, Ga, Ge, s, sigma, S, K, cp, R, work, NONE, dummy, 0, roots, count)
+    w = math.exp(-2.0 * s * mu * K.alpha(qe, *cp)) * Ge
+    return (RunState(t_max, qe, w, sigma, x.side, x.nsign, x.flip, x.impact_next, x.tail_next,
+                     x.W_friction + S.m * Wq, x.W_impacts, x.t_err + Tqe, StatusCode.T_MAX),
+            Interval(q, qe, Ga, Ge, s, sigma, iv.end, Tq, Wq, Tqe, flag))
+
+
+def arrive(x, iv, S, K, cp):
+    """The state at the end of the interval ``iv``: its time and friction work added, and what its
+    end makes of the motion: at a limiter an impact next (physics.md, "Events" 1), at ``N = 0`` the
+    branch flips or a unilateral contact ends (3), the search window's end goes on, a branch cut of
+    the tangent angle goes on from the first double beyond it, the domain's end ends the run (4).
+    A turning point (2) is :func:`turning_point`'s.  Returns ``(x, event)``."""
+    t = x.t + iv.T
+    t_err = x.t_err + iv.T_err
+    Wf = x.W_friction + S.m * iv.W
+    qb, sigma, end = iv.qb, x.sigma, iv.end
+    ev = Event(NO_EVENT, t, qb, 0.0, 0.0, 0.0, t_err)
+    if end == End.TURN:
+        return RunState(t, qb, 0.0, sigma, x.side, x.nsign, x.flip, x.impact_next, x.tail_next, Wf, x.W_impacts,
+                        t_err, x.status), ev
+    wb = math.exp(-2.0 * iv.s * S.mu * K.alpha(qb, *cp)) * iv.Gb
+    q, impact_next, flip, status = qb, x.impact_next, x.flip, x.status
+    if end == End.LIMIT:
+        impact_next = True
+    elif end == End.NSIGN:
+        qd = qdot_of(qb, wb, sigma, K, cp)
+        if S.unilateral:
+            ev = Event(EventCode.LEFT_CURVE.value, t, qb, qd, qd, energy(qb, wb, S.m, S.g, K, cp), t_err)
+            status = StatusCode.LEFT_CURVE
+        else:
+            ev = Event(EventCode.NORMAL_SIGN_CHANGE.value, t, qb, qd, qd, energy(qb, wb, S.m, S.g, K, cp), t_err)
+            flip = True
+    elif end == End.CUT:
+        # The tangent angle's branch cut: go on from the first double beyond it, where the
+        # kernels' alpha is the other branch's (w is continuous; one ulp of motion is not timed).
+        q = np.nextafter(qb, qb + sigma)
+    elif end != End.PASS:
+        status = StatusCode.LEFT_DOMAIN
+    return RunState(t, q, wb, sigma, x.side, x.nsign, flip, impact_next, x.tail_next, Wf, x.W_impacts, t_err,
+                    status), ev
+
+
+def turning_point(x, iv, S, K, cp, roots, count):
+    """At the turning point that ends the interval ``iv`` (the state ``x`` there at rest, physics.md,
+    "Events" 2): the rest test (:func:`~symvib.numeric.engine.laws.rest`) says arrest, rest on a
+    limiter, or reversal; a reversal leaves on the branch of its new direction, from the double
+    before the turning point (``G > 0`` there: the particle passes it again after ``tail_next``).
+    Returns ``(x, event)``."""
+    qb, Gb, s = iv.qb, iv.Gb, iv.s
+    side = side_at(qb, S.has_left, S.left, S.has_right, S.right)
+    what, direction = rest(qb, side, S.mu, K, cp)
+    ev = Event(EventCode.REVERSAL.value, x.t, qb, 0.0, 0.0, energy(qb, 0.0, S.m, S.g, K, cp), x.t_err)
+    if what != SLIDE:
+        code, status = rest_outcome(what)
+        ev = Event(code.value, x.t, qb, 0.0, 0.0, ev.energy, x.t_err)
+        return RunState(x.t, qb, 0.0, x.sigma, side, x.nsign, x.flip, x.impact_next, x.tail_next, x.W_friction,
+                        x.W_impacts, x.t_err, status), ev
+    sigma = direction
+    w = 0.0
+    tail_next = x.tail_next
+    if Gb > 0.0:
+        # The turning point lies a fraction of an ulp beyond qb: the particle passes qb
+        # again, with the G of its new branch over that stretch, after tail_next.
+        s_out = sigma * nsign_of(qb, 0.0, S.g, K, cp)
+        G_out = turn_departure(qb, Gb, s, s_out, S, K, cp, roots, count)
+        w = G_out * math.exp(-2.0 * s_out * S.mu * K.alpha(qb, *cp))
+        tail_next = tail_time(qb, G_out, s_out, S, K, cp, roots, count)
+    return RunState(x.t, qb, w, sigma, side, x.nsign, x.flip, x.impact_next, tail_next, x.W_friction, x.W_impacts,
+                    x.t_err, x.status), ev
+
+
+def finish(x, S, K, cp):
+    """The final state: at rest when ``max_events`` or the deadline stopped it with ``w = 0``,
+    ``NON_FINITE`` when a number overflowed (e.g. ``mu = 1e65``: an arrest reached at ``t = nan``).
+    Returns ``(x, qdot, E)``: the state, its speed ``qdot`` and its energy."""
+    sigma, status = x.sigma, x.status
+    if (status == StatusCode.MAX_EVENTS or status == StatusCode.WALL_TIME_LIMIT) and x.w == 0.0:
         sigma = 0
-    if not finite_state(t, q, w, Wf, Wimp):
-        status = StatusCode.NON_FINITE  # e.g. mu = 1e65: an arrest reached at t = nan
-    qdot_final = qdot_of(q, w, sigma, K, cp) if sigma != 0 else 0.0
-    return Outcome(status.value, ne, events, ni, ivs, t, q, qdot_final, Wf, Wimp, E0, energy(q, w, m, g, K, cp),
-                   zeno, scale, t_err, q_bad)
+    if not finite_state(x.t, x.q, x.w, x.W_friction, x.W_impacts):
+        status = StatusCode.NON_FINITE
+    qdot = qdot_of(x.q, x.w, sigma, K, cp) if sigma != 0 else 0.0
+    return (RunState(x.t, x.q, x.w, sigma, x.side, x.nsign, x.flip, x.impact_next, x.tail_next, x.W_friction,
+                     x.W_impacts, x.t_err, status), qdot, energy(x.q, x.w, S.m, S.g, K, cp))
 
 
 def clock():

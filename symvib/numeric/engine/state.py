@@ -25,7 +25,8 @@ from typing import NamedTuple
 
 from symvib.kernelformat import KERNEL_INTERFACE  # declared with the format of a generated module
 
-__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno"]
+__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno", "RunState", "Interval", "Event",
+           "NO_EVENT"]
 
 
 class Kernels(NamedTuple):
@@ -112,6 +113,72 @@ class Zeno(NamedTuple):
     simulated: float
     remaining: float
     side: float
+
+
+class RunState(NamedTuple):
+    """The state of a run between two of its steps (:func:`symvib.numeric.engine.loop.run`; physics.md,
+    "Events"): only numbers, so that the compiled steps keep it in registers.
+
+    ``t, q, w``: time, coordinate and squared speed ``v^2``; ``sigma``: the direction of motion
+    (+1, -1; 0 at rest); ``side``: the limiter at ``q`` (+1 right, -1 left, 0 none); ``nsign``: the
+    sign of the normal force on the branch of the last interval; ``flip``: that interval ended where
+    ``N = 0`` and the branch flips; ``impact_next``: the particle is on a limiter moving into it;
+    ``tail_next``: the time from a turning point to the double next to it that the next interval
+    starts on (physics.md, "Accuracy"); ``W_friction, W_impacts``: the energy lost so far;
+    ``t_err``: the estimated error of ``t`` (s); ``status``: a
+    :class:`~symvib.numeric.layout.StatusCode`, ``RUNNING`` until the run ends.
+    """
+
+    t: float
+    q: float
+    w: float
+    sigma: int
+    side: int
+    nsign: int
+    flip: bool
+    impact_next: bool
+    tail_next: float
+    W_friction: float
+    W_impacts: float
+    t_err: float
+    status: object
+
+
+class Interval(NamedTuple):
+    """A motion interval (physics.md, "Events", "Time"): from ``qa`` to ``qb`` on the branch ``s``
+    moving ``sigma``, with ``G = w exp(2 s mu alpha)`` at its ends, how it ends
+    (:class:`~symvib.numeric.engine.scan.End`), its time ``T``, friction work ``W`` per unit mass,
+    the estimated error ``T_err`` of ``T`` and the quadrature's flag
+    (:data:`~symvib.numeric.engine.timing.QUAD_OK`, ...)."""
+
+    qa: float
+    qb: float
+    Ga: float
+    Gb: float
+    s: int
+    sigma: int
+    end: object
+    T: float
+    W: float
+    T_err: float
+    flag: int
+
+
+class Event(NamedTuple):
+    """One row of the event log (columns :class:`~symvib.numeric.layout.EventColumn`) as a step
+    returns it: ``kind`` an :class:`~symvib.numeric.layout.EventCode` value, or :data:`NO_EVENT`."""
+
+    kind: int
+    t: float
+    q: float
+    before: float
+    after: float
+    energy: float
+    t_err: float
+
+
+#: The ``kind`` of an :class:`Event` a step returns when nothing happened.
+NO_EVENT = -1
 
 
 class Outcome(NamedTuple):

@@ -44,7 +44,8 @@ from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_u
 from symvib.numeric.engine.scan import ROOT_ROWS, scratch
 from symvib.numeric.layout import IntervalColumn
 
-__all__ = ["quad", "panel", "zero_ratio", "ellipse_ratio", "tail_time", "turn_departure", "PanelColumn",
+__all__ = ["quad", "panel", "half_anchor", "panel_error", "record_panel", "midpoint_error", "QUAD_STEPS",
+           "zero_ratio", "ellipse_ratio", "tail_time", "turn_departure", "PanelColumn",
            "PANEL_COLUMNS", "NONE",
            "SAMPLES", "PANELS",
            "tail_error", "cumulate", "root_time", "samples", "arc_length", "grown", "PANEL_Q", "ROOT_RATIO",
@@ -97,6 +98,10 @@ GEOM_SLACK = 1.25
 NEGATIVE_MARGIN = 8.0
 #: What :func:`quad` writes to its ``out``: nothing, the samples at the nodes, or the panels it took.
 NONE, SAMPLES, PANELS = 0, 1, 2
+#: The steps of :func:`quad` besides :func:`panel`: the compiled engine inlines them into ``quad``
+#: (:mod:`~symvib.numeric.engine.bind`; ``quad`` counts no references, so the arrays they take cost
+#: nothing there either).
+QUAD_STEPS = ("half_anchor", "panel_error", "record_panel", "midpoint_error")
 
 
 class PanelColumn:
@@ -118,6 +123,10 @@ class PanelColumn:
 
 #: Columns of a row of :class:`PanelColumn`.
 PANEL_COLUMNS = 9
+#: :class:`PanelColumn` as module-level ints (numba takes them as compile-time constants).
+P_HALF, P_R1, P_R2, P_G1, P_G2, P_TAU1, P_TAU2, P_ROOT, P_DELTA = (
+    PanelColumn.half, PanelColumn.r1, PanelColumn.r2, PanelColumn.G1, PanelColumn.G2, PanelColumn.tau1,
+    PanelColumn.tau2, PanelColumn.root, PanelColumn.delta)
 
 
 #: What :func:`quad` reports: the tolerance was met (or the interval is done); the budget of
@@ -142,6 +151,10 @@ class SampleColumn:
 
 #: Columns of a sample (:class:`SampleColumn`).
 SAMPLE_COLUMNS = 1 + max(v for k, v in vars(SampleColumn).items() if not k.startswith("_"))
+#: :class:`SampleColumn` as module-level ints (numba takes them as compile-time constants).
+C_T, C_Q, C_W, C_N, C_S, C_PATH, C_WF, C_WIMP, C_BRANCH, C_SIGMA = (
+    SampleColumn.t, SampleColumn.q, SampleColumn.w, SampleColumn.N, SampleColumn.s, SampleColumn.path,
+    SampleColumn.W, SampleColumn.W_impacts, SampleColumn.branch, SampleColumn.sigma)
 #: Panels a sample buffer grows by at least, times the rule's nodes (both halves of a piece).
 SAMPLE_GROWTH = 2 * MAX_PANELS
 
@@ -333,9 +346,9 @@ def panel(r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, Xr, Wr, Sr, Tr, wo
             work[fp + j] = hdj
             work[fw + j] = mu * abs(N) * hdj
             P += wj * hdj
-            out[o + j, 1] = work[qn + j]
-            out[o + j, 2] = w
-            out[o + j, 3] = N
+            out[o + j, C_Q] = work[qn + j]
+            out[o + j, C_W] = w
+            out[o + j, C_N] = N
     floor_T = ROUND_TAIL * EPS * T
     r_geom = 0.0
     if not weighted and max(abs(b1), abs(b2)) > floor_T:
@@ -364,10 +377,15 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
     :data:`QUAD_BUDGET` (a half needed more than :data:`MAX_PANELS` panels) or
     :data:`QUAD_NEGATIVE` (``G < 0`` at the node ``q_neg``, after ``G = G_ok > 0`` at
     ``q_ok``: a turning point lies between them), and the next free sample row.
+
+    The steps (physics.md, "Time"): each half is anchored at its outer end
+    (:func:`half_anchor`) and walked in panels of the quadrature variable from there
+    (:func:`panel`); a panel whose error (:func:`panel_error`) exceeds its tolerance is
+    halved, else accepted and recorded (:func:`record_panel`); where the halves meet, their
+    disagreement on ``G`` is an error too (:func:`midpoint_error`).
     """
-    g, scale = S.g, S.scale
+    scale = S.scale
     rtol, atol = R.rtol, R.atol
-    g2 = 2.0 * g
     L = abs(qb - qa)
     if L == 0.0:
         return 0.0, 0.0, 0.0, QUAD_OK, o, qa, Ga, qa
@@ -383,38 +401,17 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
     T_a = 0.0
     q_ok, G_ok, q_neg = qa, Ga, qa
     for kh in range(2):
-        if kh == 0:
-            e, d, Ge = qa, float(sigma), Ga
-        else:
-            e, d, Ge = qb, -float(sigma), Gb
+        if kh == 1:
             half_b = o
-        gd = -d * g2  # G' = gd F_s' along the half (d = +-1: gd F_s' is -2 g F_s' d exactly)
-        gamma = gd * dF_best(s, e, 0.0, S, K, cp, roots, count)
-        root = Ge == 0.0 or (gamma > 0.0 and Ge < ROOT_RATIO * gamma * half)
-        Gstart = Ge
+        e, d, gd, Ge, root, delta, r_lo, r_hi, Gstart, tau0 = half_anchor(kh, qa, qb, Ga, Gb, s, sigma, half, S, K,
+                                                                          cp, roots, count)
+        T += tau0
         unsure = 4.0 * EPS * abs(Ge)  # the anchor's own rounding (0 on a root)
-        tau0 = 0.0
         path0 = 0.0
         work0 = 0.0
         sens_half = 0.0
         tries = 0
         accepted = 0
-        if root:
-            delta = Ge / gamma if Ge > 0.0 else 0.0
-            r_lo = math.sqrt(delta)
-            r_hi = math.sqrt(delta + half)
-            if 0.0 < delta <= VIRTUAL_ROOT_RTOL * scale:
-                # G of rounding size (a turning point stopped on the double before it): the half
-                # starts on the root itself with the weighted rule, and the time of the stretch from
-                # the root to the anchor, where G is linear, is taken away in closed form.
-                tau0 = -tail_time(e, Ge, s, S, K, cp, roots, count)
-                T += tau0
-                r_lo = 0.0
-                Gstart = 0.0
-        else:
-            delta = 0.0
-            r_lo = 0.0
-            r_hi = half
         seg_a = r_lo
         while True:
             if (not root) or r_lo < ROOT_GRADE * r_hi or 2.0 * seg_a >= r_hi:
@@ -439,17 +436,8 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                         r1, r2, Gstart, e, d, gd, s, root, delta, S, K, cp, R.Xp, R.Wp, R.Sp, R.Tp, work, mode,
                         out, o, roots, count)
                 tries += 1
-                share = atol * (r2 - r1) / (r_hi - r_lo) if r_hi > r_lo else atol
-                tol = rtol * Tq + share
-                if root and r1 == 0.0:
-                    # From the root itself G is rebuilt as a multiple of the increment, so its errors
-                    # are relative: the time's is half of theirs (dT/T = -dG/(2G)).
-                    rel = 0.5 * Tq / abs(dG) if dG != 0.0 else 0.0
-                    fixable = eT + rel * eG
-                    spread = rel * (eG + rG)
-                else:
-                    fixable = eT + sens * eG
-                    spread = sens * (unsure + eG + rG)
+                tol, fixable, spread = panel_error(r1, r2, r_lo, r_hi, root, dG, Tq, eT, eG, sens, rG, unsure, rtol,
+                                                   atol)
                 narrow = (r2 - r1) <= MIN_PANEL_RTOL * max(abs(r1), abs(r2))
                 if fixable > tol and not narrow and tries < MAX_TRIES and accepted < MAX_PANELS:
                     width = 0.5 * (r2 - r1)
@@ -470,28 +458,7 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
                 err += eT + spread
                 unsure += eG + rG
                 sens_half += sens
-                if mode == PANELS:
-                    out[o, 0], out[o, 1], out[o, 2], out[o, 3], out[o, 4] = kh, r1, r2, Gstart, Gstart + dG
-                    out[o, 5], out[o, 6], out[o, 7], out[o, 8] = tau0, tau0 + Tq, 1.0 if root else 0.0, delta
-                    o += 1
-                elif mode == SAMPLES:
-                    # Time, path and friction work at every node: the same cumulative
-                    # Gauss-Legendre integral as the interval's totals.
-                    weighted = root and r1 == 0.0
-                    St = R.Sw if weighted else R.Sp
-                    n = len(R.Xw) if weighted else len(R.Xp)
-                    hw = 0.5 * (r2 - r1)
-                    acc = W_ACC * n
-                    cumulate(St, work, W_FT * n, n, work, acc)
-                    for j in range(n):
-                        out[o + j, 0] = tau0 + hw * work[acc + j]
-                    cumulate(St, work, W_FP * n, n, work, acc)
-                    for j in range(n):
-                        out[o + j, 4] = path0 + hw * work[acc + j]
-                    cumulate(St, work, W_FW * n, n, work, acc)
-                    for j in range(n):
-                        out[o + j, 5] = work0 + hw * work[acc + j]
-                    o += n
+                o = record_panel(mode, out, o, kh, r1, r2, Gstart, dG, tau0, Tq, root, delta, path0, work0, R, work)
                 tau0 += Tq
                 path0 += Pq
                 work0 += Wq
@@ -508,23 +475,115 @@ def quad(qa, qb, Ga, Gb, s, sigma, S, K, cp, R, work, mode, out, o, roots, count
             G_mid_a = Gstart
             T_a = T
         else:
-            # The two halves meet at the midpoint: what they disagree on there is an error of
-            # one of the anchors (or of the search), beyond their propagated uncertainties.  Next
-            # to a root it moves the root (the time of the half scales as the root's distance,
-            # sqrt of G at the midpoint); elsewhere it is an offset of G over the half.
-            miss = abs(Gstart - G_mid_a)
-            if root:
-                G_mid = max(Gstart, G_mid_a)
-                err += 0.5 * (T - T_a) * miss / G_mid if G_mid > 0.0 else 0.0
-            else:
-                err += sens_half * miss
+            err += midpoint_error(root, Gstart, G_mid_a, T, T_a, sens_half)
     if mode == SAMPLES:
         # The half anchored at qb was integrated from qb backwards.
         for j in range(half_b, o):
-            out[j, 0] = T - out[j, 0]
-            out[j, 4] = P - out[j, 4]
-            out[j, 5] = Wf - out[j, 5]
+            out[j, C_T] = T - out[j, C_T]
+            out[j, C_S] = P - out[j, C_S]
+            out[j, C_PATH] = Wf - out[j, C_PATH]
     return T, Wf, err, flag, o, q_ok, G_ok, q_neg
+
+
+def half_anchor(kh, qa, qb, Ga, Gb, s, sigma, half, S, K, cp, roots, count):
+    """Where half ``kh`` of the interval ``[qa, qb]`` (0: from ``qa``, 1: from ``qb``) is anchored and
+    in which variable it is integrated: ``(e, d, gd, Ge, root, delta, r_lo, r_hi, Gstart, tau0)``.
+
+    The anchor ``e`` is the half's outer end, where ``G = Ge`` is known exactly; the half is walked
+    in direction ``d`` from it, where ``G' = gd F_s'``.  Next to a (real or virtual) root of ``G``
+    behind the anchor, at a distance ``delta`` (``G`` linear: ``Ge / gamma``), the variable is ``r =
+    sqrt(xi + delta)`` (``root``), from ``r_lo`` to ``r_hi``; else ``r = xi`` from 0 to ``half``.  A
+    root within :data:`VIRTUAL_ROOT_RTOL` (a turning point stopped on the double before it) is
+    where the half starts instead, with ``G = Gstart = 0``, and the time of the stretch from it to
+    the anchor, ``-tau0``, is taken away in closed form (:func:`tail_time`).
+    """
+    if kh == 0:
+        e, d, Ge = qa, float(sigma), Ga
+    else:
+        e, d, Ge = qb, -float(sigma), Gb
+    gd = -d * (2.0 * S.g)  # G' = gd F_s' along the half (d = +-1: gd F_s' is -2 g F_s' d exactly)
+    gamma = gd * dF_best(s, e, 0.0, S, K, cp, roots, count)
+    root = Ge == 0.0 or (gamma > 0.0 and Ge < ROOT_RATIO * gamma * half)
+    Gstart = Ge
+    tau0 = 0.0
+    if root:
+        delta = Ge / gamma if Ge > 0.0 else 0.0
+        r_lo = math.sqrt(delta)
+        r_hi = math.sqrt(delta + half)
+        if 0.0 < delta <= VIRTUAL_ROOT_RTOL * S.scale:
+            # G of rounding size (a turning point stopped on the double before it): the half
+            # starts on the root itself with the weighted rule, and the time of the stretch from
+            # the root to the anchor, where G is linear, is taken away in closed form.
+            tau0 = -tail_time(e, Ge, s, S, K, cp, roots, count)
+            r_lo = 0.0
+            Gstart = 0.0
+    else:
+        delta = 0.0
+        r_lo = 0.0
+        r_hi = half
+    return e, d, gd, Ge, root, delta, r_lo, r_hi, Gstart, tau0
+
+
+def panel_error(r1, r2, r_lo, r_hi, root, dG, Tq, eT, eG, sens, rG, unsure, rtol, atol):
+    """A panel's tolerance and errors (physics.md, "Accuracy"): ``(tol, fixable, spread)``.
+
+    ``tol``: ``rtol`` of its time plus its share of ``atol``; ``fixable``: what halving it
+    reduces, the truncation error of its time and the time's share of the truncation error of
+    ``G``; ``spread``: the time's share of the uncertainty of ``G`` (the anchor's rounding and
+    every increment's, ``unsure``, then this panel's), which halving does not reduce.
+    """
+    share = atol * (r2 - r1) / (r_hi - r_lo) if r_hi > r_lo else atol
+    tol = rtol * Tq + share
+    if root and r1 == 0.0:
+        # From the root itself G is rebuilt as a multiple of the increment, so its errors
+        # are relative: the time's is half of theirs (dT/T = -dG/(2G)).
+        rel = 0.5 * Tq / abs(dG) if dG != 0.0 else 0.0
+        return tol, eT + rel * eG, rel * (eG + rG)
+    return tol, eT + sens * eG, sens * (unsure + eG + rG)
+
+
+def record_panel(mode, out, o, kh, r1, r2, Gstart, dG, tau0, Tq, root, delta, path0, work0, R, work):
+    """Write an accepted panel to ``out[o:]``: in mode :data:`PANELS` its row (columns
+    :class:`PanelColumn`), in mode :data:`SAMPLES` the time, path and friction work from the
+    half's anchor at its nodes (the same cumulative Gauss-Legendre integral as the interval's
+    totals; :func:`panel` wrote the nodes' ``q, w, N``).  Returns the next free row."""
+    if mode == PANELS:
+        out[o, P_HALF], out[o, P_R1], out[o, P_R2] = kh, r1, r2
+        out[o, P_G1], out[o, P_G2] = Gstart, Gstart + dG
+        out[o, P_TAU1], out[o, P_TAU2] = tau0, tau0 + Tq
+        out[o, P_ROOT], out[o, P_DELTA] = 1.0 if root else 0.0, delta
+        return o + 1
+    if mode == SAMPLES:
+        weighted = root and r1 == 0.0
+        St = R.Sw if weighted else R.Sp
+        n = len(R.Xw) if weighted else len(R.Xp)
+        hw = 0.5 * (r2 - r1)
+        acc = W_ACC * n
+        cumulate(St, work, W_FT * n, n, work, acc)
+        for j in range(n):
+            out[o + j, C_T] = tau0 + hw * work[acc + j]
+        cumulate(St, work, W_FP * n, n, work, acc)
+        for j in range(n):
+            out[o + j, C_S] = path0 + hw * work[acc + j]  # (the path from the anchor, for now)
+        cumulate(St, work, W_FW * n, n, work, acc)
+        for j in range(n):
+            out[o + j, C_PATH] = work0 + hw * work[acc + j]  # (the friction work, for now)
+        return o + n
+    return o
+
+
+def midpoint_error(root, G_b, G_a, T, T_a, sens_half):
+    """The error of the time from the halves' disagreement at the midpoint (``G_a`` from the first
+    half, ``G_b`` from the second; ``T_a`` the time of the first, ``T`` of both): beyond their
+    propagated uncertainties, it is an error of one of the anchors (or of the search).  Next to a
+    root it moves the root (the time of the half scales as the root's distance, sqrt of ``G`` at
+    the midpoint); elsewhere it is an offset of ``G`` over the half (``sens_half``: the half's
+    ``dT/dG``)."""
+    miss = abs(G_b - G_a)
+    if root:
+        G_mid = max(G_b, G_a)
+        return 0.5 * (T - T_a) * miss / G_mid if G_mid > 0.0 else 0.0
+    return sens_half * miss
 
 
 def tail_time(q, G, s, S, K, cp, roots, count):
@@ -599,9 +658,9 @@ def grown(a, n, rows):
 
 def put_sample(out, index, o, t, q, w, N, coord, path, Wf, Wimp, s, sigma, motion):
     """Write the sample at a piece's end into row ``o`` (columns :class:`SampleColumn`); returns ``o + 1``."""
-    out[o, 0], out[o, 1], out[o, 2], out[o, 3] = t, q, w, N
-    out[o, 4], out[o, 5], out[o, 6], out[o, 7] = coord, path, Wf, Wimp
-    out[o, 8], out[o, 9] = s, sigma
+    out[o, C_T], out[o, C_Q], out[o, C_W], out[o, C_N] = t, q, w, N
+    out[o, C_S], out[o, C_PATH], out[o, C_WF], out[o, C_WIMP] = coord, path, Wf, Wimp
+    out[o, C_BRANCH], out[o, C_SIGMA] = s, sigma
     index[o] = motion
     return o + 1
 
@@ -672,13 +731,15 @@ def samples(ivs, ni, S, K, cp, R, pieces):
             start = o
             Tq, Wq, _, _, o, _, _, _ = quad(q1, q2, G1, G2, s, sigma, S, K, cp, R, work, SAMPLES, out, o, roots, count)
             for j in range(start, o):
-                dp, dw = out[j, 4], out[j, 5]
-                out[j, 0] += tp
-                out[j, 4] = coord + sigma * dp
-                out[j, 5] = path + dp
-                out[j, 6] = Wf + dw
-                out[j, 7] = Wimp
-                out[j, 8], out[j, 9] = s, sigma
+                # quad left the path and the friction work from the piece's start in the columns
+                # s and path: now the arc-length coordinate, the path and the work since the start
+                dp, dw = out[j, C_S], out[j, C_PATH]
+                out[j, C_T] += tp
+                out[j, C_S] = coord + sigma * dp
+                out[j, C_PATH] = path + dp
+                out[j, C_WF] = Wf + dw
+                out[j, C_WIMP] = Wimp
+                out[j, C_BRANCH], out[j, C_SIGMA] = s, sigma
                 index[j] = motion
             L = arc_length(q1, q2, S, K, cp, R)
             if last:  # the interval's end: its logged time and friction work
