@@ -152,3 +152,22 @@ def test_the_readme_s_fit_example_gives_back_mu_and_k(capsys):
     namespace = run_section("## Fit", "readme_fit")
     assert namespace["fit"].estimates["mu"] == pytest.approx(0.03, rel=1e-9)
     assert "k      = 0.8" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_95_percent_intervals_cover_the_truth_90_to_99_percent_of_the_time():
+    # 200 synthetic data sets (6 impact times, 1 ms Gaussian noise, the noise known): the interval
+    # estimate +- 1.96 standard errors must contain the true mu and k in 90-99 % of them.
+    times = np.array(impact_times(TRUTH, 6))
+    rng = np.random.default_rng(2026)
+    hits = np.zeros(2)
+    runs = 200
+    for _ in range(runs):
+        noisy = times + rng.normal(0.0, 1e-3, len(times))
+        result = fit(TRUTH, observed_events(noisy, kinds=["impact"] * 6),     # (the start does not matter
+                     free=("mu", "k"), weights=np.full(6, 1e3))               # here: the interval does)
+        assert result.status == "converged", result.message
+        for j, (name, true) in enumerate((("mu", 0.03), ("k", 0.8))):
+            hits[j] += abs(result.estimates[name] - true) <= 1.96 * result.stderr[name]
+    coverage = hits / runs
+    assert np.all((coverage >= 0.90) & (coverage <= 0.99)), coverage

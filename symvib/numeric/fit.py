@@ -58,6 +58,7 @@ STATUSES = {
     "not_identified": "converged, but the data do not separate some parameters (see message)",
     "max_iterations": "the iteration bound was reached before the parameters settled",
     "no_error_estimate": "converged; as many observations as parameters, so no error estimate without weights",
+    "incomplete": "stopped where the model does not make every observed event (see message); try another start",
     "no_events": "the model makes none of the observed events at the start; give another start",
 }
 #: Largest ``|correlation|`` of two estimates that still counts as separated.
@@ -350,12 +351,14 @@ def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weig
             if np.all(moved):
                 status = "converged"
                 break
+        if matched < len(observed.t):
+            status = "incomplete"
         message = STATUSES[status]
         if not np.all(usable):
             message += f"; {int(np.sum(~usable))} observation(s) without derivatives left out of the steps"
         if matched < len(observed.t):
             message += (f"; the model makes only {matched} of the {len(observed.t)} observed events in their "
-                        "order and kinds (the fit is not a fit of them all: try another start)")
+                        "order and kinds")
         return _result(status, message, at(x), free, x, J, r, w, weights is not None, matched, iterations,
                        tuple(history))
 
