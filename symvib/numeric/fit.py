@@ -65,6 +65,8 @@ STATUSES = {
 IDENTIFIED = 1 - 1e-6
 #: Steps of ``lambda`` (Levenberg-Marquardt) up and down.
 LAMBDA_UP, LAMBDA_DOWN = 10.0, 0.3
+#: Relative step that ends a stage of the continuation before the last (the last uses ``xtol``).
+STAGE_XTOL = 1e-5
 #: Columns a file of observed events may have.
 CSV_COLUMNS = ("t", "kind", "q")
 
@@ -225,12 +227,13 @@ def _default_bounds(scene: Scene, name: str) -> tuple:
 
 
 def _model(scene, observed, free, run):
-    """Residuals (model - observed, unweighted), their Jacobian, and how many events matched."""
+    """Residuals (model - observed, unweighted), how many events matched, and a function that gives
+    their Jacobian and which rows have one (the exact sensitivities cost more than the run: a
+    Levenberg-Marquardt step asks for them only once a trial is accepted)."""
     result = run(scene)
     if result.status.is_error:
         raise ValueError(f"scene: the run at {dict((k, getattr(scene, k)) for k in free)} failed "
                          f"({result.status.value}): {result.message}")
-    sens = sensitivities(result, wrt=free)
     wanted = set(observed.kinds) if observed.kinds else None
     index = [i for i, e in enumerate(result.events) if wanted is None or e.kind.value in wanted]
     n_obs = len(observed.t)
@@ -239,24 +242,30 @@ def _model(scene, observed, free, run):
             observed.kinds is None or result.events[index[matched]].kind.value == observed.kinds[matched]):
         matched += 1
     span_t = max(float(observed.t[-1] - observed.t[0]), float(observed.t[-1]), 1e-300)
-    r_t = np.full(n_obs, span_t)
-    J_t = np.zeros((n_obs, len(free)))
+    r = [np.full(n_obs, span_t)]
     for k in range(matched):
-        r_t[k], J_t[k] = result.events[index[k]].t - observed.t[k], sens.t[index[k]]
-    r, J = [r_t], [J_t]
-    usable = np.concatenate([np.all(np.isfinite(J_t[:matched]), axis=1), np.ones(n_obs - matched, dtype=bool)])
+        r[0][k] = result.events[index[k]].t - observed.t[k]
     if observed.q is not None:
         span_q = max(float(np.max(np.abs(observed.q - scene.q0))), 1e-300)
-        r_q, J_q = np.full(n_obs, span_q), np.zeros((n_obs, len(free)))
+        r.append(np.full(n_obs, span_q))
         for k in range(matched):
-            r_q[k], J_q[k] = result.events[index[k]].q - observed.q[k], sens.q[index[k]]
-        r.append(r_q)
-        J.append(J_q)
-        usable = np.concatenate([usable, np.all(np.isfinite(J_q[:matched]), axis=1),
-                                 np.ones(n_obs - matched, dtype=bool)])
-    r, J = np.concatenate(r), np.vstack(J)
-    J[~usable] = 0.0
-    return r, J, matched, usable
+            r[1][k] = result.events[index[k]].q - observed.q[k]
+
+    def jacobian():
+        sens = sensitivities(result, wrt=free)
+        blocks, usable = [], []
+        for values in ([sens.t] if observed.q is None else [sens.t, sens.q]):
+            J = np.zeros((n_obs, len(free)))
+            for k in range(matched):
+                J[k] = values[index[k]]
+            blocks.append(J)
+            usable.append(np.concatenate([np.all(np.isfinite(J[:matched]), axis=1),
+                                          np.ones(n_obs - matched, dtype=bool)]))
+        J, usable = np.vstack(blocks), np.concatenate(usable)
+        J[~usable] = 0.0
+        return J, usable
+
+    return np.concatenate(r), matched, jacobian
 
 
 def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weights=None, max_iterations=50,
@@ -314,8 +323,9 @@ def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weig
     def at(values):
         return scene.replace(**{name: float(v) for name, v in zip(free, values)})
 
-    def solve(observed, w, x):
-        r, J, matched, usable = _model(at(x), observed, free, run)
+    def solve(observed, w, x, xtol):
+        r, matched, jacobian = _model(at(x), observed, free, run)
+        J, usable = jacobian()
         if matched == 0:
             return _result("no_events", STATUSES["no_events"], at(x), free, x, J, r, w, weights is not None, matched,
                            0, ())
@@ -332,7 +342,7 @@ def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weig
                 step = np.linalg.lstsq(H + lam * np.diag(scale ** 2), -g, rcond=None)[0]
                 trial = np.clip(x + step, lo, hi)
                 try:
-                    r_new, J_new, m_new, u_new = _model(at(trial), observed, free, run)
+                    r_new, m_new, jacobian_new = _model(at(trial), observed, free, run)
                     new_cost = 0.5 * float(np.sum((w * r_new) ** 2))
                 except ValueError:
                     new_cost = math.inf
@@ -345,6 +355,7 @@ def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weig
                 status = "converged"
                 break
             moved = np.abs(trial - x) <= xtol * (np.abs(x) + xtol)
+            J_new, u_new = jacobian_new()
             x, r, J, matched, usable, cost = trial, r_new, J_new, m_new, u_new, new_cost
             lam = max(lam * LAMBDA_DOWN, 1e-12)
             history.append((x.copy(), cost))
@@ -378,7 +389,8 @@ def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weig
         part = Observed(observed.t[:n], observed.kinds[:n] if observed.kinds else None,
                         observed.q[:n] if observed.q is not None else None)
         part_w = w[:n] if observed.q is None else np.concatenate([w[:n], w[n_obs:n_obs + n]])
-        result = solve(part, part_w, x)
+        # (a stage before the last only needs to land near its minimum: the next one refines it)
+        result = solve(part, part_w, x, xtol if n == n_obs else STAGE_XTOL)
         total += result.iterations
         history += list(result.history)
         x = np.array([result.estimates[name] for name in free])

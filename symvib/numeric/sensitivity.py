@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -161,8 +162,12 @@ class _Curve:
         return float(self._N(float(q), float(w), self.g, *self._cp))
 
 
+@cache
 def _gauss(n):
+    """Gauss-Legendre nodes and weights on ``[-1, 1]`` (computed once per ``n``)."""
     x, w = np.polynomial.legendre.leggauss(n)
+    x.setflags(write=False)
+    w.setflags(write=False)
     return x, w
 
 

@@ -1,0 +1,89 @@
+"""Cost of a fit against the forward runs it needs (issue 26's target: 4 free parameters from 20
+impact times under 1 s on the compiled engine, at most 3 times the cost of its forward runs).
+
+Run from the project folder::
+
+    python benchmarks/bench_fit.py [--repeat 3] [--backend numba]
+
+The truth: the paper parabola with ``mu = 0.01``, ``k = 0.95`` (at least 20 impacts); the data:
+its first 20 impact times with 1 ms of Gaussian noise (seeded); the start 10-20 % off in
+``mu``, ``k``, ``qdot0`` and the right limiter.  The fit runs with a counting wrapper around
+the forward run, so one process reports, per repetition: the fit's wall time, the number of
+forward runs and their own time, the time in the exact sensitivities, and the ratio of the
+fit's time to its forward runs' time.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+import warnings
+
+import numpy as np
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--backend", default="numba", choices=("numba", "python"))
+    args = ap.parse_args(argv)
+    warnings.simplefilter("ignore")
+    import symvib
+    from symvib.numeric import fit as fitmod
+    from symvib.numeric import sensitivity
+    from symvib.numeric.driver import simulate
+
+    truth = symvib.load_scene("paper-parabola").replace(mu=0.01, k=0.95)
+    simulate(truth, backend=args.backend, samples=False)          # compile (numba) outside the timing
+    impacts = [e.t for e in simulate(truth, backend=args.backend, samples=False).events
+               if e.kind.value == "impact"][:20]
+    assert len(impacts) == 20, len(impacts)
+    rng = np.random.default_rng(26)
+    observed = fitmod.observed_events(np.array(impacts) + rng.normal(0, 1e-3, 20), kinds=["impact"] * 20)
+    start = truth.replace(mu=0.012, k=0.9, qdot0=7.5, right=0.75)
+    free = ("mu", "k", "qdot0", "right")
+    rows = []
+    for _ in range(args.repeat):
+        spent = {"runs": 0, "run_s": 0.0, "sens_s": 0.0}
+
+        def run(scene):
+            t0 = time.perf_counter()
+            out = simulate(scene, backend=args.backend, samples=False)
+            spent["run_s"] += time.perf_counter() - t0
+            spent["runs"] += 1
+            return out
+
+        original = fitmod.sensitivities
+
+        def timed_sensitivities(*a, **k):
+            t0 = time.perf_counter()
+            out = original(*a, **k)
+            spent["sens_s"] += time.perf_counter() - t0
+            return out
+
+        fitmod.sensitivities = timed_sensitivities
+        try:
+            t0 = time.perf_counter()
+            result = fitmod.fit(start, observed, free, run=run, weights=np.full(20, 1e3))
+            wall = time.perf_counter() - t0
+        finally:
+            fitmod.sensitivities = original
+        rows.append((wall, spent["runs"], spent["run_s"], spent["sens_s"], result))
+    wall = statistics.median(r[0] for r in rows)
+    runs = rows[0][1]
+    run_s = statistics.median(r[2] for r in rows)
+    sens_s = statistics.median(r[3] for r in rows)
+    result = rows[0][4]
+    print(f"# fit of {', '.join(free)} to 20 impact times, backend {args.backend}, median of {args.repeat}")
+    print(f"status {result.status}; " + ", ".join(f"{k} = {v:.6g} +- {result.stderr[k]:.2g}"
+                                                for k, v in result.estimates.items()))
+    print(f"fit wall time              {wall:8.3f} s   (target < 1 s)")
+    print(f"forward runs               {runs:8d}     {run_s:8.3f} s")
+    print(f"exact sensitivities        {sens_s:8.3f} s   ({sensitivity.__name__}, NumPy)")
+    print(f"fit / forward runs         {wall / run_s:8.1f}     (target <= 3)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
