@@ -8,7 +8,7 @@ import logging
 
 import pytest
 
-from symvib.codegen.generate import AUTO_ROUTE_SECONDS, module_source, route_plan
+from symvib.codegen.generate import AUTO_SEARCH_SECONDS, Plan, module_source, route_plan
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.provenance import input_hash
 from symvib.shapes import CLOSED_FORMS
@@ -22,12 +22,35 @@ def scene(z="a*x**2/2", **curve):
 
 
 def test_each_choice_takes_its_routes_and_budget():
-    assert route_plan("never")[0] == ()
-    assert route_plan("required") == (ROUTES, ROUTE_SECONDS)
-    assert route_plan("auto") == (ROUTES, AUTO_ROUTE_SECONDS)
-    assert AUTO_ROUTE_SECONDS < ROUTE_SECONDS
+    assert route_plan("never").routes == ()
+    assert route_plan("required") == Plan(ROUTES, ROUTE_SECONDS, None, "symbolic")
+    assert route_plan("auto") == Plan(ROUTES, AUTO_SEARCH_SECONDS, AUTO_SEARCH_SECONDS, "numeric")
+    assert AUTO_SEARCH_SECONDS < ROUTE_SECONDS
     with pytest.raises(ValueError, match="curve.closed_form"):
         route_plan("sometimes")
+
+
+def test_auto_spends_one_total_budget_on_all_routes(monkeypatch):
+    """Under "auto" the routes share one budget: a route that spends it leaves none to the next,
+    which is recorded as not tried (the numeric F_sigma stands in)."""
+    from symvib.symbolic import integrals
+
+    started = []
+    real_start = integrals.budget.start
+
+    def start(job, args, seconds):
+        started.append(seconds)
+        return real_start(job, args, seconds=seconds)
+
+    monkeypatch.setattr(integrals.budget, "start", start)
+    curve = scene(z="a*(1 - cos(x))").shape.curve()   # F_sigma: no elementary form
+    total = 1.0
+    found = integrals.antiderivatives(curve, seconds=total, total=total, check="numeric")
+    assert all(F.route == "numeric" for F in found.values())
+    assert started and max(started) <= total
+    outcomes = [a.outcome for a in found[1].attempts]
+    assert outcomes[0].startswith("timeout") and outcomes[-1].startswith("not tried: the total budget")
+    assert sum(a.seconds for a in found[1].attempts) < total + 1.0   # (a child's start and stop)
 
 
 @pytest.mark.parametrize("value", ["sometimes", "", "AUTO", "never "])
