@@ -8,7 +8,7 @@ import logging
 
 import pytest
 
-from symvib.codegen.generate import AUTO_SEARCH_SECONDS, Plan, module_source, route_plan
+from symvib.codegen.generate import AUTO_ROUTES, AUTO_SEARCH_SECONDS, Plan, module_source, route_plan
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.provenance import input_hash
 from symvib.shapes import CLOSED_FORMS
@@ -24,15 +24,17 @@ def scene(z="a*x**2/2", **curve):
 def test_each_choice_takes_its_routes_and_budget():
     assert route_plan("never").routes == ()
     assert route_plan("required") == Plan(ROUTES, ROUTE_SECONDS, None, "symbolic")
-    assert route_plan("auto") == Plan(ROUTES, AUTO_SEARCH_SECONDS, AUTO_SEARCH_SECONDS, "numeric")
+    assert route_plan("auto") == Plan(AUTO_ROUTES, AUTO_SEARCH_SECONDS, AUTO_SEARCH_SECONDS, "numeric")
+    assert sorted(AUTO_ROUTES) == sorted(ROUTES)
     assert AUTO_SEARCH_SECONDS < ROUTE_SECONDS
     with pytest.raises(ValueError, match="curve.closed_form"):
         route_plan("sometimes")
 
 
 def test_auto_spends_one_total_budget_on_all_routes(monkeypatch):
-    """Under "auto" the routes share one budget: a route that spends it leaves none to the next,
-    which is recorded as not tried (the numeric F_sigma stands in)."""
+    """Under "auto" the routes share one budget, each its share of what is left: all three of a
+    curve with no elementary F_sigma end within the total, and a total too short for any route
+    tries none (the numeric F_sigma stands in at once)."""
     from symvib.symbolic import integrals
 
     started = []
@@ -44,13 +46,31 @@ def test_auto_spends_one_total_budget_on_all_routes(monkeypatch):
 
     monkeypatch.setattr(integrals.budget, "start", start)
     curve = scene(z="a*(1 - cos(x))").shape.curve()   # F_sigma: no elementary form
-    total = 1.0
-    found = integrals.antiderivatives(curve, seconds=total, total=total, check="numeric")
+    plan = route_plan("auto")
+    total = 1.2
+    found = integrals.antiderivatives(curve, seconds=total, routes=plan.routes, total=total, check=plan.check)
     assert all(F.route == "numeric" for F in found.values())
-    assert started and max(started) <= total
-    outcomes = [a.outcome for a in found[1].attempts]
-    assert outcomes[0].startswith("timeout") and outcomes[-1].startswith("not tried: the total budget")
-    assert sum(a.seconds for a in found[1].attempts) < total + 1.0   # (a child's start and stop)
+    assert len(started) == 2 * len(plan.routes) and max(started) <= total / len(plan.routes) + 1e-9
+    assert [a.route for a in found[1].attempts] == list(plan.routes)
+    assert all(a.outcome.startswith("timeout") for a in found[1].attempts)
+    assert sum(a.seconds for a in found[1].attempts) < total + 0.5   # (starting and stopping the children)
+    started.clear()
+    short = integrals.antiderivatives(curve, seconds=0.5, routes=plan.routes, total=0.5, check=plan.check)
+    assert not started and all(a.outcome.startswith("not tried: the total budget") for a in short[-1].attempts)
+
+
+def test_auto_tries_the_tangent_angle_route_first_and_checks_numerically():
+    """The tilted parabola's F_sigma under "auto"'s routes and check (a budget long enough not to
+    matter here): the tangent-angle route, first, finds both branches' (integrate takes 3-6 s
+    on branch -1 alone), each checked numerically."""
+    from symvib.symbolic import integrals
+
+    plan = route_plan("auto")
+    curve = scene(z="x**2/(2*a) + x/3").shape.curve()
+    found = integrals.antiderivatives(curve, seconds=60.0, routes=plan.routes, total=180.0, check=plan.check)
+    assert {F.route for F in found.values()} == {"tangent-angle"}
+    assert {F.verification for F in found.values()} == {"numeric"}
+    assert all(len(F.attempts) == 1 for F in found.values())
 
 
 @pytest.mark.parametrize("value", ["sometimes", "", "AUTO", "never "])

@@ -75,7 +75,8 @@ from symvib.symbolic.derive import Derivation, derive
 from symvib.symbolic.symbols import C, g, mu
 
 __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
-           "DIGEST_PREFIX", "route_plan", "module_source", "Plan", "AUTO_SEARCH_SECONDS", "kernel_forms"]
+           "DIGEST_PREFIX", "route_plan", "module_source", "Plan", "AUTO_SEARCH_SECONDS", "AUTO_ROUTES",
+           "kernel_forms"]
 
 #: Gauss-Legendre nodes per panel of a numeric-route antiderivative.
 QUAD_NODES = 16
@@ -612,6 +613,10 @@ def _resolved(curve, source, name):
 #: and otherwise the numeric ``F_sigma``, so that a new curve's first run waits seconds rather
 #: than every route's full budget (:data:`~symvib.symbolic.integrals.ROUTE_SECONDS` each).
 AUTO_SEARCH_SECONDS = 3.0
+#: The order of the routes under ``closed_form = "auto"``, each with its share of
+#: :data:`AUTO_SEARCH_SECONDS`: the tangent-angle route first, which finds the parabolas' forms
+#: in half a second where ``integrate`` takes 3-6 s on their branch -1.
+AUTO_ROUTES = ("tangent-angle", "sympy", "split")
 
 
 @dataclass(frozen=True)
@@ -654,7 +659,8 @@ def route_plan(closed_form: str = "auto") -> Plan:
     from symvib.shapes import CLOSED_FORMS
     from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
-    plans = {"auto": Plan(ROUTES, AUTO_SEARCH_SECONDS, AUTO_SEARCH_SECONDS, "numeric"),
+    assert sorted(AUTO_ROUTES) == sorted(ROUTES)
+    plans = {"auto": Plan(AUTO_ROUTES, AUTO_SEARCH_SECONDS, AUTO_SEARCH_SECONDS, "numeric"),
              "required": Plan(ROUTES, ROUTE_SECONDS, None, "symbolic"),
              "never": Plan((), ROUTE_SECONDS, None, "symbolic")}
     if closed_form not in plans:

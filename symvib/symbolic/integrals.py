@@ -28,7 +28,7 @@ Default budget: :data:`ROUTE_SECONDS` per route and :data:`VERIFY_SECONDS` for
 the symbolic part of a check, so one branch takes at most about
 ``3 * ROUTE_SECONDS + VERIFY_SECONDS`` seconds (40 s) before the numeric
 route stands in.  A ``total`` budget bounds all the routes together (a new curve's
-first run, :func:`symvib.codegen.generate.route_plan`), and ``check="numeric"`` accepts a
+first run, :func:`symvib.codegen.generate.route_plan`: each route its share), and ``check="numeric"`` accepts a
 closed form on its numeric checks alone (the derivative at 30 digits at random points and
 ``F(b) - F(a)`` against a quadrature), without the symbolic substitution.
 
@@ -71,7 +71,7 @@ VERIFY_SECONDS = 10.0
 #: How a closed form is checked: ``"symbolic"`` tries SymPy's substitution after the numeric checks
 #: (:func:`verify`), ``"numeric"`` stops after them.
 CHECKS = ("symbolic", "numeric")
-#: A route is started only when at least this much of a ``total`` budget is left, in seconds.
+#: A route is started only when its share of a ``total`` budget is at least this, in seconds.
 SHORTEST_ROUTE_SECONDS = 0.25
 #: Random points at which a closed form is differentiated back at 30 digits.
 VERIFY_POINTS = 6
@@ -290,16 +290,16 @@ def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SE
     ``routes``; the branches' attempts at one route run side by side (a child process each,
     on cores of their own), so a curve whose routes all spend their budgets waits for them
     once, not once per branch.  ``total`` (seconds), when given, bounds all the routes
-    together: a route gets at most what is left of it, and none starts with less than
-    :data:`SHORTEST_ROUTE_SECONDS` left.  ``check`` (:data:`CHECKS`) is how a closed form
-    found is checked (:func:`verify`).
+    together: each route gets its share of what is left (that divided by the number of routes
+    still to try, at most ``seconds``), so a route that ends early leaves its time to the next,
+    and none starts with less than :data:`SHORTEST_ROUTE_SECONDS`.  ``check`` (:data:`CHECKS`)
+    is how a closed form found is checked (:func:`verify`).
     """
     unknown = set(routes) - set(ROUTES)
     if unknown:
         raise ValueError(f"unknown route(s) {sorted(unknown)}; known: {', '.join(ROUTES)}")
     if check not in CHECKS:
         raise ValueError(f"check: {check!r} is not one of {', '.join(CHECKS)}")
-    deadline = None if total is None else time.perf_counter() + total
     out, todo = {}, {}
     for s in branches:
         if s not in (1, -1):
@@ -312,41 +312,26 @@ def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SE
             out[s] = _with_q_ref(_CACHE[key], reference_point(curve), curve.q)
         else:
             todo[s] = (f, key, [])
-    q = curve.q
-    for route in routes:
+    deadline = None if total is None else time.perf_counter() + total
+    for i, route in enumerate(routes):
         waiting = [s for s in todo if s not in out]
         if not waiting:
             break
-        allowed = seconds if deadline is None else min(seconds, deadline - time.perf_counter())
-        if allowed < SHORTEST_ROUTE_SECONDS:
-            for s in waiting:
-                todo[s][2].append(Attempt(route, f"not tried: the total budget of {total:g} s is spent", 0.0))
-            continue
+        allowed = seconds
+        if deadline is not None:   # this route's share of what is left of the total budget
+            allowed = min(seconds, (deadline - time.perf_counter()) / (len(routes) - i))
+            if allowed < SHORTEST_ROUTE_SECONDS:   # too little for this route, and so for the rest
+                for s in waiting:
+                    todo[s][2].extend(Attempt(r, f"not tried: the total budget of {total:g} s is spent", 0.0)
+                                      for r in routes[i:])
+                break
         started = {s: budget.start(*_route_job(route, todo[s][0], curve, s), seconds=allowed) for s in waiting}
         for s in waiting:
             f, _, attempts = todo[s]
-            running = started[s]
-            outcome = budget.finish(running)
-            if outcome.status == "timeout":
-                attempts.append(Attempt(route, f"timeout after {allowed:.3g} s", outcome.seconds))
-                continue
-            if outcome.status == "error":
-                attempts.append(Attempt(route, f"error: {outcome.value}", outcome.seconds))
-                continue
-            F = outcome.value
-            if F.has(sp.Integral) or F.has(sp.Piecewise):
-                attempts.append(Attempt(route, "no closed form", outcome.seconds))
-                continue
-            F = _tidy(F)
-            how = verify(F, f, curve, check=check)
-            elapsed = time.perf_counter() - running.started
-            if how is None:
-                attempts.append(Attempt(route, "rejected: derivative check failed", elapsed))
-                continue
-            F_reg, regular = regularize(F, q)
-            attempts.append(Attempt(route, f"closed form, verified {how}", elapsed))
-            out[s] = Antiderivative(s=s, integrand=f, expr=F_reg, route=route, verification=how,
-                                    attempts=tuple(attempts), q_ref=reference_point(curve), mu_regular=regular)
+            found = _judge(s, route, started[s], budget.finish(started[s]), f, curve, check, attempts)
+            if found is not None:
+                out[s] = found
+    q = curve.q
     for s, (f, key, attempts) in todo.items():
         if s not in out:
             u = sp.Dummy("u", real=True)
@@ -356,6 +341,31 @@ def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SE
                                     q_ref=q_ref)
         _CACHE[key] = out[s]
     return out
+
+
+def _judge(s: int, route: str, running, outcome, f: sp.Expr, curve: Curve, check: str, attempts: list):
+    """The :class:`Antiderivative` a route's ``outcome`` gives, after its check, or ``None``; the
+    attempt is appended to ``attempts`` either way."""
+    if outcome.status == "timeout":
+        attempts.append(Attempt(route, f"timeout after {running.seconds:.3g} s", outcome.seconds))
+        return None
+    if outcome.status == "error":
+        attempts.append(Attempt(route, f"error: {outcome.value}", outcome.seconds))
+        return None
+    F = outcome.value
+    if F.has(sp.Integral) or F.has(sp.Piecewise):
+        attempts.append(Attempt(route, "no closed form", outcome.seconds))
+        return None
+    F = _tidy(F)
+    how = verify(F, f, curve, check=check)
+    elapsed = time.perf_counter() - running.started
+    if how is None:
+        attempts.append(Attempt(route, "rejected: derivative check failed", elapsed))
+        return None
+    F_reg, regular = regularize(F, curve.q)
+    attempts.append(Attempt(route, f"closed form, verified {how}", elapsed))
+    return Antiderivative(s=s, integrand=f, expr=F_reg, route=route, verification=how, attempts=tuple(attempts),
+                          q_ref=reference_point(curve), mu_regular=regular)
 
 
 def _route_job(route: str, f: sp.Expr, curve: Curve, s: int) -> tuple:
