@@ -76,7 +76,7 @@ from symvib.symbolic.symbols import C, g, mu
 
 __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
            "DIGEST_PREFIX", "route_plan", "module_source", "Plan", "AUTO_SEARCH_SECONDS", "AUTO_ROUTES",
-           "kernel_forms"]
+           "AUTO_ROUTE_SECONDS", "kernel_forms"]
 
 #: Gauss-Legendre nodes per panel of a numeric-route antiderivative.
 QUAD_NODES = 16
@@ -612,10 +612,12 @@ def _resolved(curve, source, name):
 #: ``closed_form = "auto"``: a closed form SymPy finds quickly is taken (checked numerically),
 #: and otherwise the numeric ``F_sigma``, so that a new curve's first run waits seconds rather
 #: than every route's full budget (:data:`~symvib.symbolic.integrals.ROUTE_SECONDS` each).
-AUTO_SEARCH_SECONDS = 3.0
-#: The order of the routes under ``closed_form = "auto"``, each with its share of
-#: :data:`AUTO_SEARCH_SECONDS`: the tangent-angle route first, which finds the parabolas' forms
-#: in half a second where ``integrate`` takes 3-6 s on their branch -1.
+AUTO_SEARCH_SECONDS = 4.0
+#: Budget of one route under ``closed_form = "auto"`` (s; at most what is left of
+#: :data:`AUTO_SEARCH_SECONDS`).
+AUTO_ROUTE_SECONDS = 2.0
+#: The order of the routes under ``closed_form = "auto"``: the tangent-angle route first, which
+#: finds the parabolas' forms in 0.5-1.5 s where ``integrate`` takes 3-6 s on their branch -1.
 AUTO_ROUTES = ("tangent-angle", "sympy", "split")
 
 
@@ -660,7 +662,7 @@ def route_plan(closed_form: str = "auto") -> Plan:
     from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
     assert sorted(AUTO_ROUTES) == sorted(ROUTES)
-    plans = {"auto": Plan(AUTO_ROUTES, AUTO_SEARCH_SECONDS, AUTO_SEARCH_SECONDS, "numeric"),
+    plans = {"auto": Plan(AUTO_ROUTES, AUTO_ROUTE_SECONDS, AUTO_SEARCH_SECONDS, "numeric"),
              "required": Plan(ROUTES, ROUTE_SECONDS, None, "symbolic"),
              "never": Plan((), ROUTE_SECONDS, None, "symbolic")}
     if closed_form not in plans:

@@ -28,7 +28,7 @@ Default budget: :data:`ROUTE_SECONDS` per route and :data:`VERIFY_SECONDS` for
 the symbolic part of a check, so one branch takes at most about
 ``3 * ROUTE_SECONDS + VERIFY_SECONDS`` seconds (40 s) before the numeric
 route stands in.  A ``total`` budget bounds all the routes together (a new curve's
-first run, :func:`symvib.codegen.generate.route_plan`: each route its share), and ``check="numeric"`` accepts a
+first run, :func:`symvib.codegen.generate.route_plan`), and ``check="numeric"`` accepts a
 closed form on its numeric checks alone (the derivative at 30 digits at random points and
 ``F(b) - F(a)`` against a quadrature), without the symbolic substitution.
 
@@ -71,7 +71,7 @@ VERIFY_SECONDS = 10.0
 #: How a closed form is checked: ``"symbolic"`` tries SymPy's substitution after the numeric checks
 #: (:func:`verify`), ``"numeric"`` stops after them.
 CHECKS = ("symbolic", "numeric")
-#: A route is started only when its share of a ``total`` budget is at least this, in seconds.
+#: A route is started only when at least this much of a ``total`` budget is left, in seconds.
 SHORTEST_ROUTE_SECONDS = 0.25
 #: Random points at which a closed form is differentiated back at 30 digits.
 VERIFY_POINTS = 6
@@ -290,9 +290,9 @@ def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SE
     ``routes``; the branches' attempts at one route run side by side (a child process each,
     on cores of their own), so a curve whose routes all spend their budgets waits for them
     once, not once per branch.  ``total`` (seconds), when given, bounds all the routes
-    together: each route gets its share of what is left (that divided by the number of routes
-    still to try, at most ``seconds``), so a route that ends early leaves its time to the next,
-    and none starts with less than :data:`SHORTEST_ROUTE_SECONDS`.  ``check`` (:data:`CHECKS`)
+    together: a route gets ``seconds`` or what is left of ``total``, whichever is less, so a
+    route that ends early leaves its time to the next, and none starts with less than
+    :data:`SHORTEST_ROUTE_SECONDS` left.  ``check`` (:data:`CHECKS`)
     is how a closed form found is checked (:func:`verify`).
     """
     unknown = set(routes) - set(ROUTES)
@@ -318,8 +318,8 @@ def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SE
         if not waiting:
             break
         allowed = seconds
-        if deadline is not None:   # this route's share of what is left of the total budget
-            allowed = min(seconds, (deadline - time.perf_counter()) / (len(routes) - i))
+        if deadline is not None:   # at most what is left of the total budget
+            allowed = min(seconds, deadline - time.perf_counter())
             if allowed < SHORTEST_ROUTE_SECONDS:   # too little for this route, and so for the rest
                 for s in waiting:
                     todo[s][2].extend(Attempt(r, f"not tried: the total budget of {total:g} s is spent", 0.0)
