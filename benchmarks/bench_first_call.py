@@ -3,7 +3,7 @@
 Run from the project folder, in the environment to measure (the main install
 ``pip install .``, numba included)::
 
-    python benchmarks/bench_first_call.py [--sweep-scenes 200000] [--plain-scenes 2000]
+    python benchmarks/bench_first_call.py [--sweep-scenes 200000] [--plain-scenes 2000] [--repeat N]
 
 Every measurement runs the ``symvib`` command in a new process with its own
 empty kernel cache (``$SYMVIB_CACHE``) and numba cache (``$NUMBA_CACHE_DIR``),
@@ -16,7 +16,9 @@ start-up included, and reports the wall time beside issue 15's target:
 * the first run of the four curves of the corpus whose ``F_sigma`` the symbolic routes
   find late or never (``sine-track``, ``tilted-parabola``, ``tan-wall``, ``pole-well``),
   with each ``curve.closed_form`` of ``--closed-form`` (default ``auto``; issue 28's target
-  <= 10 s each);
+  <= 10 s each), its standard error on a pseudo-terminal so that the progress line shows,
+  and when that line came (target <= 1 s); ``--repeat N`` runs each N times (each on empty
+  caches) and prints every wall time and the median;
 * the first sweep of ``--sweep-scenes`` scenes of the paper parabola, compilation
   included (target <= 15 s for 200,000);
 * the main install's sweep speed (numba is a dependency): the same sweep again in a
@@ -38,9 +40,11 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -88,6 +92,65 @@ def timed(args: list, backend: str | None = None, caches: Path | None = None, co
     if out.returncode not in codes:
         raise SystemExit(f"symvib {' '.join(args)} failed ({out.returncode}):\n{out.stderr[-2000:]}")
     return wall, out.stdout + out.stderr
+
+
+def timed_on_terminal(args: list) -> tuple:
+    """``(wall, progress)`` of ``symvib ARGS`` in a fresh process with empty caches, its standard
+    error on a pseudo-terminal (where the command line shows its progress lines): ``progress`` is
+    the time from the start to the first line on it (``None`` when none came)."""
+    import pty
+
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, SYMVIB_CACHE=str(Path(tmp) / "kernels"), NUMBA_CACHE_DIR=str(Path(tmp) / "numba"))
+        env.pop("SYMVIB_BACKEND", None)
+        leader, follower = pty.openpty()
+        first, chunks = [], []
+
+        def read():
+            while True:
+                try:
+                    data = os.read(leader, 4096)
+                except OSError:   # the child closed the terminal
+                    return
+                if not data:
+                    return
+                if b"\n" in data and not first:
+                    first.append(time.perf_counter())
+                chunks.append(data)
+
+        start = time.perf_counter()
+        proc = subprocess.Popen([sys.executable, "-m", "symvib.cli", *args], stdout=subprocess.PIPE,
+                                stderr=follower, env=env, cwd=tmp)
+        os.close(follower)
+        reader = threading.Thread(target=read, daemon=True)
+        reader.start()
+        proc.communicate()
+        wall = time.perf_counter() - start
+        reader.join(5.0)
+        os.close(leader)
+    if proc.returncode != 0:
+        raise SystemExit(f"symvib {' '.join(args)} failed ({proc.returncode}):\n"
+                         f"{b''.join(chunks).decode(errors='replace')[-2000:]}")
+    return wall, (first[0] - start if first else None)
+
+
+def new_curve_runs(choices: str, repeat: int) -> None:
+    """Issue 28: the first run of each new curve, ``repeat`` times on empty caches, with its progress line."""
+    from symvib.checks.corpus import entry
+
+    for choice in choices.split(","):
+        for name in NEW_CURVES:
+            with tempfile.TemporaryDirectory() as tmp:
+                path = Path(tmp) / f"{name}.toml"
+                path.write_text(toml_text(entry(name).scene()), encoding="utf-8")
+                runs = [timed_on_terminal(["run", str(path), "--closed-form", choice]) for _ in range(repeat)]
+            walls = [w for w, _ in runs]
+            lines = [p for _, p in runs if p is not None]
+            shown = f"{statistics.median(lines):.2f}s" if len(lines) == len(runs) else "missing"
+            each = f" (runs: {', '.join(f'{w:.2f}' for w in walls)}; progress line: " \
+                   f"{', '.join(f'{p:.2f}' for p in lines)})" if repeat > 1 else ""
+            print(f"{f'symvib run {name} (closed_form {choice})':48s} {statistics.median(walls):8.2f}s   "
+                  f"<= 10 s (issue 28); first progress line {shown} (<= 1 s){each}")
 
 
 def toml_text(tables: dict) -> str:
@@ -200,6 +263,7 @@ def main(argv=None) -> int:
     ap.add_argument("--only-new-curves", action="store_true", help="time the new curves' first runs only")
     ap.add_argument("--prepared", action="store_true", help="time a prepared user curve's runs only (issue 25)")
     ap.add_argument("--startup", type=int, metavar="N", help="time the start-up of symvib sweep only, N rounds")
+    ap.add_argument("--repeat", type=int, default=1, help="runs of each new curve (each on empty caches)")
     args = ap.parse_args(argv)
     try:
         import numba  # noqa: F401
@@ -215,15 +279,9 @@ def main(argv=None) -> int:
     if args.startup:
         startup(args.startup)
         return 0
-    from symvib.checks.corpus import entry
-
-    for choice in args.closed_form.split(","):
-        for name in NEW_CURVES:
-            with tempfile.TemporaryDirectory() as tmp:
-                path = Path(tmp) / f"{name}.toml"
-                path.write_text(toml_text(entry(name).scene()), encoding="utf-8")
-                wall, _ = timed(["run", str(path), "--closed-form", choice])
-            print(f"{f'symvib run {name} (closed_form {choice})':48s} {wall:8.2f}s   <= 10 s (issue 28)")
+    if args.repeat < 1:
+        raise SystemExit("--repeat: must be at least 1")
+    new_curve_runs(args.closed_form, args.repeat)
     if args.only_new_curves:
         return 0
     for name in SCENES:

@@ -8,7 +8,14 @@ import logging
 
 import pytest
 
-from symvib.codegen.generate import AUTO_ROUTE_SECONDS, module_source, route_plan
+from symvib.codegen.generate import (
+    AUTO_ROUTE_SECONDS,
+    AUTO_ROUTES,
+    AUTO_SEARCH_SECONDS,
+    Plan,
+    module_source,
+    route_plan,
+)
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.provenance import input_hash
 from symvib.shapes import CLOSED_FORMS
@@ -22,12 +29,54 @@ def scene(z="a*x**2/2", **curve):
 
 
 def test_each_choice_takes_its_routes_and_budget():
-    assert route_plan("never")[0] == ()
-    assert route_plan("required") == (ROUTES, ROUTE_SECONDS)
-    assert route_plan("auto") == (ROUTES, AUTO_ROUTE_SECONDS)
-    assert AUTO_ROUTE_SECONDS < ROUTE_SECONDS
+    assert route_plan("never").routes == ()
+    assert route_plan("required") == Plan(ROUTES, ROUTE_SECONDS, None, "symbolic")
+    assert route_plan("auto") == Plan(AUTO_ROUTES, AUTO_ROUTE_SECONDS, AUTO_SEARCH_SECONDS, "numeric")
+    assert sorted(AUTO_ROUTES) == sorted(ROUTES)
+    assert AUTO_ROUTE_SECONDS <= AUTO_SEARCH_SECONDS < ROUTE_SECONDS
     with pytest.raises(ValueError, match="curve.closed_form"):
         route_plan("sometimes")
+
+
+def test_auto_spends_one_total_budget_on_all_routes(monkeypatch):
+    """Under "auto" the routes share one budget: a route gets its own budget or what is left of the
+    total, whichever is less; a curve with no elementary F_sigma ends its search within the total,
+    the routes that found too little left are recorded as not tried, and the numeric F_sigma
+    stands in."""
+    from symvib.symbolic import integrals
+
+    started = []
+    real_start = integrals.budget.start
+
+    def start(job, args, seconds):
+        started.append(seconds)
+        return real_start(job, args, seconds=seconds)
+
+    monkeypatch.setattr(integrals.budget, "start", start)
+    curve = scene(z="a*(1 - cos(x))").shape.curve()   # F_sigma: no elementary form
+    plan = route_plan("auto")
+    seconds, total = 0.6, 1.0
+    found = integrals.antiderivatives(curve, seconds=seconds, routes=plan.routes, total=total, check=plan.check)
+    assert all(F.route == "numeric" for F in found.values())
+    assert started[:2] == [seconds, seconds] and max(started) <= seconds and sum(started[::2]) <= total + 1e-9
+    assert [a.route for a in found[1].attempts] == list(plan.routes)
+    outcomes = [a.outcome for a in found[1].attempts]
+    assert outcomes[0].startswith("timeout") and outcomes[-1].startswith("not tried: the total budget")
+    assert sum(a.seconds for a in found[1].attempts) < total + 0.5   # (starting and stopping the children)
+
+
+def test_auto_tries_the_tangent_angle_route_first_and_checks_numerically():
+    """The tilted parabola's F_sigma under "auto"'s routes and check (a budget long enough not to
+    matter here): the tangent-angle route, first, finds both branches' (integrate takes 3-6 s
+    on branch -1 alone), each checked numerically."""
+    from symvib.symbolic import integrals
+
+    plan = route_plan("auto")
+    curve = scene(z="x**2/(2*a) + x/3").shape.curve()
+    found = integrals.antiderivatives(curve, seconds=60.0, routes=plan.routes, total=180.0, check=plan.check)
+    assert {F.route for F in found.values()} == {"tangent-angle"}
+    assert {F.verification for F in found.values()} == {"numeric"}
+    assert all(len(F.attempts) == 1 for F in found.values())
 
 
 @pytest.mark.parametrize("value", ["sometimes", "", "AUTO", "never "])

@@ -208,3 +208,59 @@ def test_a_kernel_takes_each_sine_and_cosine_once_and_its_tangent_from_them():
         calls = [ast.unparse(c.func) for c in ast.walk(fn) if isinstance(c, ast.Call)]
         assert calls.count("math.sin") == 1 and calls.count("math.cos") == 1, (fn.name, calls)
         assert "math.tan" not in calls, fn.name
+
+
+def test_the_catalogue_keeps_the_simplest_forms_and_a_user_curve_takes_the_direct_ones():
+    """generated/ (and every catalogue or paper event) keeps the forms it had; a user curve, even one
+    with a catalogue shape's expressions under another name, is derived with the direct forms."""
+    import dataclasses
+
+    assert {codegen.kernel_forms(s.source()) for s in CATALOGUE.values()} == {"simplest"}
+    twin = dataclasses.replace(shape("parabola-x"), name="my-parabola")
+    assert codegen.kernel_forms(twin.source()) == "direct"
+    edited = dataclasses.replace(shape("parabola-x"), z="x**2/(2*p) + x")
+    assert codegen.kernel_forms(edited.source()) == "direct"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(CATALOGUE))
+def test_every_catalogue_module_is_what_the_generator_writes(name, tmp_path):
+    """The committed module of every catalogue shape is byte for byte a fresh generation (the
+    derivation's forms of a catalogue shape are unchanged by the direct forms of user curves)."""
+    if load_kernels(name).SYMPY_VERSION != sp.__version__:
+        pytest.skip("generated/ was written by another SymPy")
+    path = codegen.generate(name, tmp_path)
+    assert path.read_bytes() == (GENERATED / path.name).read_bytes()
+
+
+#: A user curve's direct-form eq. 1 near its singular points: (z, domain, parameters, points).
+NEAR_SINGULAR = {
+    "tan-wall": ("a*tan(x/b)", ["-pi*b/2", "pi*b/2"], {"a": 0.2, "b": 1.0}, [0.0, 0.7, -1.2, 1.5, 1.57, -1.5707]),
+    "pole-well": ("-a/x", [0, "oo"], {"a": 0.1}, [1e-3, 0.01, 0.3, 1.0, 2.0, 50.0]),
+    "sine-track": ("a*(1 - cos(x/b))", None, {"a": 0.1, "b": 0.2}, [0.0, 1e-9, 0.1, 0.31415, 0.6, -2.0]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(NEAR_SINGULAR))
+def test_direct_form_kernels_match_a_30_digit_evaluation_near_singular_points(name, tmp_path, monkeypatch):
+    """The qddot kernels of a user curve (eq. 1 in the direct forms, as generated) agree with a
+    30-digit evaluation of the simplest forms to KERNEL_RTOL, also close to a pole or a wall."""
+    from symvib.shapes import Shape
+
+    monkeypatch.setenv(kernels.CACHE_ENV, str(tmp_path))
+    z, domain, values, points = NEAR_SINGULAR[name]
+    user = Shape(name=name, kind="graph", q="x", z=z, params={p: "positive" for p in values},
+                 domain=tuple(domain) if domain else ("-oo", "oo"), closed_form="never")
+    k = load_kernels(user)
+    d = derive(user.curve(), routes=(), forms="simplest")
+    c = d.curve
+    g_, mu_, qdot_ = 9.81, 0.05, 1.7
+    for s, b in ((1, "p"), (-1, "m")):
+        want = d.branches[s].qddot(c.qdot).subs({c.qdot: qdot_, g: g_, mu: mu_,
+                                                 **{p: values[p.name] for p in c.params}})
+        f = sp.lambdify(c.q, want, "mpmath")
+        for q in points:
+            with mpmath.workdps(30):
+                exact = float(f(mpmath.mpf(q)))
+            got = getattr(k, f"qddot_{b}_scalar")(q, qdot_, g_, mu_, *values.values())
+            assert got == pytest.approx(exact, rel=KERNEL_RTOL, abs=1e-300), (name, s, q)

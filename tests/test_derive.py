@@ -147,3 +147,36 @@ def test_a_wrong_branch_of_a_numeric_route_fails_its_check():
     wrong_F = dataclasses.replace(d, branches={**d.branches, 1: dataclasses.replace(
         br, qdot2=br.qdot2.xreplace({integral: flipped}))})
     assert wrong_F.check()[1] is None
+
+
+#: The corpus's new curves (issue 28): their first run derives with the "direct" forms.
+NEW_CURVES = {"sine-track": ("a*(1 - cos(x/b))", None), "tilted-parabola": ("x**2/(2*p) + c*x", None),
+              "tan-wall": ("a*tan(x/b)", ("-pi*b/2", "pi*b/2")), "pole-well": ("-a/x", ("0", "oo"))}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "tan-wall" else n
+                                  for n in sorted(NEW_CURVES)])   # (the tan wall's simplest forms: 20 s)
+def test_direct_forms_satisfy_the_equations_and_equal_the_simplest(name):
+    """A user curve's "direct" forms (as differentiated, no simplification): eq. 2 substituted back
+    into eq. 1 vanishes at random points at 30 digits, and A, B equal the "simplest" forms there."""
+    from symvib.symbolic.curve import graph, numeric_zero
+
+    z, domain = NEW_CURVES[name]
+    c = graph(z, name=name, **({"domain": domain} if domain else {}))
+    direct, simplest = derive(c, forms="direct", routes=()), derive(c, forms="simplest", routes=())
+    extra = {mu: (0.01, 0.5), g: (1.0, 20.0), C: (5.0, 50.0)}
+    for s in (1, -1):
+        assert dv.identity_holds(direct.residual(s), c, extra={**extra, sp.Symbol("Phi", real=True): (-1, 1)},
+                                 simplify=False) == "numeric", s
+        for got, want in ((direct.branches[s].A, simplest.branches[s].A),
+                          (direct.branches[s].B, simplest.branches[s].B)):
+            assert numeric_zero(got - want, c, extra=extra, points=8, seed=5), (s, got, want)
+    # no simplification: the direct forms are the curve's own pieces (here: more operations, never fewer)
+    assert sp.count_ops(direct.branches[1].B) >= sp.count_ops(simplest.branches[1].B)
+
+
+def test_forms_default_to_the_simplest_and_an_unknown_one_names_the_option():
+    d = derive("circle", routes=())
+    assert d.branches[1].A == derive("circle", routes=(), forms="simplest").branches[1].A
+    with pytest.raises(ValueError, match="forms: 'short'"):
+        derive("circle", forms="short")

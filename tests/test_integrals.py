@@ -143,3 +143,34 @@ def test_both_branches_at_once_find_what_each_finds_alone():
         assert sp.simplify(together[s].expr - alone.expr) == 0
         assert together[s].route == alone.route and together[s].verification == alone.verification
         assert [(a.route, a.outcome) for a in together[s].attempts] == [(a.route, a.outcome) for a in alone.attempts]
+
+
+def _wrong_sympy_job(f: str, q: str):
+    """The sympy route's closed form, made wrong by a term whose derivative is small but not zero."""
+    F = integrals._job_sympy(f, q)
+    var = integrals._find(sp.sympify(f), q)
+    return F + mu**2 * var**3 / 10**6
+
+
+def test_a_wrong_closed_form_is_rejected_by_the_numeric_check(monkeypatch):
+    """Under closed_form "auto" a closed form is checked numerically only (no symbolic substitution):
+    a wrong one (derivative off by 3e-6 mu**2 q**2) is still rejected and the numeric route stands in,
+    while the right one passes, verified "numeric"."""
+    from symvib.symbolic.curve import graph
+
+    c = graph("a*x**2/2")
+    monkeypatch.setattr(integrals, "_CACHE", {})
+    right = integrals.antiderivatives(c, routes=("sympy",), seconds=20.0, total=20.0, check="numeric")
+    assert all(F.route == "sympy" and F.verification == "numeric" for F in right.values())
+    monkeypatch.setattr(integrals, "_CACHE", {})
+    monkeypatch.setattr(integrals, "_route_job", lambda route, f, curve, s: (_wrong_sympy_job,
+                                                                            (sp.srepr(f), curve.q.name)))
+    wrong = integrals.antiderivatives(c, routes=("sympy",), seconds=20.0, total=20.0, check="numeric")
+    for F in wrong.values():
+        assert F.route == "numeric"
+        assert [a.outcome for a in F.attempts] == ["rejected: derivative check failed"]
+
+
+def test_an_unknown_check_names_the_option():
+    with pytest.raises(ValueError, match="check: 'maybe'"):
+        integrals.antiderivatives(shape("circle").curve(), check="maybe")

@@ -59,6 +59,7 @@ import math
 import re
 import sys
 import unicodedata
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -74,7 +75,8 @@ from symvib.symbolic.derive import Derivation, derive
 from symvib.symbolic.symbols import C, g, mu
 
 __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_param_names", "KERNEL_FUNCTIONS",
-           "DIGEST_PREFIX", "route_plan", "module_source", "AUTO_ROUTE_SECONDS"]
+           "DIGEST_PREFIX", "route_plan", "module_source", "Plan", "AUTO_SEARCH_SECONDS", "AUTO_ROUTES",
+           "AUTO_ROUTE_SECONDS", "kernel_forms"]
 
 #: Gauss-Legendre nodes per panel of a numeric-route antiderivative.
 QUAD_NODES = 16
@@ -606,31 +608,86 @@ def _resolved(curve, source, name):
     return curve, source, name
 
 
-#: Budget of one closed-form route (s) for a curve with ``closed_form = "auto"``: a closed form
-#: SymPy finds quickly is taken, and otherwise the numeric ``F_sigma`` at once, so that a new
-#: curve's first run waits seconds rather than every route's full budget
-#: (:data:`~symvib.symbolic.integrals.ROUTE_SECONDS` each).
+#: Budget of the whole closed-form search (s, all routes together) for a curve with
+#: ``closed_form = "auto"``: a closed form SymPy finds quickly is taken (checked numerically),
+#: and otherwise the numeric ``F_sigma``, so that a new curve's first run waits seconds rather
+#: than every route's full budget (:data:`~symvib.symbolic.integrals.ROUTE_SECONDS` each).
+AUTO_SEARCH_SECONDS = 4.0
+#: Budget of one route under ``closed_form = "auto"`` (s; at most what is left of
+#: :data:`AUTO_SEARCH_SECONDS`).
 AUTO_ROUTE_SECONDS = 2.0
+#: The order of the routes under ``closed_form = "auto"``: the tangent-angle route first, which
+#: finds the parabolas' forms in 0.5-1.5 s where ``integrate`` takes 3-6 s on their branch -1.
+AUTO_ROUTES = ("tangent-angle", "sympy", "split")
 
 
-def route_plan(closed_form: str = "auto") -> tuple:
-    """``(routes, seconds)`` of the derivation of a curve whose ``F_sigma`` is found as
+@dataclass(frozen=True)
+class Plan:
+    """How the derivation of a curve searches ``F_sigma`` in closed form (:func:`route_plan`).
+
+    Attributes
+    ----------
+    routes : tuple of str
+        The closed-form routes, in order (:data:`~symvib.symbolic.integrals.ROUTES`); empty for
+        the numeric ``F_sigma`` at once.
+    seconds : float
+        Budget of one route.
+    total : float or None
+        Budget of all the routes together (``None``: each route its own ``seconds``).
+    check : {"symbolic", "numeric"}
+        How a closed form found is checked (:func:`symvib.symbolic.integrals.verify`).
+    """
+
+    routes: tuple
+    seconds: float
+    total: float | None
+    check: str
+
+
+def route_plan(closed_form: str = "auto") -> Plan:
+    """The :class:`Plan` of the derivation of a curve whose ``F_sigma`` is found as
     ``closed_form`` says (:data:`symvib.shapes.CLOSED_FORMS`).
 
     Examples
     --------
-    >>> route_plan("never")[0]
+    >>> route_plan("never").routes
     ()
-    >>> route_plan("auto")[1] == AUTO_ROUTE_SECONDS
+    >>> plan = route_plan("auto")
+    >>> plan.total == AUTO_SEARCH_SECONDS, plan.check
+    (True, 'numeric')
+    >>> route_plan("required").total is None
     True
     """
     from symvib.shapes import CLOSED_FORMS
     from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
-    plans = {"auto": (ROUTES, AUTO_ROUTE_SECONDS), "required": (ROUTES, ROUTE_SECONDS), "never": ((), ROUTE_SECONDS)}
+    assert sorted(AUTO_ROUTES) == sorted(ROUTES)
+    plans = {"auto": Plan(AUTO_ROUTES, AUTO_ROUTE_SECONDS, AUTO_SEARCH_SECONDS, "numeric"),
+             "required": Plan(ROUTES, ROUTE_SECONDS, None, "symbolic"),
+             "never": Plan((), ROUTE_SECONDS, None, "symbolic")}
     if closed_form not in plans:
         raise ValueError(f"curve.closed_form: {closed_form!r} is not one of {', '.join(CLOSED_FORMS)}")
     return plans[closed_form]
+
+
+def kernel_forms(source: dict) -> str:
+    """The forms (:data:`symvib.symbolic.derive.FORMS`) of the kernels of the curve ``source``.
+
+    A catalogue shape's module keeps the simplest forms (``"simplest"``: ``generated/`` and the
+    paper's equations as they were); a user curve's is derived with its expressions as
+    differentiated (``"direct"``), seconds sooner; whoever generates it (``symvib run``,
+    ``symvib generate``), one input hash gives one module.
+
+    Examples
+    --------
+    >>> from symvib.shapes import shape
+    >>> kernel_forms(shape("circle").source()), kernel_forms({"name": "circle", "z": "x**4"})
+    ('simplest', 'direct')
+    """
+    from symvib.shapes import CATALOGUE
+
+    catalogue = CATALOGUE.get(source.get("name"))
+    return "simplest" if catalogue is not None and catalogue.source() == source else "direct"
 
 
 def module_source(curve, *, source: dict | None = None, seconds: float | None = None, routes=None,
@@ -640,7 +697,8 @@ def module_source(curve, *, source: dict | None = None, seconds: float | None = 
     Arguments as :func:`generate`'s; ``origin`` names the module in errors.  Nothing is written.
     ``closed_form`` (``"auto"``, ``"required"``, ``"never"``: :func:`route_plan`) chooses the routes
     and their budget where ``routes`` and ``seconds`` are not given; ``"required"`` raises a
-    ValueError naming ``curve.closed_form`` when a branch has no closed form.
+    ValueError naming ``curve.closed_form`` when a branch has no closed form.  The coefficients
+    of eq. 1 are written in the forms :func:`kernel_forms` gives the curve.
     """
     from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES
 
@@ -648,12 +706,12 @@ def module_source(curve, *, source: dict | None = None, seconds: float | None = 
     check_param_names(p.name for p in curve.params)  # before the derivation: fail in milliseconds
     _py_literal(source)
     closed_form = source.get("closed_form") if closed_form is None else closed_form
-    if closed_form is not None:
-        plan_routes, plan_seconds = route_plan(closed_form)
-        routes = plan_routes if routes is None else routes
-        seconds = plan_seconds if seconds is None else seconds
-    d = derive(curve, seconds=ROUTE_SECONDS if seconds is None else seconds,
-               routes=ROUTES if routes is None else routes)
+    plan = Plan(ROUTES, ROUTE_SECONDS, None, "symbolic") if closed_form is None else route_plan(closed_form)
+    if seconds is not None or routes is not None:   # a budget or routes of one's own: every route its seconds
+        plan = Plan(plan.routes if routes is None else tuple(routes), plan.seconds if seconds is None else seconds,
+                    None, plan.check)
+    d = derive(curve, seconds=plan.seconds, routes=plan.routes, total=plan.total, check=plan.check,
+               forms=kernel_forms(source))
     missing = [s for s, br in d.branches.items() if br.F.route == "numeric"] if closed_form == "required" else []
     if missing:
         tried = "; ".join(f"{a.route}: {a.outcome}" for a in d.branches[missing[0]].F.attempts)

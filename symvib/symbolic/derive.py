@@ -42,7 +42,14 @@ from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
 #: as ``C`` is, since eq. 2 satisfies eq. 1 whatever it is.
 PHI = sp.Symbol("Phi", real=True)
 
-__all__ = ["Branch", "Derivation", "derive", "coefficients", "pm_latex"]
+__all__ = ["Branch", "Derivation", "derive", "coefficients", "pm_latex", "FORMS"]
+
+#: How :func:`derive` writes the coefficients ``A``, ``B`` of eq. 1: ``"simplest"`` takes the
+#: shortest of a few simplified forms (``cancel``, ``trigsimp``, ``simplify``: the catalogue's
+#: kernels and the paper's equations; seconds of SymPy for a curve with trigonometric terms),
+#: ``"direct"`` the expressions as differentiated from the curve's own (already simplified)
+#: ``h``, ``h'``, ``alpha'``, ``x'``, ``z'`` (a new user curve's first run: milliseconds).
+FORMS = ("simplest", "direct")
 
 
 def _simplest(expr: sp.Expr) -> sp.Expr:
@@ -51,6 +58,11 @@ def _simplest(expr: sp.Expr) -> sp.Expr:
     for op in (sp.cancel, sp.trigsimp, sp.simplify):
         forms.append(budget.simplify(expr, how=op))  # the input where one fails or runs out of time
     return min(forms, key=sp.count_ops)
+
+
+def _as_differentiated(expr: sp.Expr) -> sp.Expr:
+    """``expr`` as it stands (the ``"direct"`` forms of :data:`FORMS`)."""
+    return expr
 
 
 @dataclass(frozen=True)
@@ -266,16 +278,26 @@ def pm_latex(text: str) -> str:
     return text.replace(r"- \pm", r"\mp").replace(r"+ \pm", r"\pm").replace(r"-\pm", r"\mp")
 
 
-def coefficients(xp, zp, h, hp, alphap) -> tuple:
+def coefficients(xp, zp, h, hp, alphap, *, forms: str = "simplest") -> tuple:
     """``A, B`` of eq. 1 with the symbol ``sigma`` for the branch sign.
 
     ``A = h'/h + sigma mu alpha'`` and ``B = g (z' + sigma mu x') / h**2``, from
     ``dv/dt = h qddot + h' qdot**2 = -g sin(alpha) - sigma mu (kappa v**2 + g cos(alpha))``
-    with ``v = h qdot``, ``h sin(alpha) = z'``, ``h cos(alpha) = x'``, ``kappa h = alpha'``.
+    with ``v = h qdot``, ``h sin(alpha) = z'``, ``h cos(alpha) = x'``, ``kappa h = alpha'``;
+    each ratio in the ``forms`` of :data:`FORMS`.
     """
-    A = _simplest(hp / h) + sigma * mu * alphap
-    B = g * (_simplest(zp / h**2) + sigma * mu * _simplest(xp / h**2))
+    tidy = _form_maker(forms)
+    A = tidy(hp / h) + sigma * mu * alphap
+    B = g * (tidy(zp / h**2) + sigma * mu * tidy(xp / h**2))
     return A, B
+
+
+def _form_maker(forms: str):
+    """The function that writes an expression in the ``forms`` of :data:`FORMS`."""
+    makers = {"simplest": _simplest, "direct": _as_differentiated}
+    if forms not in makers:
+        raise ValueError(f"forms: {forms!r} is not one of {', '.join(FORMS)}")
+    return makers[forms]
 
 
 def _collect(lhs: sp.Expr, c: Curve) -> sp.Expr:
@@ -285,7 +307,8 @@ def _collect(lhs: sp.Expr, c: Curve) -> sp.Expr:
     return sp.Add(c.qddot, _simplest(coeff) * c.qdot**2, _simplest(rest), evaluate=False)
 
 
-def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES) -> Derivation:
+def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES, forms: str = "simplest",
+           total: float | None = None, check: str = "symbolic") -> Derivation:
     """Derive eqs. 1-2 and the energy expressions of ``curve``.
 
     Parameters
@@ -296,10 +319,24 @@ def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES) -> Derivatio
         Budget of each symbolic integration route (see :mod:`symvib.symbolic.integrals`).
     routes : sequence of str
         Closed-form routes to try for ``F_sigma``.
+    forms : {"simplest", "direct"}
+        How the coefficients of eq. 1 are written (:data:`FORMS`): ``"simplest"`` (the default:
+        the catalogue's and the paper's forms) or ``"direct"`` (as differentiated, no
+        simplification: a new user curve's kernels in a fraction of the time).
+    total : float, optional
+        Budget of all the routes together (default: none but each route's ``seconds``).
+    check : {"symbolic", "numeric"}
+        How a closed form found is checked (:func:`symvib.symbolic.integrals.antiderivatives`).
 
     Returns
     -------
     Derivation
+
+    Examples
+    --------
+    >>> d = derive("circle", forms="direct", routes=())
+    >>> d.branches[1].F.route
+    'numeric'
     """
     if isinstance(curve, str):
         from symvib.shapes import shape
@@ -310,15 +347,16 @@ def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES) -> Derivatio
     if not isinstance(curve, Curve):
         raise TypeError(f"derive() needs a Curve, a Shape or a shape name, not {type(curve).__name__}")
     c = curve
-    A_sym, B_sym = coefficients(c.xp, c.zp, c.h, c.hp, c.alphap)
+    tidy = _form_maker(forms)
+    A_sym, B_sym = coefficients(c.xp, c.zp, c.h, c.hp, c.alphap, forms=forms)
     branches = {}
     # Every route on both branches (their integrands differ in the sign of mu, and a route may
     # find one and not the other; the derivation notebooks show each attempt), side by side.
-    found = antiderivatives(c, seconds=seconds, routes=routes)
+    found = antiderivatives(c, seconds=seconds, routes=routes, total=total, check=check)
     for s in (1, -1):
         F = found[s]
-        A = _simplest(A_sym.subs(sigma, s))
-        B = _simplest(B_sym.subs(sigma, s))
+        A = tidy(A_sym.subs(sigma, s))
+        B = tidy(B_sym.subs(sigma, s))
         w_ = sp.exp(-2 * s * mu * c.alpha) * (C - 2 * g * F.expr)
         branches[s] = Branch(s=s, A=A, B=B, F=F, w=w_, qdot2=w_ / c.h**2)
     return Derivation(curve=c, branches=branches, A=A_sym, B=B_sym)

@@ -27,7 +27,10 @@ is differentiated back and checked:
 Default budget: :data:`ROUTE_SECONDS` per route and :data:`VERIFY_SECONDS` for
 the symbolic part of a check, so one branch takes at most about
 ``3 * ROUTE_SECONDS + VERIFY_SECONDS`` seconds (40 s) before the numeric
-route stands in.
+route stands in.  A ``total`` budget bounds all the routes together (a new curve's
+first run, :func:`symvib.codegen.generate.route_plan`), and ``check="numeric"`` accepts a
+closed form on its numeric checks alone (the derivative at 30 digits at random points and
+``F(b) - F(a)`` against a quadrature), without the symbolic substitution.
 
 Examples
 --------
@@ -57,7 +60,7 @@ from symvib.symbolic.curve import (
 from symvib.symbolic.symbols import mu
 
 __all__ = ["Attempt", "Antiderivative", "antiderivative", "antiderivatives", "integrand", "ROUTES", "ROUTE_SECONDS",
-           "VERIFY_SECONDS"]
+           "VERIFY_SECONDS", "CHECKS", "SHORTEST_ROUTE_SECONDS"]
 
 #: Closed-form routes, tried in this order.
 ROUTES = ("sympy", "split", "tangent-angle")
@@ -65,6 +68,11 @@ ROUTES = ("sympy", "split", "tangent-angle")
 ROUTE_SECONDS = 10.0
 #: Default budget for SymPy to simplify ``F' - integrand`` to zero, in seconds.
 VERIFY_SECONDS = 10.0
+#: How a closed form is checked: ``"symbolic"`` tries SymPy's substitution after the numeric checks
+#: (:func:`verify`), ``"numeric"`` stops after them.
+CHECKS = ("symbolic", "numeric")
+#: A route is started only when at least this much of a ``total`` budget is left, in seconds.
+SHORTEST_ROUTE_SECONDS = 0.25
 #: Random points at which a closed form is differentiated back at 30 digits.
 VERIFY_POINTS = 6
 #: Pairs of points at which ``F(b) - F(a)`` is compared with a quadrature (catches jumps).
@@ -209,17 +217,21 @@ def _continuous(F: sp.Expr, f: sp.Expr, curve: Curve, seed: int = 3) -> bool:
     return True
 
 
-def verify(F: sp.Expr, f: sp.Expr, curve: Curve, *, seconds: float = VERIFY_SECONDS) -> str | None:
+def verify(F: sp.Expr, f: sp.Expr, curve: Curve, *, seconds: float = VERIFY_SECONDS,
+           check: str = "symbolic") -> str | None:
     """Differentiate ``F`` back and compare with ``f``; ``None`` if it fails.
 
     Returns ``"symbolic"`` or ``"numeric"`` (how ``F' = f`` was shown), after
-    also checking ``F(b) - F(a)`` against a quadrature at random pairs.
+    also checking ``F(b) - F(a)`` against a quadrature at random pairs.  With
+    ``check="numeric"`` the symbolic substitution is not tried (``"numeric"`` or ``None``).
     """
     residual = sp.diff(F, curve.q) - f
     if not numeric_zero(residual, curve, extra={mu: MU_RANGE}, points=VERIFY_POINTS):
         return None
     if not _continuous(F, f, curve):
         return None
+    if check == "numeric":
+        return "numeric"
     outcome = budget.run(_job_simplify_zero, (sp.srepr(residual),), seconds=seconds)
     return "symbolic" if outcome.status == "ok" and outcome.value == 1 else "numeric"
 
@@ -271,59 +283,55 @@ def antiderivative(curve: Curve, s: int, *, seconds: float = ROUTE_SECONDS,
 
 
 def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SECONDS,
-                    routes=ROUTES) -> dict:
+                    routes=ROUTES, total: float | None = None, check: str = "symbolic") -> dict:
     """:func:`antiderivative` of each branch in ``branches``, ``{s: Antiderivative}``.
 
     Every route is tried on every branch still without a closed form, in the order of
     ``routes``; the branches' attempts at one route run side by side (a child process each,
     on cores of their own), so a curve whose routes all spend their budgets waits for them
-    once, not once per branch.
+    once, not once per branch.  ``total`` (seconds), when given, bounds all the routes
+    together: a route gets ``seconds`` or what is left of ``total``, whichever is less, so a
+    route that ends early leaves its time to the next, and none starts with less than
+    :data:`SHORTEST_ROUTE_SECONDS` left.  ``check`` (:data:`CHECKS`)
+    is how a closed form found is checked (:func:`verify`).
     """
     unknown = set(routes) - set(ROUTES)
     if unknown:
         raise ValueError(f"unknown route(s) {sorted(unknown)}; known: {', '.join(ROUTES)}")
+    if check not in CHECKS:
+        raise ValueError(f"check: {check!r} is not one of {', '.join(CHECKS)}")
     out, todo = {}, {}
     for s in branches:
         if s not in (1, -1):
             raise ValueError(f"branch s must be +1 or -1, got {s!r}")
         f = integrand(curve, s)
-        key = (sp.srepr(f), sp.srepr(curve.alpha), tuple(routes), seconds)
+        key = (sp.srepr(f), sp.srepr(curve.alpha), tuple(routes), seconds, total, check)
         if key in _CACHE:
             # The reference point depends on the domain: one integrand on (0.3, oo) and on
             # (-oo, -0.3) shares the symbolic work but not q_ref.
             out[s] = _with_q_ref(_CACHE[key], reference_point(curve), curve.q)
         else:
             todo[s] = (f, key, [])
-    q = curve.q
-    for route in routes:
+    deadline = None if total is None else time.perf_counter() + total
+    for i, route in enumerate(routes):
         waiting = [s for s in todo if s not in out]
         if not waiting:
             break
-        started = {s: budget.start(*_route_job(route, todo[s][0], curve, s), seconds=seconds) for s in waiting}
+        allowed = seconds
+        if deadline is not None:   # at most what is left of the total budget
+            allowed = min(seconds, deadline - time.perf_counter())
+            if allowed < SHORTEST_ROUTE_SECONDS:   # too little for this route, and so for the rest
+                for s in waiting:
+                    todo[s][2].extend(Attempt(r, f"not tried: the total budget of {total:g} s is spent", 0.0)
+                                      for r in routes[i:])
+                break
+        started = {s: budget.start(*_route_job(route, todo[s][0], curve, s), seconds=allowed) for s in waiting}
         for s in waiting:
             f, _, attempts = todo[s]
-            running = started[s]
-            outcome = budget.finish(running)
-            if outcome.status == "timeout":
-                attempts.append(Attempt(route, f"timeout after {seconds:g} s", outcome.seconds))
-                continue
-            if outcome.status == "error":
-                attempts.append(Attempt(route, f"error: {outcome.value}", outcome.seconds))
-                continue
-            F = outcome.value
-            if F.has(sp.Integral) or F.has(sp.Piecewise):
-                attempts.append(Attempt(route, "no closed form", outcome.seconds))
-                continue
-            F = _tidy(F)
-            how = verify(F, f, curve)
-            elapsed = time.perf_counter() - running.started
-            if how is None:
-                attempts.append(Attempt(route, "rejected: derivative check failed", elapsed))
-                continue
-            F_reg, regular = regularize(F, q)
-            attempts.append(Attempt(route, f"closed form, verified {how}", elapsed))
-            out[s] = Antiderivative(s=s, integrand=f, expr=F_reg, route=route, verification=how,
-                                    attempts=tuple(attempts), q_ref=reference_point(curve), mu_regular=regular)
+            found = _judge(s, route, started[s], budget.finish(started[s]), f, curve, check, attempts)
+            if found is not None:
+                out[s] = found
+    q = curve.q
     for s, (f, key, attempts) in todo.items():
         if s not in out:
             u = sp.Dummy("u", real=True)
@@ -333,6 +341,31 @@ def antiderivatives(curve: Curve, branches=(1, -1), *, seconds: float = ROUTE_SE
                                     q_ref=q_ref)
         _CACHE[key] = out[s]
     return out
+
+
+def _judge(s: int, route: str, running, outcome, f: sp.Expr, curve: Curve, check: str, attempts: list):
+    """The :class:`Antiderivative` a route's ``outcome`` gives, after its check, or ``None``; the
+    attempt is appended to ``attempts`` either way."""
+    if outcome.status == "timeout":
+        attempts.append(Attempt(route, f"timeout after {running.seconds:.3g} s", outcome.seconds))
+        return None
+    if outcome.status == "error":
+        attempts.append(Attempt(route, f"error: {outcome.value}", outcome.seconds))
+        return None
+    F = outcome.value
+    if F.has(sp.Integral) or F.has(sp.Piecewise):
+        attempts.append(Attempt(route, "no closed form", outcome.seconds))
+        return None
+    F = _tidy(F)
+    how = verify(F, f, curve, check=check)
+    elapsed = time.perf_counter() - running.started
+    if how is None:
+        attempts.append(Attempt(route, "rejected: derivative check failed", elapsed))
+        return None
+    F_reg, regular = regularize(F, curve.q)
+    attempts.append(Attempt(route, f"closed form, verified {how}", elapsed))
+    return Antiderivative(s=s, integrand=f, expr=F_reg, route=route, verification=how, attempts=tuple(attempts),
+                          q_ref=reference_point(curve), mu_regular=regular)
 
 
 def _route_job(route: str, f: sp.Expr, curve: Curve, s: int) -> tuple:
