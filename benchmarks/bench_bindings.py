@@ -38,6 +38,10 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from sweep_duel import GRID  # the benchmark's grid, written once
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
@@ -74,14 +78,7 @@ from symvib.numeric.engine.bind import bind
 from symvib.numeric.scene import load_scene
 driver.bind = functools.partial(bind, shared={shared!r})
 scene = load_scene({root!r} + "/symvib/scenes/paper-parabola.toml")
-fn = driver.sweep_function(scene, "numba")
-rows = np.array([driver.scene_row(scene.replace(qdot0=float(a), mu=float(b), k=0.8))
-                 for a in np.linspace(3, 12, 100) for b in np.linspace(0.01, 0.2, 100)])
-params = np.array([scene.param_values] * len(rows))
-pick = np.random.default_rng(0).permutation(len(rows))[:{scenes}]
-rows, params = rows[pick], params[pick]
-fn(rows[:10], params[:10], 16, 0)
-times, events = [], 0
+{grid}times, events = [], 0
 for _ in range({rounds}):
     start = time.thread_time()
     out, _ = fn(rows, params, 16, 0)
@@ -171,7 +168,8 @@ def main(argv=None) -> int:
         medians = {}
         for shared in (True, False):
             label = "shared" if shared else "specialized"
-            out = child(SWEEP_WORKER.format(root=str(ROOT), shared=shared, scenes=opts.scenes, rounds=opts.rounds),
+            out = child(SWEEP_WORKER.format(root=str(ROOT), shared=shared, scenes=opts.scenes, rounds=opts.rounds,
+                                     grid=GRID.format(scenes=opts.scenes)),
                         kernels, tmp / f"numba-sweep-{label}")
             medians[label] = statistics.median(out["times"])
             print(f"sweep {label}: {out['events']} events, median {medians[label]:.4f} s, "

@@ -35,6 +35,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from compare_revisions import ROOT, checkout
 
+#: The benchmark's grid in a worker (``scene`` and ``driver`` loaded): the paper parabola's sweep
+#: compiled, ``{scenes}`` scenes of a 100 x 100 grid of ``phidot0`` x ``mu`` (``k = 0.8``) picked at random
+#: (seeded), and one small sweep to warm it.  ``bench_bindings.py`` uses it too.
+GRID = """fn = driver.sweep_function(scene, "numba")
+rows = np.array([driver.scene_row(scene.replace(qdot0=float(a), mu=float(b), k=0.8))
+                 for a in np.linspace(3, 12, 100) for b in np.linspace(0.01, 0.2, 100)])
+params = np.array([scene.param_values] * len(rows))
+pick = np.random.default_rng(0).permutation(len(rows))[:{scenes}]
+rows, params = rows[pick], params[pick]
+fn(rows[:10], params[:10], 16, 0)
+"""
+
 #: The worker: that revision's symvib first on the path, the sweep compiled, then one sweep per line read.
 WORKER = """
 import sys, time
@@ -46,14 +58,7 @@ from symvib.numeric import driver
 from symvib.numeric.scene import load_scene
 assert driver.__file__.startswith({folder!r}), driver.__file__
 scene = load_scene({folder!r} + "/symvib/scenes/paper-parabola.toml")
-fn = driver.sweep_function(scene, "numba")
-rows = np.array([driver.scene_row(scene.replace(qdot0=float(a), mu=float(b), k=0.8))
-                 for a in np.linspace(3, 12, 100) for b in np.linspace(0.01, 0.2, 100)])
-params = np.array([scene.param_values] * len(rows))
-pick = np.random.default_rng(0).permutation(len(rows))[:{scenes}]
-rows, params = rows[pick], params[pick]
-fn(rows[:10], params[:10], 16, 0)
-print("ready", flush=True)
+{grid}print("ready", flush=True)
 for _ in sys.stdin:
     start = time.thread_time()
     out, _ = fn(rows, params, 16, 0)
@@ -65,7 +70,7 @@ def start(folder: Path, scenes: int, cpu: str, caches: Path) -> subprocess.Popen
     env = dict(os.environ, NUMBA_CACHE_DIR=str(caches / "numba"), SYMVIB_CACHE=str(caches / "kernels"))
     pin = ["taskset", "-c", cpu] if cpu and shutil.which("taskset") else []
     proc = subprocess.Popen([*pin, sys.executable, "-W", "ignore", "-c",
-                             WORKER.format(folder=str(folder), scenes=scenes)],
+                             WORKER.format(folder=str(folder), scenes=scenes, grid=GRID.format(scenes=scenes))],
                             cwd=folder, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     if proc.stdout.readline().strip() != "ready":
         raise SystemExit(f"{folder}: the worker did not start")
