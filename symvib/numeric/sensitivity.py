@@ -45,7 +45,9 @@ from functools import cache
 
 import numpy as np
 
-from symvib.numeric.events import EventKind, Result, Status
+# Kinds and statuses by their engine codes (symvib.numeric.layout, below the records of
+# symvib.numeric.events, whose Result.sensitivities calls up into this module).
+from symvib.numeric.layout import EventCode, StatusCode
 
 __all__ = ["sensitivities", "Sensitivities", "PARAMETERS"]
 
@@ -71,7 +73,7 @@ INNER_NODES = 8
 #: Agreement of two piece counts that ends the integral of ``df/dmu`` over a whole interval.
 INTEGRAL_RTOL = 1e-14
 #: Statuses whose final state has derivatives (the run ended on an event).
-FINAL_STATUSES = (Status.ARRESTED, Status.RESTING_ON_LIMITER)
+FINAL_STATUSES = (StatusCode.ARRESTED, StatusCode.RESTING_ON_LIMITER)
 
 
 @dataclass(frozen=True)
@@ -310,12 +312,12 @@ class _Interval:
         return best if best_gap <= ACCEPT else None
 
 
-def sensitivities(result: Result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
+def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``.
 
     Parameters
     ----------
-    result : Result
+    result : symvib.numeric.events.Result
         A run of :func:`symvib.simulate` (its scene and events are read; nothing runs again).
     wrt : sequence of str
         Names from :data:`PARAMETERS` (``left``/``right`` only where the scene has that limiter).
@@ -370,7 +372,7 @@ def sensitivities(result: Result, wrt=PARAMETERS, *, prepared=None) -> Sensitivi
     D_impact_loss = np.zeros(P)
     Dq_last = Dw_last = None
     for i, ev in enumerate(result.events):
-        kind = ev.kind
+        kind = ev.kind.code
         own = _not_differentiable(ev, scene, c, kind)
         if broken or own:
             reasons.append(own or f"follows event {first_broken}, which has no derivatives ({broken})")
@@ -378,7 +380,7 @@ def sensitivities(result: Result, wrt=PARAMETERS, *, prepared=None) -> Sensitivi
                 broken, first_broken = own, i
             continue
         q_e = ev.q
-        turning = kind in (EventKind.REVERSAL, EventKind.ARREST)
+        turning = kind in (EventCode.REVERSAL, EventCode.ARREST)
         if q_e == q_a:                      # no motion in between (a rest test at the start)
             Dq_e, Dw_minus, dT = Dq_a.copy(), Dw_a.copy(), np.zeros(P)
             w_minus = w_a
@@ -390,7 +392,7 @@ def sensitivities(result: Result, wrt=PARAMETERS, *, prepared=None) -> Sensitivi
             if turning:
                 Dq_e = iv.dG_fixed_q_end() / (2 * c.g * iv.f_e)
             else:
-                Dq_e = limiter_D.get(q_e, np.zeros(P)) if kind in (EventKind.IMPACT, EventKind.REST_ON_LIMITER) \
+                Dq_e = limiter_D.get(q_e, np.zeros(P)) if kind in (EventCode.IMPACT, EventCode.REST_ON_LIMITER) \
                     else np.zeros(P)
             iv.set_end(Dq_e)
             w_end, W_end, _, _ = iv.along(np.array([1.0]))
@@ -403,7 +405,7 @@ def sensitivities(result: Result, wrt=PARAMETERS, *, prepared=None) -> Sensitivi
         sigma_in = 1.0 if ev.qdot_before >= 0 else -1.0
         v_minus = sigma_in * math.sqrt(max(w_minus, 0.0))
         Dv_minus = sigma_in * Dw_minus / (2 * math.sqrt(w_minus)) if w_minus > 0 else np.zeros(P)
-        if kind == EventKind.IMPACT:
+        if kind == EventCode.IMPACT:
             k = scene.k
             w_plus, Dw_plus = k * k * w_minus, 2 * k * Dk * w_minus + k * k * Dw_minus
             Dv_plus = -(Dk * v_minus + k * Dv_minus)
@@ -418,7 +420,7 @@ def sensitivities(result: Result, wrt=PARAMETERS, *, prepared=None) -> Sensitivi
         q_a, w_a, Dq_a, Dw_a, Dt_a = q_e, w_plus, Dq_e, Dw_plus, Dt_e
         Dq_last, Dw_last = Dq_e, Dw_plus
     final = {name: np.full(P, np.nan) for name in ("t_final", "q_final", "friction_work", "impact_loss")}
-    if not broken and result.status in FINAL_STATUSES and n and Dq_last is not None:
+    if not broken and result.status.code in FINAL_STATUSES and n and Dq_last is not None:
         q_f = result.events[-1].q
         DE_final = c.m * (Dw_last / 2 + c.g * float(c.dz(q_f)) * Dq_last)
         final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=D_impact_loss,
@@ -441,13 +443,13 @@ def _branch(c, q_a, w_a, sigma, mid_q) -> int:
 
 def _not_differentiable(ev, scene, c, kind) -> str:
     """Why event ``ev`` has no derivatives (empty when it has)."""
-    if kind == EventKind.NORMAL_SIGN_CHANGE:
+    if kind == EventCode.NORMAL_SIGN_CHANGE:
         return "a sign change of the normal force (not derived yet); this event and the ones after it"
-    if kind == EventKind.LEFT_CURVE:
+    if kind == EventCode.LEFT_CURVE:
         return "the particle leaves the curve"
     if ev.detail and "zeno" in ev.detail.lower():
         return "a Zeno accumulation of impacts (infinitely many events); this event and the ones after it"
-    if kind in (EventKind.REVERSAL, EventKind.ARREST):
+    if kind in (EventCode.REVERSAL, EventCode.ARREST):
         a = float(c.alpha(ev.q))
         edge = abs(abs(math.sin(a)) - scene.mu * abs(math.cos(a)))
         if edge <= CONE_EDGE * max(abs(math.sin(a)), scene.mu * abs(math.cos(a)), 1e-300):
