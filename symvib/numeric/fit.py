@@ -63,8 +63,10 @@ STATUSES = {
 }
 #: Largest ``|correlation|`` of two estimates that still counts as separated.
 IDENTIFIED = 1 - 1e-6
-#: Steps of ``lambda`` (Levenberg-Marquardt) up and down.
+#: Steps of ``lambda`` (Levenberg-Marquardt) up and down, and its range (above the top no step is
+#: left to try: the cost is at a minimum to rounding).
 LAMBDA_UP, LAMBDA_DOWN = 10.0, 0.3
+LAMBDA_MIN, LAMBDA_MAX = 1e-12, 1e16
 #: Relative step that ends a stage of the continuation before the last (the last uses ``xtol``).
 STAGE_XTOL = 1e-5
 #: Columns a file of observed events may have.
@@ -314,89 +316,110 @@ def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weig
     if len(w) != m or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {len(w)}")
     bounds = {name: (bounds or {}).get(name, _default_bounds(scene, name)) for name in free}
-    run = run or (lambda s: simulate(s, samples=False))
+    problem = _Problem(scene, free, run or (lambda s: simulate(s, samples=False)),
+                       *(np.array([bounds[n][i] for n in free]) for i in (0, 1)), weights is not None)
     x = np.array([getattr(scene, name) for name in free], dtype=float)
-    lo, hi = (np.array([bounds[n][i] for n in free]) for i in (0, 1))
-    if np.any(x < lo) or np.any(x > hi):
+    if np.any(x < problem.lo) or np.any(x > problem.hi):
         raise ValueError(f"scene: the start {dict(zip(free, x))} is outside the bounds {bounds}")
-
-    def at(values):
-        return scene.replace(**{name: float(v) for name, v in zip(free, values)})
-
-    def solve(observed, w, x, xtol):
-        r, matched, jacobian = _model(at(x), observed, free, run)
-        J, usable = jacobian()
-        if matched == 0:
-            return _result("no_events", STATUSES["no_events"], at(x), free, x, J, r, w, weights is not None, matched,
-                           0, ())
-        cost = 0.5 * float(np.sum((w * r) ** 2))
-        lam, history, status = 1e-3, [(x.copy(), cost)], "max_iterations"
-        iterations = 0
-        while iterations < max_iterations:
-            iterations += 1
-            A = w[:, None] * J
-            scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)          # Moré's column scaling
-            g = A.T @ (w * r)
-            H = A.T @ A
-            while True:
-                step = np.linalg.lstsq(H + lam * np.diag(scale ** 2), -g, rcond=None)[0]
-                trial = np.clip(x + step, lo, hi)
-                try:
-                    r_new, m_new, jacobian_new = _model(at(trial), observed, free, run)
-                    new_cost = 0.5 * float(np.sum((w * r_new) ** 2))
-                except ValueError:
-                    new_cost = math.inf
-                if new_cost <= cost:
-                    break
-                lam *= LAMBDA_UP
-                if lam > 1e16:
-                    break
-            if new_cost > cost:                     # no step lowers the cost: a minimum (to rounding)
-                status = "converged"
-                break
-            moved = np.abs(trial - x) <= xtol * (np.abs(x) + xtol)
-            J_new, u_new = jacobian_new()
-            x, r, J, matched, usable, cost = trial, r_new, J_new, m_new, u_new, new_cost
-            lam = max(lam * LAMBDA_DOWN, 1e-12)
-            history.append((x.copy(), cost))
-            if np.all(moved):
-                status = "converged"
-                break
-        if matched < len(observed.t):
-            status = "incomplete"
-        message = STATUSES[status]
-        if not np.all(usable):
-            message += f"; {int(np.sum(~usable))} observation(s) without derivatives left out of the steps"
-        if matched < len(observed.t):
-            message += (f"; the model makes only {matched} of the {len(observed.t)} observed events in their "
-                        "order and kinds")
-        return _result(status, message, at(x), free, x, J, r, w, weights is not None, matched, iterations,
-                       tuple(history))
-
-    # Continuation in the number of events: the first events depend least on how far the start is
-    # from the answer, so fit them first, then twice as many, ..., then all (each stage starts from
-    # the last one's estimates); a fit of every event from a distant start can stop in a minimum
-    # where the model's later events are matched to the wrong observed ones.
     n_obs = len(observed.t)
-    stages = []
-    n = min(n_obs, max(len(free), 2))
-    while n < n_obs:
-        stages.append(n)
-        n *= 2
-    stages.append(n_obs)
     total, history = 0, []
-    for n in stages:
+    for n in _stages(n_obs, len(free)):
         part = Observed(observed.t[:n], observed.kinds[:n] if observed.kinds else None,
                         observed.q[:n] if observed.q is not None else None)
         part_w = w[:n] if observed.q is None else np.concatenate([w[:n], w[n_obs:n_obs + n]])
         # (a stage before the last only needs to land near its minimum: the next one refines it)
-        result = solve(part, part_w, x, xtol if n == n_obs else STAGE_XTOL)
+        result = _levenberg_marquardt(problem, part, part_w, x, xtol if n == n_obs else STAGE_XTOL, max_iterations)
         total += result.iterations
         history += list(result.history)
         x = np.array([result.estimates[name] for name in free])
         if result.status == "no_events":
             return result
     return dataclasses.replace(result, iterations=total, history=tuple(history))
+
+
+def _stages(n_obs: int, n_free: int) -> list:
+    """How many observed events each stage of the continuation fits: the first events depend least
+    on how far the start is from the answer, so fit them first, then twice as many, ..., then all
+    (a fit of every event from a distant start can stop where the model's later events are matched
+    to the wrong observed ones).
+
+    >>> _stages(20, 4), _stages(3, 2)
+    ([4, 8, 16, 20], [2, 3])
+    """
+    stages, n = [], min(n_obs, max(n_free, 2))
+    while n < n_obs:
+        stages.append(n)
+        n *= 2
+    return stages + [n_obs]
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """What a fit holds fixed: the start scene, the free parameters, the forward run, the bounds."""
+
+    scene: Scene
+    free: tuple
+    run: object
+    lo: np.ndarray
+    hi: np.ndarray
+    absolute: bool
+
+    def at(self, values) -> Scene:
+        return self.scene.replace(**{name: float(v) for name, v in zip(self.free, values)})
+
+
+def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: float, max_iterations: int) -> FitResult:
+    """Levenberg-Marquardt from ``x`` (Moré's column scaling, bounds by projection): a trial that
+    lowers the cost is taken and ``lambda`` falls, else ``lambda`` rises; it stops when the relative
+    step is below ``xtol`` or no step lowers the cost (a minimum, to rounding)."""
+    free, lo, hi = problem.free, problem.lo, problem.hi
+    r, matched, jacobian = _model(problem.at(x), observed, free, problem.run)
+    J, usable = jacobian()
+    if matched == 0:
+        return _result("no_events", STATUSES["no_events"], problem.at(x), free, x, J, r, w, problem.absolute,
+                       matched, 0, ())
+    cost = 0.5 * float(np.sum((w * r) ** 2))
+    lam, history, status = 1e-3, [(x.copy(), cost)], "max_iterations"
+    iterations = 0
+    while iterations < max_iterations:
+        iterations += 1
+        A = w[:, None] * J
+        scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
+        g, H = A.T @ (w * r), A.T @ A
+        while True:
+            step = np.linalg.lstsq(H + lam * np.diag(scale ** 2), -g, rcond=None)[0]
+            trial = np.clip(x + step, lo, hi)
+            try:
+                r_new, m_new, jacobian_new = _model(problem.at(trial), observed, free, problem.run)
+                new_cost = 0.5 * float(np.sum((w * r_new) ** 2))
+            except ValueError:                      # a run that failed there: as if the cost rose
+                new_cost = math.inf
+            if new_cost <= cost:
+                break
+            lam *= LAMBDA_UP
+            if lam > LAMBDA_MAX:
+                break
+        if new_cost > cost:
+            status = "converged"
+            break
+        moved = np.abs(trial - x) <= xtol * (np.abs(x) + xtol)
+        J_new, u_new = jacobian_new()
+        x, r, J, matched, usable, cost = trial, r_new, J_new, m_new, u_new, new_cost
+        lam = max(lam * LAMBDA_DOWN, LAMBDA_MIN)
+        history.append((x.copy(), cost))
+        if np.all(moved):
+            status = "converged"
+            break
+    if matched < len(observed.t):
+        status = "incomplete"
+    message = STATUSES[status]
+    if not np.all(usable):
+        message += f"; {int(np.sum(~usable))} observation(s) without derivatives left out of the steps"
+    if matched < len(observed.t):
+        message += f"; the model makes only {matched} of the {len(observed.t)} observed events in their order and kinds"
+    return _result(status, message, problem.at(x), free, x, J, r, w, problem.absolute, matched, iterations,
+                   tuple(history))
+
 
 def _result(status, message, scene, free, x, J, r, w, absolute, matched, iterations, history) -> FitResult:
     """The result at ``x``: covariance ``(A^T A)^-1`` of the weighted Jacobian ``A``, scaled by the
