@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parent.parent
 DERIVATIONS = ROOT / "derivations"
 #: The notebooks the issue asks for: the paper's curves, its errata, and shapes it does not treat.
 REQUIRED = ("parabola", "cycloid", "circle", "errata", "catenary", "quartic", "mechanics", "own-parametric",
-            "explorer")
+            "explorer", "fit")
 #: What every curve notebook shows (a call each), besides the errata notebook.
 SHOWN = {
     "the derivation": "derive(",
@@ -31,7 +31,7 @@ SHOWN = {
 }
 NOTEBOOKS = sorted(DERIVATIONS.glob("*.ipynb"))
 #: Notebooks that are not about one curve (each asserts its own results).
-NOT_CURVES = ("errata", "mechanics", "explorer")
+NOT_CURVES = ("errata", "mechanics", "explorer", "fit")
 
 
 nbtool = load_nbtool()
@@ -81,6 +81,11 @@ def test_each_curve_notebook_shows_every_step(path):
                if not any(call in source for call in ((calls,) if isinstance(calls, str) else calls))]
     assert not missing, f"{path.name} does not show {', '.join(missing)}"
     assert re.search(r"^\s*assert ", source, re.M), f"{path.name} asserts nothing"
+
+
+def test_fit_notebook_asserts_its_estimates():
+    source = _source(DERIVATIONS / "fit.ipynb")
+    assert "symvib.fit(" in source and re.search(r"^\s*assert .*stderr", source, re.M)
 
 
 def test_errata_notebook_asserts_the_verdicts():
