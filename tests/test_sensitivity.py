@@ -198,3 +198,17 @@ def test_the_long_table_has_one_row_per_event_and_parameter():
     assert rows[0]["dt"] == sens.t[0, 0]
     # k = 1 here: the impacts' speeds after depend on k, their times not before the first impact
     assert sens.t[0, 1] == 0.0 and sens.v_after[0, 1] != 0.0
+
+
+def test_the_labelled_table_has_an_event_and_a_parameter_dimension():
+    xr = pytest.importorskip("xarray")
+    res = simulate("paper-parabola")
+    sens = res.sensitivities(wrt=("mu", "qdot0"))
+    ds = sens.to_xarray()
+    assert isinstance(ds, xr.Dataset) and dict(ds.sizes) == {"event": len(res.events), "wrt": 2}
+    assert float(ds.dt.sel(wrt="qdot0").isel(event=0)) == sens.t[0, 1]
+    assert float(ds.t_final.sel(wrt="mu")) == float(ds.dt.sel(wrt="mu").isel(event=-1))
+    assert list(ds.kind.values[:2]) == ["impact", "impact"]
+    pytest.importorskip("pandas")
+    frame = sens.to_dataframe()
+    assert len(frame) == 2 * len(res.events) and set(frame["wrt"]) == {"mu", "qdot0"}

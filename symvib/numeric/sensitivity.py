@@ -120,6 +120,31 @@ class Sensitivities:
                             "dv_after": float(self.v_after[i, j]), "reason": self.reasons[i]})
         return out
 
+    def to_xarray(self):
+        """The derivatives as an ``xarray.Dataset`` with an ``event`` and a ``wrt`` dimension
+        (``dt``, ``dq``, ``dv_before``, ``dv_after``; the event's ``kind`` and ``reason`` as
+        coordinates) and the final state's as variables over ``wrt`` (extra ``symvib[xarray]``).
+
+        Examples
+        --------
+        >>> from symvib import simulate
+        >>> ds = simulate("paper-parabola").sensitivities(wrt=("mu", "k")).to_xarray()  # doctest: +SKIP
+        >>> float(ds.dt.sel(wrt="mu").isel(event=-1)) == float(ds.t_final.sel(wrt="mu"))  # doctest: +SKIP
+        True
+        """
+        try:
+            import xarray as xr
+        except ImportError:
+            raise ImportError("Sensitivities.to_xarray needs xarray: pip install 'symvib[xarray]'") from None
+        dims = ("event", "wrt")
+        coords = {"event": np.arange(len(self.events)), "wrt": list(self.wrt),
+                  "kind": ("event", [e.kind.value for e in self.events]),
+                  "t": ("event", [e.t for e in self.events]), "reason": ("event", list(self.reasons))}
+        data = {"dt": (dims, self.t), "dq": (dims, self.q), "dv_before": (dims, self.v_before),
+                "dv_after": (dims, self.v_after)}
+        data.update({name: ("wrt", values) for name, values in self.final.items()})
+        return xr.Dataset(data, coords=coords, attrs={name: why for name, why in self.notes.items()})
+
     def to_dataframe(self):
         """:meth:`rows` as a pandas DataFrame (extra ``symvib[pandas]``)."""
         try:
