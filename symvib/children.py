@@ -97,6 +97,11 @@ def tether(parent: int, cpu_seconds: float | None = None) -> None:
         (rounded up to whole seconds), after which the kernel ends the child (SIGXCPU,
         then SIGKILL one second later).
     """
+    # A forked child inherits the parent's Python handlers: SIGTERM would raise Terminated here, in
+    # whatever the child was doing (an import, a job), and print its traceback on the shared stderr
+    # when the parent's pool shuts it down.  A child just ends on SIGTERM.
+    with contextlib.suppress(ValueError):  # (not the main thread: nothing was inherited there)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _death_signal()
     if os.getppid() != parent:
         _die()

@@ -261,3 +261,15 @@ def test_symvib_paper_leaves_no_process(tmp_path, signum, target):
     if target == "process" and signum != signal.SIGKILL:
         assert "Traceback" not in err
         assert len(err.strip().splitlines()) == 1, err
+
+
+def _sigterm_handler_is_default():
+    return signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+
+
+def test_a_pool_worker_forked_under_terminate_as_exception_ends_quietly_on_sigterm():
+    # Forked inside the parent's `terminate_as_exception`, a worker would inherit the handler that
+    # raises Terminated, and a SIGTERM from the pool's shutdown would print a traceback there.
+    with children.terminate_as_exception():
+        with children.worker_pool(1, "fork") as pool:
+            assert pool.submit(_sigterm_handler_is_default).result(timeout=HANG_GUARD) is True
