@@ -165,6 +165,7 @@ class _Curve:
             fn = getattr(kernels, name)
             setattr(self, name, lambda q, fn=fn: np.asarray(fn(np.asarray(q, dtype=float), *cp), dtype=float))
         self._F = {1: kernels.F_p, -1: kernels.F_m}
+        self._dF = {1: kernels.dF_p, -1: kernels.dF_m}
         self._ddF = {1: kernels.ddF_p, -1: kernels.ddF_m}
         self._N = kernels.N_w
         self._cp = cp
@@ -173,8 +174,8 @@ class _Curve:
         return np.asarray(self._F[s](np.asarray(q, dtype=float), self.mu, *self._cp), dtype=float)
 
     def f(self, s, q):
-        """``F_s' = exp(2 s mu alpha) (z' + s mu x')``."""
-        return np.exp(2 * s * self.mu * self.alpha(q)) * (self.dz(q) + s * self.mu * self.dx(q))
+        """``F_s' = exp(2 s mu alpha) (z' + s mu x')`` (the generated ``dF`` kernel)."""
+        return np.asarray(self._dF[s](np.asarray(q, dtype=float), self.mu, *self._cp), dtype=float)
 
     def df(self, s, q):
         """``F_s''`` (the generated ``ddF`` kernel)."""
