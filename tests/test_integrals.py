@@ -75,6 +75,19 @@ def test_budget_reports_errors():
     assert outcome.status == "error" and "ValueError" in outcome.value
 
 
+def _hyper_arc_length():
+    x = sp.Symbol("x", real=True)
+    return sp.integrate(sp.sqrt(1 + 16 * x**6), x)   # a hyper(...) whose srepr SymPy cannot rebuild
+
+
+def test_budget_reports_a_result_that_does_not_rebuild_as_an_error():
+    """SymPy's ``srepr`` of ``hyper`` does not round-trip: the step fails cleanly (its fallback takes over)."""
+    with pytest.raises((TypeError, ValueError)):
+        sp.sympify(sp.srepr(_hyper_arc_length()))
+    outcome = budget.run(_hyper_arc_length, (), seconds=60)
+    assert outcome.status == "error" and "srepr" in outcome.value
+
+
 def test_regularize_removes_constant_pole():
     t = sp.Symbol("t", real=True)
     F, regular = regularize(sp.exp(mu * t) / mu + sp.sin(t), t)

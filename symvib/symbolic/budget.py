@@ -134,7 +134,11 @@ def finish(running: Running) -> Outcome:
         proc.join(_JOIN_SECONDS)
     elapsed = time.perf_counter() - running.started
     if status == "ok" and isinstance(payload, str):
-        payload = _from_srepr(payload)
+        try:
+            payload = _from_srepr(payload)
+        except (TypeError, ValueError, SyntaxError, sp.SympifyError) as exc:
+            # SymPy's srepr does not round-trip every result (hyper's TupleArg): no result
+            status, payload = "error", f"the result does not rebuild from its srepr: {exc}"
     return Outcome(status, payload, elapsed)
 
 
