@@ -49,7 +49,7 @@ import numpy as np
 # symvib.numeric.events, whose Result.sensitivities calls up into this module).
 from symvib.numeric.layout import EventCode, StatusCode
 
-__all__ = ["sensitivities", "Sensitivities", "PARAMETERS"]
+__all__ = ["sensitivities", "interval_tangents", "Sensitivities", "Tangents", "Leg", "PARAMETERS"]
 
 #: Parameters a run's events can be differentiated with respect to.
 PARAMETERS = ("mu", "k", "qdot0", "q0", "left", "right")
@@ -208,10 +208,10 @@ class _Interval:
     accuracy where a difference of two ``F_s`` would not.
     """
 
-    def __init__(self, curve, q_a, w_a, q_e, s, turning_end, Dq_a, Dw_a, Dmu):
+    def __init__(self, curve, q_a, w_a, q_e, s, turning_end, Dq_a, Dw_a, Dmu, G_e=None):
         c = curve
         self.c, self.q_a, self.q_e, self.s, self.turning_end = c, q_a, q_e, s, turning_end
-        self.Dq_a, self.Dmu = Dq_a, Dmu
+        self.w_a, self.Dq_a, self.Dw_a, self.Dmu = w_a, Dq_a, Dw_a, Dmu
         self.E_a = math.exp(2 * s * c.mu * float(c.alpha(q_a)))
         self.G_a = w_a * self.E_a
         alpha_a, dalpha_a = float(c.alpha(q_a)), float(c.dalpha(q_a))
@@ -222,7 +222,9 @@ class _Interval:
         self.A = self.DG_a + 2 * c.g * self.f_a * Dq_a
         self.f_e = float(c.f(s, q_e))
         self.I_mu_e = self.integral(lambda q: c.df_dmu(s, q), q_a, q_e - q_a) if np.any(Dmu) else 0.0
-        self.G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(c.F(s, q_e) - c.F(s, q_a))
+        if G_e is None:
+            G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(c.F(s, q_e) - c.F(s, q_a))
+        self.G_e = G_e
 
     def dG_fixed_q_end(self):
         """``dG/dp`` at fixed ``q = q_e``."""
@@ -337,9 +339,85 @@ class _Interval:
             previous = current
         return best if best_gap <= ACCEPT else None
 
+    def position_tangent(self, q, qdot, Dt_a, Dt_e):
+        """``Dq`` at fixed time of the point ``q`` inside the interval (``qdot`` its speed there, ``Dt_a``,
+        ``Dt_e`` the tangents of the start and end times), or None when the time quadrature fails.
+
+        The time from the nearer end to ``q`` is the duration of a piece of the interval whose ends
+        move with that end's tangent (fixed distance ``xi`` from it): ``t = t_c +- tau(xi; p)``, so at
+        fixed ``t``, ``Dq = Dq_c - qdot (Dt_c +- D tau)`` (physics.md, "Sensitivities" 7).  Next to a
+        turning point the piece starts or ends on it, and ``D tau`` stays finite where the derivative
+        of ``t(q)`` at fixed ``q`` (``-Dq / qdot``) would not.
+        """
+        c, s = self.c, self.s
+        from_start = abs(q - self.q_a) <= abs(q - self.q_e)
+        q_c, Dq_c, Dt_c = (self.q_a, self.Dq_a, Dt_a) if from_start else (self.q_e, self.Dq_e, Dt_e)
+        if q == q_c:
+            return Dq_c - qdot * Dt_c
+        G, Dw = self.point(q, Dq_c, from_start)
+        if from_start:
+            piece = _Interval(c, self.q_a, self.w_a, q, s, False, self.Dq_a, self.Dw_a, self.Dmu, G_e=G)
+        else:
+            w = G / math.exp(2 * s * c.mu * float(c.alpha(q)))
+            piece = _Interval(c, q, w, self.q_e, s, self.turning_end, self.Dq_e, Dw, self.Dmu, G_e=self.G_e)
+        piece.set_end(Dq_c)
+        dtau = piece.dT()
+        if dtau is None:
+            return None
+        return Dq_c - qdot * (Dt_c + dtau if from_start else Dt_c - dtau)
+
+    def point(self, q, Dq, from_start):
+        """``G(q)`` and the total derivative of ``w`` at ``q`` moving with tangent ``Dq``, integrated from
+        the start (``from_start``) or the end: ``G(q) = G_c - 2 g Integral_{q_c}^{q} f`` and
+        ``DG = DG_c - 2 g (f(q) Dq - f(q_c) Dq_c + Dmu Integral_{q_c}^{q} df/dmu)``."""
+        c, s = self.c, self.s
+        q_c, G_c, DG_c, f_c, Dq_c = ((self.q_a, self.G_a, self.DG_a, self.f_a, self.Dq_a) if from_start
+                                     else (self.q_e, self.G_e, self.DG_e, self.f_e, self.Dq_e))
+        G = G_c - 2 * c.g * self.integral(lambda v: c.f(s, v), q_c, q - q_c)
+        DG = DG_c - 2 * c.g * (float(c.f(s, q)) * Dq - f_c * Dq_c)
+        if np.any(self.Dmu):
+            DG = DG - 2 * c.g * self.Dmu * self.integral(lambda v: c.df_dmu(s, v), q_c, q - q_c)
+        alpha, dalpha = float(c.alpha(q)), float(c.dalpha(q))
+        E = math.exp(2 * s * c.mu * alpha)
+        return G, (DG - G * 2 * s * (alpha * self.Dmu + c.mu * dalpha * Dq)) / E
+
 
 def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``.
+
+    Parameters, returns and errors as :func:`interval_tangents`, whose ``sensitivities`` this is.
+    """
+    return interval_tangents(result, wrt, prepared=prepared).sensitivities
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One motion interval of a differentiated run, from event time ``t_a`` (0 for the start) to
+    ``t_e``, with the tangents ``Dt_a``, ``Dt_e`` of those times (shape (parameters,)); its
+    :meth:`position_tangent` differentiates a position inside it at fixed time."""
+
+    interval: object
+    t_a: float
+    t_e: float
+    Dt_a: np.ndarray
+    Dt_e: np.ndarray
+
+    def position_tangent(self, q, qdot):
+        """``Dq`` at fixed time of the point ``q`` (speed ``qdot``) inside the leg, or None."""
+        return self.interval.position_tangent(q, qdot, self.Dt_a, self.Dt_e)
+
+
+@dataclass(frozen=True)
+class Tangents:
+    """A differentiated run: its :class:`Sensitivities` and the :class:`Leg` of every motion interval up
+    to the first event without derivatives (in time order)."""
+
+    sensitivities: Sensitivities
+    legs: tuple
+
+
+def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
+    """Derivatives of ``result``'s events and final state with respect to ``wrt``, and its intervals.
 
     Parameters
     ----------
@@ -352,7 +430,7 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
 
     Returns
     -------
-    Sensitivities
+    Tangents
 
     Raises
     ------
@@ -397,6 +475,7 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
     reasons = []
     D_impact_loss = np.zeros(P)
     Dq_last = Dw_last = None
+    legs, t_a = [], 0.0
     for i, ev in enumerate(result.events):
         kind = ev.kind.code
         own = _not_differentiable(ev, scene, c, kind)
@@ -443,7 +522,9 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
         Dt_e = Dt_a + dT
         T[i], Q[i], VB[i], VA[i] = Dt_e, Dq_e, Dv_minus, Dv_plus
         reasons.append("")
-        q_a, w_a, Dq_a, Dw_a, Dt_a = q_e, w_plus, Dq_e, Dw_plus, Dt_e
+        if q_e != q_a:
+            legs.append(Leg(iv, t_a, ev.t, Dt_a, Dt_e))
+        q_a, w_a, Dq_a, Dw_a, Dt_a, t_a = q_e, w_plus, Dq_e, Dw_plus, Dt_e, ev.t
         Dq_last, Dw_last = Dq_e, Dw_plus
     final = {name: np.full(P, np.nan) for name in ("t_final", "q_final", "friction_work", "impact_loss")}
     if not broken and result.status.code in FINAL_STATUSES and n and Dq_last is not None:
@@ -455,7 +536,8 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
         j = wrt.index(name)
         for column in (T, Q, VB, VA, *final.values()):
             column[..., j] = np.nan
-    return Sensitivities(wrt, tuple(result.events), T, Q, VB, VA, tuple(reasons), final, notes)
+    sens = Sensitivities(wrt, tuple(result.events), T, Q, VB, VA, tuple(reasons), final, notes)
+    return Tangents(sens, tuple(legs))
 
 
 def _branch(c, q_a, w_a, sigma, mid_q) -> int:
