@@ -190,19 +190,18 @@ def _inside(path, folder):
 
 def _cmd_fit(args) -> int:
     from symvib.api import fit
-    from symvib.numeric.fit import read_events
+    from symvib.numeric.fit import read_observations
     from symvib.paths import check_output_file
 
     if args.plot:
         check_output_file(args.plot, "--plot file")
     free = tuple(p.strip() for p in args.free.split(",") if p.strip())
-    observed = read_events(args.data)
+    observed = read_observations(args.data)
     weights = None
     if args.sigma is not None:
         if not (math.isfinite(args.sigma) and args.sigma > 0):
-            raise ValueError(f"--sigma: must be a positive number of seconds, got {args.sigma!r}")
-        count = len(observed.t) * (1 if observed.q is None else 2)
-        weights = [1 / args.sigma] * count
+            raise ValueError(f"--sigma: must be a positive number (s, or the samples' unit), got {args.sigma!r}")
+        weights = [1 / args.sigma] * observed.count
     result = fit(args.scene, observed, free, weights=weights)
     print(result.summary())
     if args.plot:
@@ -417,13 +416,16 @@ def build_parser() -> argparse.ArgumentParser:
                         "required: every route, fail without one; never: numeric at once)")
     p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("fit", help="fit mu, k, ... of a scene to measured event times (CSV: t[, kind][, q])")
+    p = sub.add_parser("fit", help="fit mu, k, ... of a scene to measured event times or a sampled trajectory "
+                                   "(CSV: t[, kind][, q], or t with q, x,z or s)")
     p.add_argument("scene", help="scene TOML file (its values of the free parameters are the start)")
-    p.add_argument("data", help="CSV file of observed events with a header: t (s), optional kind and q")
+    p.add_argument("data", help="CSV file with a header, its kind told by its columns: events (t in s, optional "
+                                "kind, then optional q) or a sampled trajectory (t with q, or x,z, or s: the arc "
+                                "length from the initial position, m; no kind column)")
     p.add_argument("--free", default="mu,k", help="parameters to fit, comma-separated (default mu,k; also "
                    "qdot0, q0, left, right)")
-    p.add_argument("--sigma", type=float, default=None, help="standard deviation of each time, s (default: "
-                   "estimated from the residuals)")
+    p.add_argument("--sigma", type=float, default=None, help="standard deviation of each observation (s for "
+                   "times, the coordinate's unit for samples; default: estimated from the residuals)")
     p.add_argument("--plot", metavar="PATH", help="write the residual figure (PNG)")
     p.set_defaults(func=_cmd_fit)
 

@@ -32,7 +32,7 @@ import numpy as np
 from symvib.numeric.quadrature import rule
 from symvib.numeric.sensitivity import interval_tangents
 
-__all__ = ["sample_sensitivities", "SampleSensitivities", "COORDINATES"]
+__all__ = ["sample_sensitivities", "sample_positions", "SampleSensitivities", "COORDINATES", "arc_length"]
 
 #: Coordinates a sample may give -> its columns.
 COORDINATES = {"q": ("q",), "xz": ("x", "z"), "s": ("s",)}
@@ -91,8 +91,6 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
         Naming ``t`` (not finite, before the start or after the run's end), ``coordinates``,
         or (from the event sensitivities) ``wrt`` and ``result``.
     """
-    from symvib.numeric.prepared import prepared_of
-
     if coordinates not in COORDINATES:
         raise ValueError(f"coordinates: {coordinates!r} is not one of {', '.join(COORDINATES)}")
     times = np.asarray(t, dtype=float).ravel()
@@ -107,23 +105,42 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
     Dq, reasons = _position_tangents(result, tangents, times, q, qdot)
     for name in sens.notes:
         Dq[:, sens.wrt.index(name)] = np.nan
-    scene = result.scene
-    kernels = (prepared or prepared_of(scene)).kernels
-    cp = tuple(scene.param_values)
-    if coordinates == "q":
-        values, derivatives = q[:, None], Dq[:, None, :]
-    elif coordinates == "xz":
-        values = np.stack([np.asarray(kernels.x(q, *cp), float) * np.ones_like(q),
-                           np.asarray(kernels.z(q, *cp), float) * np.ones_like(q)], axis=1)
-        slopes = np.stack([np.asarray(kernels.dx(q, *cp), float) * np.ones_like(q),
-                           np.asarray(kernels.dz(q, *cp), float) * np.ones_like(q)], axis=1)
-        derivatives = slopes[:, :, None] * Dq[:, None, :]
-    else:
-        h = lambda u: np.asarray(kernels.h(u, *cp), float) * np.ones_like(u)  # noqa: E731
-        values = np.array([arc_length(h, scene.q0, qi) for qi in q])[:, None]
-        Dq0 = np.eye(len(sens.wrt))[sens.wrt.index("q0")] if "q0" in sens.wrt else np.zeros(len(sens.wrt))
-        derivatives = (h(q)[:, None] * Dq - float(h(np.array([scene.q0]))[0]) * Dq0[None, :])[:, None, :]
+    values, slopes = _coordinates(result, q, coordinates, prepared)
+    derivatives = slopes[:, :, None] * Dq[:, None, :]
+    if coordinates == "s" and "q0" in sens.wrt:     # the arc length is measured from q0
+        derivatives[:, 0, sens.wrt.index("q0")] -= _h0(result, prepared)
     return SampleSensitivities(sens.wrt, times, COORDINATES[coordinates], values, derivatives, tuple(reasons))
+
+
+def sample_positions(result, t, coordinates="q", *, prepared=None) -> np.ndarray:
+    """The model's coordinates at times ``t`` (shape (n, len(COORDINATES[coordinates]))), no derivatives."""
+    q = np.asarray(result.dense.state(np.asarray(t, dtype=float).ravel())[0], dtype=float).reshape(-1)
+    return _coordinates(result, q, coordinates, prepared)[0]
+
+
+def _kernels(result, prepared):
+    from symvib.numeric.prepared import prepared_of
+
+    return (prepared or prepared_of(result.scene)).kernels, tuple(result.scene.param_values)
+
+
+def _h0(result, prepared) -> float:
+    """``h`` at the initial position."""
+    kernels, cp = _kernels(result, prepared)
+    return float(kernels.h_scalar(float(result.scene.q0), *cp))
+
+
+def _coordinates(result, q, coordinates, prepared) -> tuple:
+    """The coordinates at positions ``q`` and their slopes ``d/dq`` (each shape (n, columns))."""
+    kernels, cp = _kernels(result, prepared)
+    of = lambda name, u: np.asarray(getattr(kernels, name)(u, *cp), float) * np.ones_like(u)  # noqa: E731
+    if coordinates == "q":
+        return q[:, None], np.ones((len(q), 1))
+    if coordinates == "xz":
+        return np.stack([of("x", q), of("z", q)], axis=1), np.stack([of("dx", q), of("dz", q)], axis=1)
+    q0 = float(result.scene.q0)
+    values = np.array([arc_length(lambda u: of("h", u), q0, float(qi)) for qi in q])
+    return values[:, None], of("h", q)[:, None]
 
 
 def _position_tangents(result, tangents, times, q, qdot):
