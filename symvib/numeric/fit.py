@@ -226,7 +226,7 @@ def _sample_model(scene, observed, free, run):
         raise ValueError(f"scene: the run at {dict((k, getattr(scene, k)) for k in free)} failed "
                          f"({result.status.value}): {result.message}")
     if observed.t[-1] > result.dense.t_max:
-        raise ValueError(f"observed.t: the last sample ({observed.t[-1]!r} s) comes after the run's end "
+        raise ValueError(f"observed.t: the last sample ({float(observed.t[-1])!r} s) comes after the run's end "
                          f"({result.dense.t_max:g} s, status {result.status.value}) at "
                          f"{dict((k, getattr(scene, k)) for k in free)}")
     r = (sample_positions(result, observed.t, observed.coordinates) - observed.values).T.ravel()

@@ -94,8 +94,8 @@ def _check_times(t, what: str) -> np.ndarray:
         raise ValueError(f"observed.t: time {int(np.flatnonzero(~np.isfinite(t))[0]) + 1} is not a finite number")
     if np.any(np.diff(t) < 0):
         bad = int(np.flatnonzero(np.diff(t) < 0)[0])
-        raise ValueError(f"observed.t: the times must be ascending (time {bad + 2}, {t[bad + 1]!r}, comes before "
-                         f"time {bad + 1}, {t[bad]!r})")
+        raise ValueError(f"observed.t: the times must be ascending (time {bad + 2}, {float(t[bad + 1])!r}, "
+                         f"comes before time {bad + 1}, {float(t[bad])!r})")
     return t
 
 
@@ -135,7 +135,7 @@ def observed_samples(t, *, q=None, x=None, z=None, s=None) -> ObservedSamples:
     """
     t = _check_times(t, "sample times")
     if t[0] < 0:
-        raise ValueError(f"observed.t: sample 1 is at {t[0]!r} s, before the run starts (t = 0)")
+        raise ValueError(f"observed.t: sample 1 is at {float(t[0])!r} s, before the run starts (t = 0)")
     given = tuple(name for name, v in (("q", q), ("x", x), ("z", z), ("s", s)) if v is not None)
     if given not in SAMPLE_COLUMNS:
         raise ValueError(f"observed: give q, or x and z, or s with the times (got {', '.join(given) or 'none'})")

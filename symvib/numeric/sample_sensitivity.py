@@ -97,8 +97,8 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
     dense = result.dense
     bad = ~np.isfinite(times) | (times < 0) | (times > dense.t_max)
     if bad.any():
-        raise ValueError(f"t: sample {int(np.flatnonzero(bad)[0]) + 1} ({times[bad][0]!r} s) is not in the run's "
-                         f"time span [0, {dense.t_max:g}] s (status {result.status.value})")
+        raise ValueError(f"t: sample {int(np.flatnonzero(bad)[0]) + 1} ({float(times[bad][0])!r} s) is not in the "
+                         f"run's time span [0, {dense.t_max:g}] s (status {result.status.value})")
     tangents = interval_tangents(result, wrt, prepared=prepared)
     sens = tangents.sensitivities
     q, qdot = (np.asarray(a, dtype=float).reshape(-1) for a in dense.state(times))
