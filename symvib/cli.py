@@ -509,7 +509,7 @@ def _out_of_sweep_file(text: str, path):
 #: Types of the keys of a sweep file (``vary`` is a table; integers are checked by
 #: :func:`symvib.numeric.sweep.make_spec`).
 _SWEEP_FILE_TYPES = {"scene": str, "out": str, "vary": dict, "random": int, "seed": int, "chunk": int,
-                     "log_events": int, "nodes": int, "format": str}
+                     "log_events": int, "nodes": int, "format": str, "sensitivities": str}
 
 
 def _check_sweep_file(data: dict, path) -> None:
@@ -550,6 +550,10 @@ def build_sweep_parser() -> argparse.ArgumentParser:
                          "(extra symvib[xarray])")
     ap.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address (tcp://...)")
     ap.add_argument("--backend", default="auto", choices=("auto", "numba", "python"))
+    ap.add_argument("--sensitivities", metavar="P,Q", help="add the exact derivatives of t_final, q_final, "
+                    "friction_work, impact_loss with respect to these parameters (mu, k, qdot0, q0, left, right) "
+                    "as columns d_<column>_d_<parameter> and sensitivity_reason: each scene run again by the "
+                    "single-scene driver, a slower path (docs/sweeps.md)")
     ap.add_argument("--plot", action="store_true", help="write maps over the first two varied fields")
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
     return ap
@@ -608,7 +612,7 @@ def _cmd_sweep(args) -> int:
                 chunk=pick("chunk", DEFAULT_CHUNK), log_events=pick("log_events", 0),
                 nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite,
                 scheduler=args.scheduler, progress=not args.quiet, backend=args.backend,
-                storage=pick("format", "npz"))
+                storage=pick("format", "npz"), sensitivities=pick("sensitivities", ""))
     names = res.status_names()
     status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in STATUSES if np.any(names == s))
     events = int(np.sum(res["events"]))
