@@ -140,3 +140,13 @@ def test_samples_inside_the_interval_a_run_stopped_in_say_why():
     last = res.events[-1].t
     out = sample_sensitivities(res, [last / 2, (last + 1.0) / 2], wrt=("mu",))
     assert out.reasons[0] == "" and "status t_max" in out.reasons[1] and np.isnan(out.derivatives[1]).all()
+
+
+def test_a_sample_at_an_impact_s_time_has_no_derivative_and_says_why():
+    # q(t) has a kink there: the derivative at fixed time jumps from DL - v_before Dt to DL - v_after Dt.
+    res = run(resolve_scene("paper-parabola").replace(k=0.8))
+    impact = res.events[0]
+    out = sample_sensitivities(res, [impact.t * (1 - 1e-6), impact.t, impact.t * (1 + 1e-6)], wrt=("mu", "k"))
+    assert out.reasons[0] == "" and out.reasons[2] == ""
+    assert "kink" in out.reasons[1] and np.isnan(out.derivatives[1]).all()
+    assert not np.allclose(out.derivatives[0], out.derivatives[2], rtol=1e-2)     # the jump

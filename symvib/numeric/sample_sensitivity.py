@@ -9,7 +9,9 @@ distance ``xi`` from it (:meth:`symvib.numeric.sensitivity.Leg.position_tangent`
 so a sample next to a turning point, where ``D[t(q; p)]`` at fixed ``q`` grows
 like ``1 / qdot``, has a finite derivative computed without cancellation.
 Before and after a motion interval the particle rests, and its position's
-derivative is that of the event it rests at.  Coordinates: ``q``; ``x, z`` with
+derivative is that of the event it rests at.  At an impact's time ``q(t)`` has a
+kink, and ``Dq`` jumps from ``DL - v_before Dt`` to ``DL - v_after Dt``: a sample
+there (within ``AT_IMPACT``) has no derivative, and says so.  Coordinates: ``q``; ``x, z`` with
 ``Dx = x'(q) Dq``, ``Dz = z'(q) Dq``; the arc length ``s`` from the initial
 position (as :class:`symvib.numeric.events.Samples`' ``s``), ``s = Integral_{q0}^{q}
 h du``, ``Ds = h(q) Dq - h(q0) Dq0``.
@@ -38,6 +40,9 @@ __all__ = ["sample_sensitivities", "sample_positions", "SampleSensitivities", "C
 COORDINATES = {"q": ("q",), "xz": ("x", "z"), "s": ("s",)}
 #: Statuses after which the particle rests at its last event for ever.
 RESTING = ("arrested", "resting_on_limiter")
+#: Relative distance of a sample time from an impact's below which it is at the impact, where ``q(t)``
+#: has a kink (its speed jumps): the derivative at fixed time jumps there too, and has no value.
+AT_IMPACT = 1e-12
 #: Gauss-Legendre nodes per piece of the arc-length quadrature, and the agreement of two piece counts.
 ARC_NODES, ARC_RTOL = 16, 1e-14
 #: Most pieces of the arc-length quadrature (doubled from 1 until two counts agree).
@@ -149,9 +154,13 @@ def _position_tangents(result, tangents, times, q, qdot):
     P = len(sens.wrt)
     starts = np.array([leg.t_a for leg in legs])
     event_times = np.array([e.t for e in sens.events])
+    impacts = np.array([e.t for e in sens.events if e.kind.value == "impact"])
     out = np.full((len(times), P), np.nan)
     reasons = []
     for k, t in enumerate(times):
+        if len(impacts) and np.min(np.abs(impacts - t)) <= AT_IMPACT * max(t, 1e-300):
+            reasons.append("at an impact: the position has a kink in time there, its derivative jumps")
+            continue
         j = int(np.searchsorted(starts, t, side="right")) - 1
         if j >= 0 and t <= legs[j].t_e:
             D = legs[j].position_tangent(float(q[k]), float(qdot[k]))
