@@ -48,6 +48,7 @@ import numpy as np
 # Kinds and statuses by their engine codes (symvib.numeric.layout, below the records of
 # symvib.numeric.events, whose Result.sensitivities calls up into this module).
 from symvib.numeric.layout import EventCode, StatusCode
+from symvib.numeric.sensitivity_table import Sensitivities
 
 __all__ = ["sensitivities", "interval_tangents", "Sensitivities", "Tangents", "Leg", "PARAMETERS"]
 
@@ -74,84 +75,6 @@ INNER_NODES = 8
 INTEGRAL_RTOL = 1e-14
 #: Statuses whose final state has derivatives (the run ended on an event).
 FINAL_STATUSES = (StatusCode.ARRESTED, StatusCode.RESTING_ON_LIMITER)
-
-
-@dataclass(frozen=True)
-class Sensitivities:
-    """Derivatives of a run's events and final state (an immutable record).
-
-    Attributes
-    ----------
-    wrt : tuple of str
-        The parameters, in the order of the columns.
-    events : tuple of Event
-        The run's events (rows).
-    t, q, v_before, v_after : ndarray, shape (events, parameters)
-        Derivatives of each event's time, position and speed ``v = h qdot`` just before
-        and after it; NaN where the event is not differentiable.
-    reasons : tuple of str
-        Per event, why its row is NaN (empty where it is differentiable).
-    final : dict
-        ``t_final``, ``q_final``, ``friction_work``, ``impact_loss`` -> derivatives, shape
-        (parameters,); NaN when the run did not end on an event or an event before is not
-        differentiable.
-    notes : dict
-        Parameter -> why its whole column is NaN (a start at rest has no derivative in ``qdot0``).
-    """
-
-    wrt: tuple
-    events: tuple
-    t: np.ndarray
-    q: np.ndarray
-    v_before: np.ndarray
-    v_after: np.ndarray
-    reasons: tuple
-    final: dict
-    notes: dict
-
-    def rows(self) -> list:
-        """One dict per event and parameter: ``event``, ``kind``, ``wrt``, ``dt``, ``dq``,
-        ``dv_before``, ``dv_after``, ``reason`` (a long table, as a DataFrame wants it)."""
-        out = []
-        for i, event in enumerate(self.events):
-            for j, name in enumerate(self.wrt):
-                out.append({"event": i, "kind": event.kind.value, "wrt": name, "dt": float(self.t[i, j]),
-                            "dq": float(self.q[i, j]), "dv_before": float(self.v_before[i, j]),
-                            "dv_after": float(self.v_after[i, j]), "reason": self.reasons[i]})
-        return out
-
-    def to_xarray(self):
-        """The derivatives as an ``xarray.Dataset`` with an ``event`` and a ``wrt`` dimension
-        (``dt``, ``dq``, ``dv_before``, ``dv_after``; the event's ``kind`` and ``reason`` as
-        coordinates) and the final state's as variables over ``wrt`` (extra ``symvib[xarray]``).
-
-        Examples
-        --------
-        >>> from symvib import simulate
-        >>> ds = simulate("paper-parabola").sensitivities(wrt=("mu", "k")).to_xarray()  # doctest: +SKIP
-        >>> float(ds.dt.sel(wrt="mu").isel(event=-1)) == float(ds.t_final.sel(wrt="mu"))  # doctest: +SKIP
-        True
-        """
-        try:
-            import xarray as xr
-        except ImportError:
-            raise ImportError("Sensitivities.to_xarray needs xarray: pip install 'symvib[xarray]'") from None
-        dims = ("event", "wrt")
-        coords = {"event": np.arange(len(self.events)), "wrt": list(self.wrt),
-                  "kind": ("event", [e.kind.value for e in self.events]),
-                  "t": ("event", [e.t for e in self.events]), "reason": ("event", list(self.reasons))}
-        data = {"dt": (dims, self.t), "dq": (dims, self.q), "dv_before": (dims, self.v_before),
-                "dv_after": (dims, self.v_after)}
-        data.update({name: ("wrt", values) for name, values in self.final.items()})
-        return xr.Dataset(data, coords=coords, attrs={name: why for name, why in self.notes.items()})
-
-    def to_dataframe(self):
-        """:meth:`rows` as a pandas DataFrame (extra ``symvib[pandas]``)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("Sensitivities.to_dataframe needs pandas: pip install 'symvib[pandas]'") from None
-        return pd.DataFrame(self.rows())
 
 
 class _Curve:
@@ -385,7 +308,12 @@ class _Interval:
 def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``.
 
-    Parameters, returns and errors as :func:`interval_tangents`, whose ``sensitivities`` this is.
+    Parameters and errors as :func:`interval_tangents`, whose ``sensitivities`` this is.
+
+    Returns
+    -------
+    Sensitivities
+        The record (:mod:`symvib.numeric.sensitivity_table`).
     """
     return interval_tangents(result, wrt, prepared=prepared).sensitivities
 
