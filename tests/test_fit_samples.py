@@ -94,7 +94,8 @@ def test_a_csv_file_is_told_events_or_samples_by_its_columns(tmp_path):
                         ("t,q\n0.2,0.5\n0.1,0.4\n", "observed.t: the times must be ascending"),
                         ("t,q\n0.1,nan\n", "observed.q: sample 1 is not a finite number"),
                         ("t,s\n0.1,__import__('os')\n", "row 2, column s: .* is not a number"),
-                        ("t,x,z\n0.1,0.5\n", "row 2 has 2 cells for 3 columns")):
+                        ("t,x,z\n0.1,0.5\n", "row 2 has 2 cells for 3 columns"),
+                        ("t,q,Q\n0.1,0.5,0.5\n", "names column 'q' twice")):
         with pytest.raises(ValueError, match=match):
             read_observations(write(text))
     with pytest.raises(ValueError, match="a sampled trajectory needs t and q"):

@@ -162,6 +162,9 @@ def _read_columns(path, what: str) -> tuple:
     if not rows:
         raise ValueError(f"{path}: empty; give a header row (events: t[, kind][, q]; samples: t with q, x,z or s)")
     header = [h.strip().lower() for h in rows[0]]
+    twice = sorted({h for h in header if header.count(h) > 1})
+    if twice:
+        raise ValueError(f"{path}: header {rows[0]!r} names column {twice[0]!r} twice")
     columns = {h: [] for h in header}
     for number, row in enumerate(rows[1:], start=2):
         if not any(cell.strip() for cell in row):
@@ -181,25 +184,31 @@ def _read_columns(path, what: str) -> tuple:
 
 def read_events(path) -> Observed:
     """Observed events from a CSV file with a header: ``t`` (s), optional ``kind`` and ``q``."""
-    raw, header, columns = _read_columns(path, "events file")
+    return _events(path, *_read_columns(path, "events file"))
+
+
+def read_samples(path) -> ObservedSamples:
+    """A sampled trajectory from a CSV file with a header: ``t`` (s) and ``q``, or ``x, z`` (m), or ``s`` (m)."""
+    return _samples(path, *_read_columns(path, "samples file"))
+
+
+def read_observations(path):
+    """Events or samples from a CSV file (read once), told by its columns: ``t`` with ``q``, ``x, z`` or
+    ``s`` and no ``kind`` is a sampled trajectory (:func:`read_samples`), else events (:func:`read_events`)."""
+    raw, header, columns = _read_columns(path, "data file")
+    rest = tuple(sorted(h for h in header if h != "t"))
+    return (_samples if rest in SAMPLE_COLUMNS else _events)(path, raw, header, columns)
+
+
+def _events(path, raw, header, columns) -> Observed:
     unknown = [h for h in header if h not in CSV_COLUMNS]
     if "t" not in header or unknown:
         raise ValueError(f"{path}: header {raw!r}: needs a column t and only {', '.join(CSV_COLUMNS)}")
     return observed_events(columns["t"], columns.get("kind"), columns.get("q"))
 
 
-def read_samples(path) -> ObservedSamples:
-    """A sampled trajectory from a CSV file with a header: ``t`` (s) and ``q``, or ``x, z`` (m), or ``s`` (m)."""
-    raw, header, columns = _read_columns(path, "samples file")
+def _samples(path, raw, header, columns) -> ObservedSamples:
     rest = tuple(sorted(h for h in header if h != "t"))
     if "t" not in header or rest not in SAMPLE_COLUMNS:
         raise ValueError(f"{path}: header {raw!r}: a sampled trajectory needs t and q, or t, x, z, or t, s")
     return observed_samples(columns["t"], **{h: columns[h] for h in rest})
-
-
-def read_observations(path):
-    """Events or samples from a CSV file, told by its columns: ``t`` with ``q``, ``x, z`` or ``s`` and no
-    ``kind`` is a sampled trajectory (:func:`read_samples`), else events (:func:`read_events`)."""
-    _, header, _ = _read_columns(path, "data file")
-    rest = tuple(sorted(h for h in header if h != "t"))
-    return read_samples(path) if rest in SAMPLE_COLUMNS else read_events(path)
