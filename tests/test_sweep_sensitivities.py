@@ -66,16 +66,27 @@ def test_bad_sensitivity_names_are_refused_naming_the_option(wrt, match):
         make_spec(scene, {"qdot": "3:4:2"}, sensitivities=wrt)
 
 
-def test_a_sweep_without_them_keeps_its_definition_and_a_folder_keeps_them(tmp_path):
+@pytest.mark.parametrize("storage", ["npz", "zarr"])
+def test_a_sweep_without_them_keeps_its_definition_and_a_folder_keeps_them(tmp_path, storage):
+    if storage == "zarr":
+        pytest.importorskip("zarr")
+        pytest.importorskip("xarray")
     plain = make_spec(BASE, {"qdot": "3:4:2"})
     assert "sensitivities" not in plain.to_dict()
     out = tmp_path / "sw"
-    first = sweep(BASE, {"qdot": "6,7"}, backend="python", sensitivities=("k",), out=out)
+    first = sweep(BASE, {"qdot": "6,7"}, backend="python", sensitivities=("k",), out=out, storage=storage)
     again = load_sweep(out)
     assert again.spec.sensitivities == ("k",)
     assert np.array_equal(again["d_t_final_d_k"], first["d_t_final_d_k"])
+    assert again["sensitivity_reason"].dtype == np.int64
     manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
     assert manifest["definition"]["sensitivities"] == ["k"]
+    if storage == "zarr":
+        from symvib.numeric.sweep import open_sweep
+
+        ds = open_sweep(out)
+        assert np.array_equal(ds["d_q_final_d_k"].values, first["d_q_final_d_k"])
+        assert ds["d_t_final_d_k"].attrs["long_name"] == "derivative of t_final with respect to k"
 
 
 def test_symvib_sweep_sensitivities_on_the_command_line(tmp_path):
@@ -90,3 +101,13 @@ def test_symvib_sweep_sensitivities_on_the_command_line(tmp_path):
                           "--sensitivities", "mu,nu", "-o", str(tmp_path / "bad")],
                          capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2 and "sensitivities" in bad.stderr
+
+
+@pytest.mark.parametrize("value, match", [("mu", "must be a list"), (["nu"], "'nu'"), ([1], "must be a list")])
+def test_a_definition_with_bad_sensitivities_is_refused_naming_the_key(value, match):
+    from symvib.numeric.sweep import SweepError, SweepSpec
+
+    definition = make_spec(BASE, {"qdot": "3:4:2"}, sensitivities=("mu",)).to_dict()
+    definition["sensitivities"] = value
+    with pytest.raises(SweepError, match=f"definition.sensitivities.*{match}"):
+        SweepSpec.from_dict(definition)
