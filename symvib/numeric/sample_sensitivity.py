@@ -90,6 +90,12 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
         Key of :data:`COORDINATES`.
     prepared : Prepared, optional
 
+    Returns
+    -------
+    SampleSensitivities
+        Where a sample's derivatives are NaN, its reason says why: at an impact (a kink of
+        ``q(t)``), after an event without derivatives, inside the interval a run stopped in.
+
     Raises
     ------
     ValueError
