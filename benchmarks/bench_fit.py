@@ -3,7 +3,7 @@ impact times under 1 s on the compiled engine, at most 3 times the cost of its f
 
 Run from the project folder::
 
-    python benchmarks/bench_fit.py [--repeat 3] [--backend numba]
+    python benchmarks/bench_fit.py [--repeat 3] [--backend numba] [--sweep N]
 
 The truth: the paper parabola with ``mu = 0.01``, ``k = 0.95`` (at least 20 impacts); the data:
 its first 20 impact times with 1 ms of Gaussian noise (seeded); the start 10-20 % off in
@@ -11,6 +11,12 @@ its first 20 impact times with 1 ms of Gaussian noise (seeded); the start 10-20 
 the forward run, so one process reports, per repetition: the fit's wall time, the number of
 forward runs and their own time, the time in the exact sensitivities, and the ratio of the
 fit's time to its forward runs' time.
+
+``--sweep N`` measures instead the opt-in sensitivity columns of a sweep
+(:mod:`symvib.numeric.sweep.sensitivity_columns`): the same sweep of ``N`` scenes of the
+paper parabola (``qdot0`` from 6 to 8 rad/s, ``k = 0.8``) with and without
+``sensitivities=("mu", "k")``, in one process, and reports the cost per scene of each and
+their ratio (median of ``--repeat``).
 """
 from __future__ import annotations
 
@@ -27,8 +33,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--backend", default="numba", choices=("numba", "python"))
+    ap.add_argument("--sweep", type=int, default=0, metavar="N", help="measure a sweep of N scenes with and "
+                    "without sensitivity columns instead of a fit")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")
+    if args.sweep:
+        return sweep_columns(args.sweep, args.repeat, args.backend)
     import symvib
     from symvib.numeric import fit as fitmod
     from symvib.numeric import sensitivity
@@ -82,6 +92,28 @@ def main(argv=None) -> int:
     print(f"forward runs               {runs:8d}     {run_s:8.3f} s")
     print(f"exact sensitivities        {sens_s:8.3f} s   ({sensitivity.__name__}, NumPy)")
     print(f"fit / forward runs         {wall / run_s:8.1f}     (target <= 3)")
+    return 0
+
+
+def sweep_columns(n: int, repeat: int, backend: str) -> int:
+    """Per-scene cost of a sweep with and without ``sensitivities=("mu", "k")``, and their ratio."""
+    from symvib.numeric.scene import resolve_scene
+    from symvib.numeric.sweep import sweep
+
+    base = resolve_scene("paper-parabola").replace(k=0.8)
+    vary = {"qdot": f"6:8:{n}"}
+    sweep(base, {"qdot": "6:8:2"}, backend=backend, sensitivities=("mu",))     # compile outside the timing
+    times = {False: [], True: []}
+    for _ in range(repeat):
+        for with_columns in (False, True):
+            t0 = time.perf_counter()
+            sweep(base, vary, backend=backend, sensitivities=("mu", "k") if with_columns else ())
+            times[with_columns].append(time.perf_counter() - t0)
+    plain, columns = (statistics.median(times[k]) for k in (False, True))
+    print(f"# sweep of {n} scenes of the paper parabola (k = 0.8), backend {backend}, median of {repeat}")
+    print(f"without sensitivities      {plain / n * 1e3:8.3f} ms per scene")
+    print(f"with d/d(mu, k) columns    {columns / n * 1e3:8.3f} ms per scene")
+    print(f"ratio                      {columns / plain:8.1f}")
     return 0
 
 

@@ -19,7 +19,7 @@ module on first use.  The four verbs:
 * ``symvib.simulate(scene)``: a :class:`~symvib.numeric.events.Result` (events, samples,
   dense output ``result.state(t)``, DataFrames ``result.events_frame()``);
 * ``symvib.sweep(scene, vary)``: many scenes at once;
-* ``symvib.fit(scene, observed, free=("mu", "k"))``: parameters from measured event times;
+* ``symvib.fit(scene, observed, free=("mu", "k"))``: parameters from measured event times or a sampled trajectory;
 * ``symvib.derive(curve)``: eqs. 1-2 of a curve (SymPy, imported only here).
 
 >>> import symvib

@@ -95,9 +95,11 @@ def sweep(scene, vary: dict, **options):
 
 def fit(scene, observed, free=("mu", "k"), **options):
     """Fit the ``free`` parameters of a scene (any form :func:`load_scene` takes; its values are the
-    start) to observed events: a CSV file (``t[, kind][, q]``), a list of impact times, or
-    :func:`symvib.numeric.fit.observed_events` (any kinds, positions); ``options`` are :func:`symvib.numeric.fit.fit`'s
-    (``bounds``, ``weights``).
+    start) to observed events or a sampled trajectory: a CSV file (events ``t[, kind][, q]``, or
+    samples ``t`` with ``q``, ``x, z`` or ``s``: :func:`symvib.numeric.fit_data.read_observations`),
+    a list of impact times, a dict of samples (``{"t": ..., "x": ..., "z": ...}``), or
+    :func:`symvib.numeric.fit.observed_events` / :func:`symvib.numeric.fit.observed_samples`; ``options``
+    are :func:`symvib.numeric.fit.fit`'s (``bounds``, ``weights``).
 
     Returns
     -------
@@ -107,16 +109,19 @@ def fit(scene, observed, free=("mu", "k"), **options):
     from pathlib import Path
 
     from symvib.numeric.driver import simulate as _simulate
-    from symvib.numeric.fit import Observed, observed_events, read_events
+    from symvib.numeric.fit import Observed, ObservedSamples, observed_events, observed_samples, read_observations
     from symvib.numeric.fit import fit as _fit
     from symvib.prepare import prepare
 
     scene = load_scene(scene)
     if isinstance(observed, (str, Path)):
-        observed = read_events(observed)
-    elif not isinstance(observed, Observed):
+        observed = read_observations(observed)
+    elif isinstance(observed, dict):
+        observed = observed_samples(**observed)
+    elif not isinstance(observed, (Observed, ObservedSamples)):
         times = list(observed)
         observed = observed_events(times, kinds=["impact"] * len(times))   # what a microphone hears
     prepared = prepare(scene)
-    return _fit(scene, observed, free, run=lambda s: _simulate(s, samples=False, prepared=prepared), **options)
+    samples = isinstance(observed, ObservedSamples)
+    return _fit(scene, observed, free, run=lambda s: _simulate(s, samples=samples, prepared=prepared), **options)
 

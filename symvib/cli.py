@@ -190,19 +190,18 @@ def _inside(path, folder):
 
 def _cmd_fit(args) -> int:
     from symvib.api import fit
-    from symvib.numeric.fit import read_events
+    from symvib.numeric.fit import read_observations
     from symvib.paths import check_output_file
 
     if args.plot:
         check_output_file(args.plot, "--plot file")
     free = tuple(p.strip() for p in args.free.split(",") if p.strip())
-    observed = read_events(args.data)
+    observed = read_observations(args.data)
     weights = None
     if args.sigma is not None:
         if not (math.isfinite(args.sigma) and args.sigma > 0):
-            raise ValueError(f"--sigma: must be a positive number of seconds, got {args.sigma!r}")
-        count = len(observed.t) * (1 if observed.q is None else 2)
-        weights = [1 / args.sigma] * count
+            raise ValueError(f"--sigma: must be a positive number (s, or the samples' unit), got {args.sigma!r}")
+        weights = [1 / args.sigma] * observed.count
     result = fit(args.scene, observed, free, weights=weights)
     print(result.summary())
     if args.plot:
@@ -417,13 +416,16 @@ def build_parser() -> argparse.ArgumentParser:
                         "required: every route, fail without one; never: numeric at once)")
     p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("fit", help="fit mu, k, ... of a scene to measured event times (CSV: t[, kind][, q])")
+    p = sub.add_parser("fit", help="fit mu, k, ... of a scene to measured event times or a sampled trajectory "
+                                   "(CSV: t[, kind][, q], or t with q, x,z or s)")
     p.add_argument("scene", help="scene TOML file (its values of the free parameters are the start)")
-    p.add_argument("data", help="CSV file of observed events with a header: t (s), optional kind and q")
+    p.add_argument("data", help="CSV file with a header, its kind told by its columns: events (t in s, optional "
+                                "kind, then optional q) or a sampled trajectory (t with q, or x,z, or s: the arc "
+                                "length from the initial position, m; no kind column)")
     p.add_argument("--free", default="mu,k", help="parameters to fit, comma-separated (default mu,k; also "
                    "qdot0, q0, left, right)")
-    p.add_argument("--sigma", type=float, default=None, help="standard deviation of each time, s (default: "
-                   "estimated from the residuals)")
+    p.add_argument("--sigma", type=float, default=None, help="standard deviation of each observation (s for "
+                   "times, the coordinate's unit for samples; default: estimated from the residuals)")
     p.add_argument("--plot", metavar="PATH", help="write the residual figure (PNG)")
     p.set_defaults(func=_cmd_fit)
 
@@ -507,7 +509,7 @@ def _out_of_sweep_file(text: str, path):
 #: Types of the keys of a sweep file (``vary`` is a table; integers are checked by
 #: :func:`symvib.numeric.sweep.make_spec`).
 _SWEEP_FILE_TYPES = {"scene": str, "out": str, "vary": dict, "random": int, "seed": int, "chunk": int,
-                     "log_events": int, "nodes": int, "format": str}
+                     "log_events": int, "nodes": int, "format": str, "sensitivities": str}
 
 
 def _check_sweep_file(data: dict, path) -> None:
@@ -548,6 +550,10 @@ def build_sweep_parser() -> argparse.ArgumentParser:
                          "(extra symvib[xarray])")
     ap.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address (tcp://...)")
     ap.add_argument("--backend", default="auto", choices=("auto", "numba", "python"))
+    ap.add_argument("--sensitivities", metavar="P,Q", help="add the exact derivatives of t_final, q_final, "
+                    "friction_work, impact_loss with respect to these parameters (mu, k, qdot0, q0, left, right) "
+                    "as columns d_<column>_d_<parameter> and sensitivity_reason: each scene run again by the "
+                    "single-scene driver, a slower path (docs/sweeps.md)")
     ap.add_argument("--plot", action="store_true", help="write maps over the first two varied fields")
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
     return ap
@@ -606,7 +612,7 @@ def _cmd_sweep(args) -> int:
                 chunk=pick("chunk", DEFAULT_CHUNK), log_events=pick("log_events", 0),
                 nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite,
                 scheduler=args.scheduler, progress=not args.quiet, backend=args.backend,
-                storage=pick("format", "npz"))
+                storage=pick("format", "npz"), sensitivities=pick("sensitivities", ""))
     names = res.status_names()
     status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in STATUSES if np.any(names == s))
     events = int(np.sum(res["events"]))

@@ -20,6 +20,13 @@ were matched at the end, and its message names a shortfall.  Extra model events
 are not compared.  An event without derivatives (physics.md, "Sensitivities")
 is left out of the steps, and the result says so.
 
+**Samples.** Observed positions at sample times (:class:`ObservedSamples`: ``q``, ``x, z``
+or the arc length ``s``, from video tracking) are compared with the model's position at the
+same times (its dense output), every sample in place; their Jacobian is the exact derivative
+of the position at a fixed time (:mod:`symvib.numeric.sample_sensitivity`).  A sample whose
+position has no derivative (after an event without one) is left out of the steps, and the
+result says so; a sample after the end of a run that does not come to rest is refused.
+
 **Errors.** ``weights`` are ``1 / sigma`` of each observation; without them the
 covariance is scaled by the residual variance (``cost / (m - n)``, as SciPy's
 ``curve_fit`` with ``absolute_sigma=False``).  Parameters the data do not
@@ -39,18 +46,27 @@ Examples
 """
 from __future__ import annotations
 
-import csv
 import dataclasses
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from symvib.numeric.events import EventKind
+from symvib.numeric.fit_data import (
+                                     Observed,
+                                     ObservedSamples,
+                                     observed_events,
+                                     observed_samples,
+                                     read_events,
+                                     read_observations,
+                                     read_samples,
+)
+from symvib.numeric.sample_sensitivity import sample_positions, sample_sensitivities
 from symvib.numeric.scene import Scene
 from symvib.numeric.sensitivity import PARAMETERS, sensitivities
 
-__all__ = ["fit", "observed_events", "read_events", "FitResult", "Observed", "STATUSES"]
+__all__ = ["fit", "observed_events", "observed_samples", "read_events", "read_samples", "read_observations",
+           "FitResult", "Observed", "ObservedSamples", "STATUSES"]
 
 #: Outcomes of a fit.
 STATUSES = {
@@ -69,82 +85,6 @@ LAMBDA_UP, LAMBDA_DOWN = 10.0, 0.3
 LAMBDA_MIN, LAMBDA_MAX = 1e-12, 1e16
 #: Relative step that ends a stage of the continuation before the last (the last uses ``xtol``).
 STAGE_XTOL = 1e-5
-#: Columns a file of observed events may have.
-CSV_COLUMNS = ("t", "kind", "q")
-
-
-@dataclass(frozen=True)
-class Observed:
-    """Observed events: times (ascending), optional kinds and positions."""
-
-    t: np.ndarray
-    kinds: tuple | None = None
-    q: np.ndarray | None = None
-
-
-def observed_events(t, kinds=None, q=None) -> Observed:
-    """Check and hold observed events.
-
-    Raises
-    ------
-    ValueError
-        Naming ``observed.t`` (not finite, not ascending, empty), ``observed.kind`` (not an
-        event kind), ``observed.q`` (not finite, or not one per time).
-    """
-    t = np.asarray(t, dtype=float).ravel()
-    if not len(t):
-        raise ValueError("observed.t: no event times")
-    if not np.all(np.isfinite(t)):
-        raise ValueError(f"observed.t: time {int(np.flatnonzero(~np.isfinite(t))[0]) + 1} is not a finite number")
-    if np.any(np.diff(t) < 0):
-        bad = int(np.flatnonzero(np.diff(t) < 0)[0])
-        raise ValueError(f"observed.t: the times must be ascending (time {bad + 2}, {t[bad + 1]!r}, comes before "
-                         f"time {bad + 1}, {t[bad]!r})")
-    if kinds is not None:
-        kinds = tuple(str(k).strip().lower() for k in kinds)
-        valid = {k.value for k in EventKind}
-        for i, k in enumerate(kinds):
-            if k not in valid:
-                raise ValueError(f"observed.kind: event {i + 1} is {k!r}, not one of {', '.join(sorted(valid))}")
-        if len(kinds) != len(t):
-            raise ValueError(f"observed.kind: {len(kinds)} kinds for {len(t)} times")
-    if q is not None:
-        q = np.asarray(q, dtype=float).ravel()
-        if len(q) != len(t) or not np.all(np.isfinite(q)):
-            raise ValueError("observed.q: one finite position per time")
-    return Observed(t, kinds, q)
-
-
-def read_events(path) -> Observed:
-    """Observed events from a CSV file with a header: ``t`` (s), optional ``kind`` and ``q``.
-
-    Read as text with :mod:`csv` (nothing is evaluated); errors name the file and the row.
-    """
-    from symvib.paths import read_user_file
-
-    text = read_user_file(path, what="events file")
-    rows = list(csv.reader(text.splitlines()))
-    if not rows:
-        raise ValueError(f"{path}: empty; give a header row with the columns t[, kind][, q]")
-    header = [h.strip().lower() for h in rows[0]]
-    unknown = [h for h in header if h not in CSV_COLUMNS]
-    if "t" not in header or unknown:
-        raise ValueError(f"{path}: header {rows[0]!r}: needs a column t and only {', '.join(CSV_COLUMNS)}")
-    columns = {h: [] for h in header}
-    for number, row in enumerate(rows[1:], start=2):
-        if not any(cell.strip() for cell in row):
-            continue
-        if len(row) != len(header):
-            raise ValueError(f"{path}: row {number} has {len(row)} cells for {len(header)} columns")
-        for h, cell in zip(header, row):
-            if h == "kind":
-                columns[h].append(cell)
-                continue
-            try:
-                columns[h].append(float(cell))
-            except ValueError:
-                raise ValueError(f"{path}: row {number}, column {h}: {cell!r} is not a number") from None
-    return observed_events(columns["t"], columns.get("kind"), columns.get("q"))
 
 
 @dataclass(frozen=True)
@@ -163,12 +103,16 @@ class FitResult:
     covariance, correlation : ndarray
         In the order of ``free``.
     residuals : ndarray
-        Model minus observed (times in s, then positions), unweighted.
+        Model minus observed, unweighted: times in s, then positions (events); or each coordinate
+        at every sample, ``x`` then ``z`` (samples).
     matched : int
-        Observed events matched to model events (the others were compared with the final time).
+        Observed events matched to model events (the others were compared with the final time);
+        for samples, their number.
     iterations : int
     cost : float
         Half the weighted sum of squared residuals.
+    data : str
+        ``"events"``, or the coordinates of a sampled trajectory (``"q"``, ``"xz"``, ``"s"``).
     """
 
     status: str
@@ -184,11 +128,14 @@ class FitResult:
     iterations: int
     cost: float
     history: tuple = field(default=(), repr=False)
+    data: str = "events"
 
     def summary(self) -> str:
         """Estimates with standard errors, the correlation, the status (plain text)."""
         lines = [f"fit: {self.status} after {self.iterations} iterations ({self.message})",
-                 f"matched {self.matched} of {len(self.residuals)} observations; cost {self.cost:.6g}"]
+                 (f"matched {self.matched} of {len(self.residuals)} observations" if self.data == "events" else
+                  f"{self.matched} samples of {self.data}, {len(self.residuals)} observations") +
+                 f"; cost {self.cost:.6g}"]
         for name in self.free:
             lines.append(f"  {name:6s} = {self.estimates[name]:.10g} +- {self.stderr[name]:.3g}")
         if len(self.free) > 1:
@@ -209,9 +156,10 @@ class FitResult:
         fig, ax = plt.subplots(figsize=(6, 3.2))
         n = len(self.residuals)
         ax.axhline(0.0, color="0.6", lw=0.8)
-        ax.plot(np.arange(1, n + 1), self.residuals * 1e3, "o", ms=4)
-        ax.set_xlabel("observation")
-        ax.set_ylabel("model - observed (ms)")
+        scale, unit = {"events": (1e3, "ms"), "q": (1.0, "q")}.get(self.data, (1e3, "mm"))
+        ax.plot(np.arange(1, n + 1), self.residuals * scale, "o", ms=4)
+        ax.set_xlabel("observation" if self.data == "events" else f"sample ({', '.join(self.data)})")
+        ax.set_ylabel(f"model - observed ({unit})")
         ax.set_title(", ".join(f"{k} = {self.estimates[k]:.5g} ± {self.stderr[k]:.2g}" for k in self.free),
                      fontsize=9)
         fig.tight_layout()
@@ -270,32 +218,59 @@ def _model(scene, observed, free, run):
     return np.concatenate(r), matched, jacobian
 
 
-def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weights=None, max_iterations=50,
-        xtol=1e-10, run=None) -> FitResult:
-    """Fit the ``free`` parameters of ``scene`` to ``observed`` events (least squares, exact Jacobian).
+def _sample_model(scene, observed, free, run):
+    """As :func:`_model` for a sampled trajectory: the model's coordinates at the sample times minus the
+    observed ones (column by column: ``x`` then ``z``), every sample matched."""
+    result = run(scene)
+    if result.status.is_error:
+        raise ValueError(f"scene: the run at {dict((k, getattr(scene, k)) for k in free)} failed "
+                         f"({result.status.value}): {result.message}")
+    if observed.t[-1] > result.dense.t_max:
+        raise ValueError(f"observed.t: the last sample ({float(observed.t[-1])!r} s) comes after the run's end "
+                         f"({result.dense.t_max:g} s, status {result.status.value}) at "
+                         f"{dict((k, getattr(scene, k)) for k in free)}")
+    r = (sample_positions(result, observed.t, observed.coordinates) - observed.values).T.ravel()
+
+    def jacobian():
+        D = sample_sensitivities(result, observed.t, free, observed.coordinates).derivatives  # (n, columns, P)
+        J = np.concatenate([D[:, j, :] for j in range(D.shape[1])])
+        usable = np.all(np.isfinite(J), axis=1)
+        J[~usable] = 0.0
+        return J, usable
+
+    return r, len(observed.t), jacobian
+
+
+def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *, bounds=None, weights=None,
+        max_iterations=50, xtol=1e-10, run=None) -> FitResult:
+    """Fit the ``free`` parameters of ``scene`` to ``observed`` events or samples (least squares, exact Jacobian).
 
     Parameters
     ----------
     scene : Scene
         The start: its values of the free parameters are the first guess, the others fixed.
-    observed : Observed
-        From :func:`observed_events` or :func:`read_events`.
+    observed : Observed or ObservedSamples
+        Events (:func:`observed_events`, :func:`read_events`) or a sampled trajectory
+        (:func:`observed_samples`, :func:`read_samples`); :func:`read_observations` reads either.
     free : sequence of str
         Names from :data:`symvib.numeric.sensitivity.PARAMETERS`.
     bounds : dict, optional
         Parameter -> ``(low, high)``; default: the physical ranges (``mu >= 0``, ``0 <= k <= 1``,
         ``q0`` between the limiters, a limiter on its side of ``q0``).
     weights : array, optional
-        ``1 / sigma`` of each observation (times, then positions).
+        ``1 / sigma`` of each observation (times, then positions; for samples each coordinate at
+        every sample, ``x`` then ``z``).
     run : callable, optional
-        ``scene -> Result`` (default :func:`symvib.numeric.driver.simulate` without samples).
+        ``scene -> Result`` (default :func:`symvib.numeric.driver.simulate`, keeping its intervals
+        only for samples: their positions come from its dense output).
 
     Raises
     ------
     ValueError
         Naming ``free`` (unknown, repeated, a missing limiter, more parameters than
-        observations), ``observed.kind`` (a kind the scene cannot make), ``weights`` (not
-        one positive finite number per observation) or ``scene`` (a run that failed).
+        observations), ``observed.kind`` (a kind the scene cannot make), ``observed.t`` (a sample
+        after the end of the start's run), ``weights`` (not one positive finite number per
+        observation) or ``scene`` (a run that failed).
     """
     from symvib.numeric.driver import simulate
 
@@ -305,28 +280,29 @@ def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weig
     for side in ("left", "right"):
         if side in free and getattr(scene, side) is None:
             raise ValueError(f"free: the scene has no {side} limiter to fit")
-    m = len(observed.t) * (1 if observed.q is None else 2)
+    samples = isinstance(observed, ObservedSamples)
+    m = observed.count
     if m < len(free):
         raise ValueError(f"free: {len(free)} parameters from {m} observations; give at least as many observations "
                          "as free parameters")
-    if observed.kinds and ("impact" in observed.kinds or "rest_on_limiter" in observed.kinds) \
+    if not samples and observed.kinds and ("impact" in observed.kinds or "rest_on_limiter" in observed.kinds) \
             and scene.left is None and scene.right is None:
         raise ValueError("observed.kind: impacts observed, but the scene has no limiter to make them")
     w = np.ones(m) if weights is None else np.asarray(weights, dtype=float).ravel()
     if len(w) != m or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {len(w)}")
     bounds = {name: (bounds or {}).get(name, _default_bounds(scene, name)) for name in free}
-    problem = _Problem(scene, free, run or (lambda s: simulate(s, samples=False)),
-                       *(np.array([bounds[n][i] for n in free]) for i in (0, 1)), weights is not None)
+    problem = _Problem(scene, free, run or (lambda s: simulate(s, samples=samples)),
+                       *(np.array([bounds[n][i] for n in free]) for i in (0, 1)), weights is not None,
+                       _sample_model if samples else _model)
     x = np.array([getattr(scene, name) for name in free], dtype=float)
     if np.any(x < problem.lo) or np.any(x > problem.hi):
         raise ValueError(f"scene: the start {dict(zip(free, x))} is outside the bounds {bounds}")
     n_obs = len(observed.t)
     total, history = 0, []
     for n in _stages(n_obs, len(free)):
-        part = Observed(observed.t[:n], observed.kinds[:n] if observed.kinds else None,
-                        observed.q[:n] if observed.q is not None else None)
-        part_w = w[:n] if observed.q is None else np.concatenate([w[:n], w[n_obs:n_obs + n]])
+        part = observed.head(n)
+        part_w = np.concatenate([w[j * n_obs:j * n_obs + n] for j in range(m // n_obs)])
         # (a stage before the last only needs to land near its minimum: the next one refines it)
         result = _levenberg_marquardt(problem, part, part_w, x, xtol if n == n_obs else STAGE_XTOL, max_iterations)
         total += result.iterations
@@ -334,7 +310,8 @@ def fit(scene: Scene, observed: Observed, free=("mu", "k"), *, bounds=None, weig
         x = np.array([result.estimates[name] for name in free])
         if result.status == "no_events":
             return result
-    return dataclasses.replace(result, iterations=total, history=tuple(history))
+    return dataclasses.replace(result, iterations=total, history=tuple(history),
+                               data=observed.coordinates if samples else "events")
 
 
 def _stages(n_obs: int, n_free: int) -> list:
@@ -363,6 +340,7 @@ class _Problem:
     lo: np.ndarray
     hi: np.ndarray
     absolute: bool
+    model: object
 
     def at(self, values) -> Scene:
         return self.scene.replace(**{name: float(v) for name, v in zip(self.free, values)})
@@ -373,7 +351,7 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
     lowers the cost is taken and ``lambda`` falls, else ``lambda`` rises; it stops when the relative
     step is below ``xtol`` or no step lowers the cost (a minimum, to rounding)."""
     free, lo, hi = problem.free, problem.lo, problem.hi
-    r, matched, jacobian = _model(problem.at(x), observed, free, problem.run)
+    r, matched, jacobian = problem.model(problem.at(x), observed, free, problem.run)
     J, usable = jacobian()
     if matched == 0:
         return _result("no_events", STATUSES["no_events"], problem.at(x), free, x, J, r, w, problem.absolute,
@@ -390,7 +368,7 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
             step = np.linalg.lstsq(H + lam * np.diag(scale ** 2), -g, rcond=None)[0]
             trial = np.clip(x + step, lo, hi)
             try:
-                r_new, m_new, jacobian_new = _model(problem.at(trial), observed, free, problem.run)
+                r_new, m_new, jacobian_new = problem.model(problem.at(trial), observed, free, problem.run)
                 new_cost = 0.5 * float(np.sum((w * r_new) ** 2))
             except ValueError:                      # a run that failed there: as if the cost rose
                 new_cost = math.inf

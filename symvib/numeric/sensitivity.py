@@ -48,8 +48,9 @@ import numpy as np
 # Kinds and statuses by their engine codes (symvib.numeric.layout, below the records of
 # symvib.numeric.events, whose Result.sensitivities calls up into this module).
 from symvib.numeric.layout import EventCode, StatusCode
+from symvib.numeric.sensitivity_table import Sensitivities
 
-__all__ = ["sensitivities", "Sensitivities", "PARAMETERS"]
+__all__ = ["sensitivities", "interval_tangents", "Sensitivities", "Tangents", "Leg", "PARAMETERS"]
 
 #: Parameters a run's events can be differentiated with respect to.
 PARAMETERS = ("mu", "k", "qdot0", "q0", "left", "right")
@@ -74,84 +75,6 @@ INNER_NODES = 8
 INTEGRAL_RTOL = 1e-14
 #: Statuses whose final state has derivatives (the run ended on an event).
 FINAL_STATUSES = (StatusCode.ARRESTED, StatusCode.RESTING_ON_LIMITER)
-
-
-@dataclass(frozen=True)
-class Sensitivities:
-    """Derivatives of a run's events and final state (an immutable record).
-
-    Attributes
-    ----------
-    wrt : tuple of str
-        The parameters, in the order of the columns.
-    events : tuple of Event
-        The run's events (rows).
-    t, q, v_before, v_after : ndarray, shape (events, parameters)
-        Derivatives of each event's time, position and speed ``v = h qdot`` just before
-        and after it; NaN where the event is not differentiable.
-    reasons : tuple of str
-        Per event, why its row is NaN (empty where it is differentiable).
-    final : dict
-        ``t_final``, ``q_final``, ``friction_work``, ``impact_loss`` -> derivatives, shape
-        (parameters,); NaN when the run did not end on an event or an event before is not
-        differentiable.
-    notes : dict
-        Parameter -> why its whole column is NaN (a start at rest has no derivative in ``qdot0``).
-    """
-
-    wrt: tuple
-    events: tuple
-    t: np.ndarray
-    q: np.ndarray
-    v_before: np.ndarray
-    v_after: np.ndarray
-    reasons: tuple
-    final: dict
-    notes: dict
-
-    def rows(self) -> list:
-        """One dict per event and parameter: ``event``, ``kind``, ``wrt``, ``dt``, ``dq``,
-        ``dv_before``, ``dv_after``, ``reason`` (a long table, as a DataFrame wants it)."""
-        out = []
-        for i, event in enumerate(self.events):
-            for j, name in enumerate(self.wrt):
-                out.append({"event": i, "kind": event.kind.value, "wrt": name, "dt": float(self.t[i, j]),
-                            "dq": float(self.q[i, j]), "dv_before": float(self.v_before[i, j]),
-                            "dv_after": float(self.v_after[i, j]), "reason": self.reasons[i]})
-        return out
-
-    def to_xarray(self):
-        """The derivatives as an ``xarray.Dataset`` with an ``event`` and a ``wrt`` dimension
-        (``dt``, ``dq``, ``dv_before``, ``dv_after``; the event's ``kind`` and ``reason`` as
-        coordinates) and the final state's as variables over ``wrt`` (extra ``symvib[xarray]``).
-
-        Examples
-        --------
-        >>> from symvib import simulate
-        >>> ds = simulate("paper-parabola").sensitivities(wrt=("mu", "k")).to_xarray()  # doctest: +SKIP
-        >>> float(ds.dt.sel(wrt="mu").isel(event=-1)) == float(ds.t_final.sel(wrt="mu"))  # doctest: +SKIP
-        True
-        """
-        try:
-            import xarray as xr
-        except ImportError:
-            raise ImportError("Sensitivities.to_xarray needs xarray: pip install 'symvib[xarray]'") from None
-        dims = ("event", "wrt")
-        coords = {"event": np.arange(len(self.events)), "wrt": list(self.wrt),
-                  "kind": ("event", [e.kind.value for e in self.events]),
-                  "t": ("event", [e.t for e in self.events]), "reason": ("event", list(self.reasons))}
-        data = {"dt": (dims, self.t), "dq": (dims, self.q), "dv_before": (dims, self.v_before),
-                "dv_after": (dims, self.v_after)}
-        data.update({name: ("wrt", values) for name, values in self.final.items()})
-        return xr.Dataset(data, coords=coords, attrs={name: why for name, why in self.notes.items()})
-
-    def to_dataframe(self):
-        """:meth:`rows` as a pandas DataFrame (extra ``symvib[pandas]``)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("Sensitivities.to_dataframe needs pandas: pip install 'symvib[pandas]'") from None
-        return pd.DataFrame(self.rows())
 
 
 class _Curve:
@@ -208,10 +131,10 @@ class _Interval:
     accuracy where a difference of two ``F_s`` would not.
     """
 
-    def __init__(self, curve, q_a, w_a, q_e, s, turning_end, Dq_a, Dw_a, Dmu):
+    def __init__(self, curve, q_a, w_a, q_e, s, turning_end, Dq_a, Dw_a, Dmu, G_e=None):
         c = curve
         self.c, self.q_a, self.q_e, self.s, self.turning_end = c, q_a, q_e, s, turning_end
-        self.Dq_a, self.Dmu = Dq_a, Dmu
+        self.w_a, self.Dq_a, self.Dw_a, self.Dmu = w_a, Dq_a, Dw_a, Dmu
         self.E_a = math.exp(2 * s * c.mu * float(c.alpha(q_a)))
         self.G_a = w_a * self.E_a
         alpha_a, dalpha_a = float(c.alpha(q_a)), float(c.dalpha(q_a))
@@ -222,7 +145,9 @@ class _Interval:
         self.A = self.DG_a + 2 * c.g * self.f_a * Dq_a
         self.f_e = float(c.f(s, q_e))
         self.I_mu_e = self.integral(lambda q: c.df_dmu(s, q), q_a, q_e - q_a) if np.any(Dmu) else 0.0
-        self.G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(c.F(s, q_e) - c.F(s, q_a))
+        if G_e is None:
+            G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(c.F(s, q_e) - c.F(s, q_a))
+        self.G_e = G_e
 
     def dG_fixed_q_end(self):
         """``dG/dp`` at fixed ``q = q_e``."""
@@ -337,9 +262,90 @@ class _Interval:
             previous = current
         return best if best_gap <= ACCEPT else None
 
+    def position_tangent(self, q, qdot, Dt_a, Dt_e):
+        """``Dq`` at fixed time of the point ``q`` inside the interval (``qdot`` its speed there, ``Dt_a``,
+        ``Dt_e`` the tangents of the start and end times), or None when the time quadrature fails.
+
+        The time from the nearer end to ``q`` is the duration of a piece of the interval whose ends
+        move with that end's tangent (fixed distance ``xi`` from it): ``t = t_c +- tau(xi; p)``, so at
+        fixed ``t``, ``Dq = Dq_c - qdot (Dt_c +- D tau)`` (physics.md, "Sensitivities" 7).  Next to a
+        turning point the piece starts or ends on it, and ``D tau`` stays finite where the derivative
+        of ``t(q)`` at fixed ``q`` (``-Dq / qdot``) would not.
+        """
+        c, s = self.c, self.s
+        from_start = abs(q - self.q_a) <= abs(q - self.q_e)
+        q_c, Dq_c, Dt_c = (self.q_a, self.Dq_a, Dt_a) if from_start else (self.q_e, self.Dq_e, Dt_e)
+        if q == q_c:
+            return Dq_c - qdot * Dt_c
+        G, Dw = self.point(q, Dq_c, from_start)
+        if from_start:
+            piece = _Interval(c, self.q_a, self.w_a, q, s, False, self.Dq_a, self.Dw_a, self.Dmu, G_e=G)
+        else:
+            w = G / math.exp(2 * s * c.mu * float(c.alpha(q)))
+            piece = _Interval(c, q, w, self.q_e, s, self.turning_end, self.Dq_e, Dw, self.Dmu, G_e=self.G_e)
+        piece.set_end(Dq_c)
+        dtau = piece.dT()
+        if dtau is None:
+            return None
+        return Dq_c - qdot * (Dt_c + dtau if from_start else Dt_c - dtau)
+
+    def point(self, q, Dq, from_start):
+        """``G(q)`` and the total derivative of ``w`` at ``q`` moving with tangent ``Dq``, integrated from
+        the start (``from_start``) or the end: ``G(q) = G_c - 2 g Integral_{q_c}^{q} f`` and
+        ``DG = DG_c - 2 g (f(q) Dq - f(q_c) Dq_c + Dmu Integral_{q_c}^{q} df/dmu)``."""
+        c, s = self.c, self.s
+        q_c, G_c, DG_c, f_c, Dq_c = ((self.q_a, self.G_a, self.DG_a, self.f_a, self.Dq_a) if from_start
+                                     else (self.q_e, self.G_e, self.DG_e, self.f_e, self.Dq_e))
+        G = G_c - 2 * c.g * self.integral(lambda v: c.f(s, v), q_c, q - q_c)
+        DG = DG_c - 2 * c.g * (float(c.f(s, q)) * Dq - f_c * Dq_c)
+        if np.any(self.Dmu):
+            DG = DG - 2 * c.g * self.Dmu * self.integral(lambda v: c.df_dmu(s, v), q_c, q - q_c)
+        alpha, dalpha = float(c.alpha(q)), float(c.dalpha(q))
+        E = math.exp(2 * s * c.mu * alpha)
+        return G, (DG - G * 2 * s * (alpha * self.Dmu + c.mu * dalpha * Dq)) / E
+
 
 def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``.
+
+    Parameters and errors as :func:`interval_tangents`, whose ``sensitivities`` this is.
+
+    Returns
+    -------
+    Sensitivities
+        The record (:mod:`symvib.numeric.sensitivity_table`).
+    """
+    return interval_tangents(result, wrt, prepared=prepared).sensitivities
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One motion interval of a differentiated run, from event time ``t_a`` (0 for the start) to
+    ``t_e``, with the tangents ``Dt_a``, ``Dt_e`` of those times (shape (parameters,)); its
+    :meth:`position_tangent` differentiates a position inside it at fixed time."""
+
+    interval: object
+    t_a: float
+    t_e: float
+    Dt_a: np.ndarray
+    Dt_e: np.ndarray
+
+    def position_tangent(self, q, qdot):
+        """``Dq`` at fixed time of the point ``q`` (speed ``qdot``) inside the leg, or None."""
+        return self.interval.position_tangent(q, qdot, self.Dt_a, self.Dt_e)
+
+
+@dataclass(frozen=True)
+class Tangents:
+    """A differentiated run: its :class:`Sensitivities` and the :class:`Leg` of every motion interval up
+    to the first event without derivatives (in time order)."""
+
+    sensitivities: Sensitivities
+    legs: tuple
+
+
+def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
+    """Derivatives of ``result``'s events and final state with respect to ``wrt``, and its intervals.
 
     Parameters
     ----------
@@ -352,7 +358,7 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
 
     Returns
     -------
-    Sensitivities
+    Tangents
 
     Raises
     ------
@@ -397,6 +403,7 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
     reasons = []
     D_impact_loss = np.zeros(P)
     Dq_last = Dw_last = None
+    legs, t_a = [], 0.0
     for i, ev in enumerate(result.events):
         kind = ev.kind.code
         own = _not_differentiable(ev, scene, c, kind)
@@ -443,7 +450,9 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
         Dt_e = Dt_a + dT
         T[i], Q[i], VB[i], VA[i] = Dt_e, Dq_e, Dv_minus, Dv_plus
         reasons.append("")
-        q_a, w_a, Dq_a, Dw_a, Dt_a = q_e, w_plus, Dq_e, Dw_plus, Dt_e
+        if q_e != q_a:
+            legs.append(Leg(iv, t_a, ev.t, Dt_a, Dt_e))
+        q_a, w_a, Dq_a, Dw_a, Dt_a, t_a = q_e, w_plus, Dq_e, Dw_plus, Dt_e, ev.t
         Dq_last, Dw_last = Dq_e, Dw_plus
     final = {name: np.full(P, np.nan) for name in ("t_final", "q_final", "friction_work", "impact_loss")}
     if not broken and result.status.code in FINAL_STATUSES and n and Dq_last is not None:
@@ -455,7 +464,8 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
         j = wrt.index(name)
         for column in (T, Q, VB, VA, *final.values()):
             column[..., j] = np.nan
-    return Sensitivities(wrt, tuple(result.events), T, Q, VB, VA, tuple(reasons), final, notes)
+    sens = Sensitivities(wrt, tuple(result.events), T, Q, VB, VA, tuple(reasons), final, notes)
+    return Tangents(sens, tuple(legs))
 
 
 def _branch(c, q_a, w_a, sigma, mid_q) -> int:

@@ -16,7 +16,8 @@ Every scene runs the same compiled loop as :func:`symvib.numeric.driver.simulate
 so a sweep's event sequences are the single-scene driver's.  Per scene it keeps
 the columns :data:`symvib.numeric.layout.SUMMARY_COLUMNS` (status, event counts,
 final time and position, friction work, impact loss, energies) and, with
-``log_events=L``, the first ``L`` events.  Given ``out=DIR`` the sweep is
+``log_events=L``, the first ``L`` events; with ``sensitivities=("mu", "k")`` the final
+state's derivatives (a slower path: each scene run again by the driver).  Given ``out=DIR`` the sweep is
 written to a folder of chunk files and resumed from it; given ``scheduler``
 (a ``dask.distributed`` address or ``Client``, extra ``symvib[dask]``), the
 chunks run on that cluster.  The command line ``symvib sweep`` is
@@ -29,6 +30,8 @@ The modules, one concept each:
 * :mod:`~symvib.numeric.sweep.spec` - the definition (:func:`make_spec`, :class:`SweepSpec`);
 * :mod:`~symvib.numeric.sweep.rows` - a chunk's scene rows, checked by the scene's own checks;
 * :mod:`~symvib.numeric.sweep.labels` - readable names, units (SI), LaTeX symbols of the columns;
+* :mod:`~symvib.numeric.sweep.sensitivity_columns` - the opt-in columns of the final state's exact
+  derivatives (``sensitivities=("mu", "k")``), computed per scene by the driver;
 * :mod:`~symvib.numeric.sweep.schema` - the columns' names and kinds, the layout :data:`FORMAT`,
   :func:`sweep_id`, the check of a chunk's rows: what the result, the stores and the labelled data share;
 * :mod:`~symvib.numeric.sweep.frames` - the columns as an xarray Dataset or a pandas DataFrame;

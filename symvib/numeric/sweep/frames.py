@@ -39,9 +39,11 @@ import numpy as np
 
 from symvib import __version__
 from symvib.numeric.layout import EVENT_COLUMNS, STATUSES, SUMMARY_COLUMNS
-from symvib.numeric.sweep.labels import column_attrs, field_attrs
+from symvib.numeric.sweep.labels import COLUMN_LABELS, column_attrs, field_attrs
 from symvib.numeric.sweep.limits import EVENT_WIDTH
 from symvib.numeric.sweep.schema import FORMAT, impact_share, variable_names
+from symvib.numeric.sweep.sensitivity_columns import column_attrs as sensitivity_attrs
+from symvib.numeric.sweep.sensitivity_columns import column_names as sensitivity_columns
 
 __all__ = ["EXTRA", "ROW_ATTRS", "require", "dataset", "dataframe", "dataset_attrs", "status_attrs",
            "event_log_attrs"]
@@ -108,6 +110,8 @@ def dataset(spec, columns: dict, ident: str, *, store: bool = False):
     for name in SUMMARY_COLUMNS:
         attrs = status_attrs(scene) if name == "status" else column_attrs(scene, name)
         data[name] = (dims, columns[name].reshape(shape), attrs)
+    for name in sensitivity_columns(spec.sensitivities):
+        data[name] = (dims, columns[name].reshape(shape), sensitivity_attrs(scene, name, COLUMN_LABELS))
     if spec.log_events:
         log = columns["event_log"].reshape(shape + (spec.log_events, EVENT_WIDTH))
         attrs = event_log_attrs()
@@ -138,6 +142,9 @@ def dataframe(spec, columns: dict, ident: str):
     for name in SUMMARY_COLUMNS:
         data[name] = np.asarray(columns[name])
         attrs[name] = column_attrs(scene, name)
+    for name in sensitivity_columns(spec.sensitivities):
+        data[name] = np.asarray(columns[name])
+        attrs[name] = sensitivity_attrs(scene, name, COLUMN_LABELS)
     data["status"] = pd.Categorical.from_codes(data["status"], categories=list(STATUSES))
     data["impact_share"] = impact_share(data["friction_work"], data["impact_loss"])
     attrs["impact_share"] = column_attrs(scene, "impact_share")

@@ -28,7 +28,7 @@ from symvib.numeric.driver import sweep_function
 from symvib.numeric.layout import Summary
 from symvib.numeric.prepared import prepared_of
 from symvib.numeric.scene import Scene, SceneError
-from symvib.numeric.sweep import limits
+from symvib.numeric.sweep import limits, sensitivity_columns
 from symvib.numeric.sweep.limits import SweepError
 from symvib.numeric.sweep.lock import WriterLock
 from symvib.numeric.sweep.progress import Progress
@@ -61,6 +61,8 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
     for column in Summary:
         values_ = summary[:, column]
         out[column.name] = values_.astype(np.int64) if column.name in INTEGER_COLUMNS else values_
+    if spec.sensitivities:
+        out.update(sensitivity_columns.compute(spec, values, out["status"], backend))
     if spec.log_events:
         out["event_log"] = logs[:, :spec.log_events]
     return out
@@ -92,7 +94,8 @@ def _refuse_singular_domain(scene: Scene, prepared=None) -> None:
 
 def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0, chunk: int = limits.DEFAULT_CHUNK,
           log_events: int = 0, nodes: int = limits.DEFAULT_NODES, out=None, overwrite: bool = False, scheduler=None,
-          progress: bool = False, backend: str = "auto", storage: str = "npz", prepared=None) -> SweepResult:
+          progress: bool = False, backend: str = "auto", storage: str = "npz", prepared=None,
+          sensitivities=()) -> SweepResult:
     """Run ``scene`` for every combination (or random sample) of the ``vary`` fields.
 
     Parameters
@@ -124,6 +127,11 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
     prepared : Prepared, optional
         The base scene's prepared curve (:func:`symvib.prepare.prepare`, which ``symvib.sweep``
         calls); default: what is on disk (:func:`~symvib.numeric.prepared.prepared_of`).
+    sensitivities : sequence of str, optional
+        Add the final state's derivatives with respect to these parameters
+        (:mod:`~symvib.numeric.sweep.sensitivity_columns`): each scene run again by the
+        single-scene driver and differentiated, a slower path (its cost per scene:
+        ``benchmarks/bench_fit.py --sweep``).
 
     Returns
     -------
@@ -138,7 +146,8 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
     """
     check_storage(storage)
     _refuse_singular_domain(scene, prepared)
-    spec = make_spec(scene, vary, random=random, seed=seed, chunk=chunk, log_events=log_events, nodes=nodes)
+    spec = make_spec(scene, vary, random=random, seed=seed, chunk=chunk, log_events=log_events, nodes=nodes,
+                     sensitivities=sensitivities)
     definition = spec.to_dict()
     ident = sweep_id(definition)
     if out is None:

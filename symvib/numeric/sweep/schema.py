@@ -46,6 +46,8 @@ import numpy as np
 from symvib.numeric.layout import STATUSES, SUMMARY_COLUMNS, Summary
 from symvib.numeric.sweep.labels import axis_name
 from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
+from symvib.numeric.sweep.sensitivity_columns import REASON_COLUMN
+from symvib.numeric.sweep.sensitivity_columns import column_names as sensitivity_columns
 
 __all__ = ["FORMAT", "OLD_FORMATS", "ID_DIGITS", "INTEGER_COLUMNS", "sweep_id", "column_names", "column_dtype",
            "column_tail", "variable_names", "impact_share", "bad_chunk", "check_rows"]
@@ -75,13 +77,15 @@ def sweep_id(definition: dict) -> str:
 
 
 def column_names(spec) -> list:
-    """The sweep's columns in their order: ``row``, the varied fields, the summary columns, ``event_log``."""
-    return ["row"] + [a.field for a in spec.axes] + list(SUMMARY_COLUMNS) + (["event_log"] if spec.log_events else [])
+    """The sweep's columns in their order: ``row``, the varied fields, the summary columns, the sensitivity
+    columns (when asked: :mod:`~symvib.numeric.sweep.sensitivity_columns`), ``event_log``."""
+    return (["row"] + [a.field for a in spec.axes] + list(SUMMARY_COLUMNS)
+            + sensitivity_columns(getattr(spec, "sensitivities", ())) + (["event_log"] if spec.log_events else []))
 
 
 def column_dtype(name: str) -> np.dtype:
     """The dtype of column ``name``: ``int64`` for ``row`` and :data:`INTEGER_COLUMNS`, else ``float64``."""
-    return np.dtype(np.int64 if name == "row" or name in INTEGER_COLUMNS else np.float64)
+    return np.dtype(np.int64 if name in ("row", REASON_COLUMN) or name in INTEGER_COLUMNS else np.float64)
 
 
 def column_tail(spec, name: str) -> tuple:

@@ -30,6 +30,8 @@ from symvib.numeric.sweep import limits
 from symvib.numeric.sweep.axes import Axis, canonical_field, parse_axis
 from symvib.numeric.sweep.limits import EVENT_WIDTH, ITEM, SweepError
 from symvib.numeric.sweep.rows import scene_rows
+from symvib.numeric.sweep.sensitivity_columns import check_wrt
+from symvib.numeric.sweep.sensitivity_columns import column_names as sensitivity_columns
 
 __all__ = ["SweepSpec", "make_spec", "check_sizes"]
 
@@ -50,6 +52,7 @@ class SweepSpec:
     chunk: int = limits.DEFAULT_CHUNK
     log_events: int = 0
     nodes: int = limits.DEFAULT_NODES
+    sensitivities: tuple = ()
 
     @property
     def shape(self) -> tuple:
@@ -61,9 +64,12 @@ class SweepSpec:
         return -(-self.count // self.chunk)
 
     def to_dict(self) -> dict:
-        return {"scene": self.scene.to_dict(), "axes": [a.to_dict() for a in self.axes], "mode": self.mode,
-                "count": self.count, "seed": self.seed, "chunk": self.chunk, "log_events": self.log_events,
-                "nodes": self.nodes}
+        out = {"scene": self.scene.to_dict(), "axes": [a.to_dict() for a in self.axes], "mode": self.mode,
+               "count": self.count, "seed": self.seed, "chunk": self.chunk, "log_events": self.log_events,
+               "nodes": self.nodes}
+        if self.sensitivities:     # (only then: a sweep without them keeps its identity)
+            out["sensitivities"] = list(self.sensitivities)
+        return out
 
     @classmethod
     def from_dict(cls, data: dict) -> SweepSpec:
@@ -81,8 +87,8 @@ class SweepSpec:
         if not isinstance(data, dict):
             raise SweepError(label, f"must be a table, got {type(data).__name__}")
         keys = {"scene", "axes", "mode", "count", "seed", "chunk", "log_events", "nodes"}
-        if set(data) != keys:
-            wrong = sorted(set(data) ^ keys)[0]
+        if set(data) - {"sensitivities"} != keys:
+            wrong = sorted((set(data) - {"sensitivities"}) ^ keys)[0]
             raise SweepError(f"{label}.{wrong}", "missing" if wrong in keys else "unknown key")
         try:
             scene = scene_from_dict(data["scene"])
@@ -106,7 +112,14 @@ class SweepSpec:
             ints[key] = value
         if data["mode"] not in ("grid", "random") or any(a.grid != (data["mode"] == "grid") for a in axes):
             raise SweepError(f"{label}.mode", "must be 'grid' (axes of values) or 'random' (axes of ranges)")
-        spec = cls(scene, axes, data["mode"], **ints)
+        wrt = data.get("sensitivities", [])
+        if not isinstance(wrt, list) or not all(isinstance(p, str) for p in wrt):
+            raise SweepError(f"{label}.sensitivities", f"must be a list of parameter names, got {wrt!r}")
+        try:
+            wrt = check_wrt(scene, wrt, axes)
+        except SceneError as exc:
+            raise SweepError(f"{label}.sensitivities", exc.reason) from None
+        spec = cls(scene, axes, data["mode"], **ints, sensitivities=wrt)
         check_sizes(spec, prefix=f"{label}.")
         return spec
 
@@ -124,7 +137,8 @@ class SweepSpec:
 
     def chunk_bytes(self) -> int:
         """Bytes of the columns of one full chunk (row, varied fields, summary, event log)."""
-        per_row = (1 + len(self.axes) + len(SUMMARY_COLUMNS) + EVENT_WIDTH * self.log_events) * ITEM
+        per_row = (1 + len(self.axes) + len(SUMMARY_COLUMNS) + len(sensitivity_columns(self.sensitivities))
+                   + EVENT_WIDTH * self.log_events) * ITEM
         return min(self.chunk, self.count) * per_row
 
     def scalars(self, values, rows=None) -> tuple:
@@ -139,7 +153,8 @@ class SweepSpec:
 
 
 def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
-              chunk: int = limits.DEFAULT_CHUNK, log_events: int = 0, nodes: int = limits.DEFAULT_NODES) -> SweepSpec:
+              chunk: int = limits.DEFAULT_CHUNK, log_events: int = 0, nodes: int = limits.DEFAULT_NODES,
+              sensitivities=()) -> SweepSpec:
     """Validate a sweep definition.
 
     Parameters
@@ -156,6 +171,9 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
     nodes : int
         Gauss-Legendre nodes per quadrature panel (as :func:`symvib.numeric.driver.simulate`),
         in :data:`~symvib.numeric.sweep.limits.NODES_RANGE`.
+    sensitivities : sequence of str or str
+        Parameters (:data:`symvib.numeric.sensitivity.PARAMETERS`) whose derivatives of the final
+        state to add as columns (:mod:`~symvib.numeric.sweep.sensitivity_columns`; a slower path).
 
     Raises
     ------
@@ -180,7 +198,8 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
         count = random
     else:
         count = math.prod(a.size for a in axes)   # Python integers: no overflow
-    spec = SweepSpec(scene, axes, "grid" if random is None else "random", count, seed, chunk, log_events, nodes)
+    wrt = check_wrt(scene, sensitivities, axes)
+    spec = SweepSpec(scene, axes, "grid" if random is None else "random", count, seed, chunk, log_events, nodes, wrt)
     check_sizes(spec)
     # Every corner of the box of varied values is a valid scene (the linear
     # constraints then hold inside it); each chunk is checked row by row too.
