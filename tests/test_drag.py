@@ -11,9 +11,9 @@ import sympy as sp
 
 from symvib.symbolic.curve import graph
 from symvib.symbolic.derive import derive
-from symvib.symbolic.drag import BRANCHES, derive_drag
+from symvib.symbolic.drag import BRANCHES, derive_drag, gamma_drag
 from symvib.symbolic.mechanics import agrees, check_eq1, first_principles, on_branch
-from symvib.symbolic.symbols import g, gamma_drag, mu
+from symvib.symbolic.symbols import g, mu
 
 SHAPES = ("parabola", "cycloid", "circle")
 #: Digits of the time-integration references, and the agreement asked of them.

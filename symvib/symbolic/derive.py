@@ -42,7 +42,7 @@ from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
 #: as ``C`` is, since eq. 2 satisfies eq. 1 whatever it is.
 PHI = sp.Symbol("Phi", real=True)
 
-__all__ = ["Branch", "Derivation", "derive", "coefficients", "form_maker", "pm_latex", "FORMS"]
+__all__ = ["Branch", "Derivation", "derive", "coefficients", "pm_latex", "FORMS"]
 
 #: How :func:`derive` writes the coefficients ``A``, ``B`` of eq. 1: ``"simplest"`` takes the
 #: shortest of a few simplified forms (``cancel``, ``trigsimp``, ``simplify``: the catalogue's
@@ -286,13 +286,13 @@ def coefficients(xp, zp, h, hp, alphap, *, forms: str = "simplest") -> tuple:
     with ``v = h qdot``, ``h sin(alpha) = z'``, ``h cos(alpha) = x'``, ``kappa h = alpha'``;
     each ratio in the ``forms`` of :data:`FORMS`.
     """
-    tidy = form_maker(forms)
+    tidy = _form_maker(forms)
     A = tidy(hp / h) + sigma * mu * alphap
     B = g * (tidy(zp / h**2) + sigma * mu * tidy(xp / h**2))
     return A, B
 
 
-def form_maker(forms: str):
+def _form_maker(forms: str):
     """The function that writes an expression in the ``forms`` of :data:`FORMS`."""
     makers = {"simplest": _simplest, "direct": _as_differentiated}
     if forms not in makers:
@@ -347,7 +347,7 @@ def derive(curve, *, seconds: float = ROUTE_SECONDS, routes=ROUTES, forms: str =
     if not isinstance(curve, Curve):
         raise TypeError(f"derive() needs a Curve, a Shape or a shape name, not {type(curve).__name__}")
     c = curve
-    tidy = form_maker(forms)
+    tidy = _form_maker(forms)
     A_sym, B_sym = coefficients(c.xp, c.zp, c.h, c.hp, c.alphap, forms=forms)
     branches = {}
     # Every route on both branches (their integrands differ in the sign of mu, and a route may

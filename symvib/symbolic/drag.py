@@ -39,10 +39,16 @@ import sympy as sp
 
 from symvib.symbolic import budget
 from symvib.symbolic.curve import Curve, identity_holds, numeric_zero, reference_point
-from symvib.symbolic.derive import coefficients, form_maker
-from symvib.symbolic.symbols import C, g, gamma_drag, mu, sigma
+from symvib.symbolic.derive import derive
+from symvib.symbolic.symbols import C, g, mu
 
-__all__ = ["DragBranch", "DragDerivation", "derive_drag", "arc_length", "BRANCHES", "ARC_SECONDS",
+#: Quadratic air drag per unit mass, ``gamma = c / m`` (drag force ``-c v |v|``).  A distinctive
+#: name, since curves may call their parameters ``gamma`` or ``c``.  It lives here, not in
+#: :mod:`symvib.symbolic.symbols`, whose source is hashed into every generated kernel module
+#: (:mod:`symvib.provenance`): no kernel uses drag yet.
+gamma_drag = sp.Symbol("gamma_drag", nonnegative=True)
+
+__all__ = ["gamma_drag", "DragBranch", "DragDerivation", "derive_drag", "arc_length", "BRANCHES", "ARC_SECONDS",
            "INTEGRAL_SECONDS"]
 
 #: The branches ``(sigma, n)``: sign of the velocity, sign of the normal force.
@@ -226,13 +232,12 @@ def derive_drag(curve, *, seconds: float = INTEGRAL_SECONDS, arc_seconds: float 
     if any(p.name == gamma_drag.name for p in c.params):
         raise ValueError(f"curve parameter {gamma_drag.name!r} is the drag's own symbol: rename it")
     S = arc_length(c, seconds=arc_seconds)
-    A_sym, B_sym = coefficients(c.xp, c.zp, c.h, c.hp, c.alphap, forms=forms)   # eq. 1's, without drag
-    tidy = form_maker(forms)
+    plain = derive(c, routes=(), forms=forms)   # eq. 1 without drag (no F_sigma needed: no routes)
     branches = {}
     for sig, n in BRANCHES:
         s = sig * n
-        A = tidy(A_sym.subs(sigma, s)) + sig * gamma_drag * c.h
-        B = tidy(B_sym.subs(sigma, s))
+        A = plain.branch(sig, n).A + sig * gamma_drag * c.h
+        B = plain.branch(sig, n).B
         Phi = 2 * s * mu * c.alpha + 2 * sig * gamma_drag * S
         f = sp.exp(Phi) * (c.zp + s * mu * c.xp)
         D = _closed_D(f, c, seconds) if seconds > 0 else None

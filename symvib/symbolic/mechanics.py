@@ -21,7 +21,8 @@ import sympy as sp
 from sympy.physics import mechanics as me
 
 from symvib.symbolic.curve import numeric_zero
-from symvib.symbolic.symbols import g, gamma_drag, mu
+from symvib.symbolic.drag import gamma_drag
+from symvib.symbolic.symbols import g, mu
 
 __all__ = ["first_principles", "agrees", "on_branch", "check_eq1", "BRANCHES"]
 
@@ -40,7 +41,7 @@ def first_principles(curve, friction: int = -1, *, drag: bool = False):
     ``friction`` is the sign of the friction force relative to the velocity (-1: Coulomb,
     opposing it; +1 is wrong physics, for tests that must catch it).  ``drag`` adds the
     air drag ``-m gamma |v| v`` (physics.md, "Air drag"; ``gamma`` is
-    :data:`~symvib.symbolic.symbols.gamma_drag`).  ``qddot`` holds the
+    :data:`~symvib.symbolic.drag.gamma_drag`).  ``qddot`` holds the
     symbols ``sign_v`` and ``abs_N`` for ``sign(v)`` and ``|N|`` (``N`` per unit mass,
     along ``n``); ``N`` is the normal reaction from Newton's law along the normal.
     """

@@ -23,12 +23,8 @@ sigma = sp.Symbol("sigma", real=True, nonzero=True)
 #: Squared speed along the curve, ``w = v**2``.
 w = sp.Symbol("w", nonnegative=True)
 
-#: Quadratic air drag per unit mass, ``gamma = c / m`` (drag force ``-c v |v|``; physics.md, "Air drag").
-#: A distinctive name: curves may use ``gamma`` and ``c`` for their own parameters.
-gamma_drag = sp.Symbol("gamma_drag", nonnegative=True)
-
 #: Names a curve may not use for its own symbols.
 RESERVED = frozenset({"g", "m", "mu", "C", "sigma", "w", "alpha0", "k"})
 
 #: LaTeX names used when printing.
-LATEX_NAMES = {sigma: r"\sigma", mu: r"\mu", C: "C", w: "w", gamma_drag: r"\gamma"}
+LATEX_NAMES = {sigma: r"\sigma", mu: r"\mu", C: "C", w: "w"}
