@@ -44,7 +44,7 @@ import importlib.util
 import math
 import os
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from functools import lru_cache, partial
 
 import numpy as np
@@ -112,6 +112,8 @@ BACKEND_ENV = "SYMVIB_BACKEND"
 BUDGET_RTOL = 1e-9
 #: (kernels, bound engine) by the identity of the kernels (a module, or a prepared view) and the backend.
 _BOUND: dict = {}
+#: Kernels (by identity) whose compiled engine has run in this process: it compiles nothing more.
+_RAN_COMPILED: dict = {}
 
 
 def backend_available(name: str) -> bool:
@@ -327,14 +329,18 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     if wall_time is not None and backend == "python":
         row[SceneRow.deadline] = time.monotonic() + wall_time
     started = time.perf_counter()
+    # (a compiled engine that ran once in this process compiles nothing more: no warnings to catch)
+    quiet = nullcontext() if _RAN_COMPILED.get(id(mod)) is mod else quiet_compiler(mod, backend)
     try:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet_compiler(mod, backend):
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet:
             out = eng.simulate(cp, row, R, samples)  # the status says what overflowed
     except (ArithmeticError, ValueError) as exc:
         if not _math_error(exc):
             raise
         return _non_finite(scene, exc)
-    if requested == "auto" and backend == "python":   # a loop's plain runs compile the curve in the background
+    if backend == "numba":
+        _RAN_COMPILED[id(mod)] = mod
+    elif requested == "auto":   # a loop's plain runs compile the curve in the background
         tiered.ran(mod, time.perf_counter() - started, scene.shape.name, partial(_run_once, cp, row, R, samples))
     status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
     # A run into a singular point (the end of a narrowed domain) ends left_domain there, or, where the
