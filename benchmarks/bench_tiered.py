@@ -19,6 +19,11 @@ one after the other, each timed from its start to its exit (start-up included):
 3. **cached**: ``--n`` calls again with the caches of (1), whose numba cache now holds the
    parabola's compiled engine: every call takes it from the first.
 
+``--compile`` measures instead what the compile child costs, each in a fresh process on empty
+caches: the CPU time of binding the parabola's engine and running it once, for the specialized
+binding's ``simulate`` entry (what the child compiles), the shared binding's ``simulate`` entry
+alone (its other entries skipped) and the shared binding whole.
+
 ``qdot0`` runs through ``[5, 9]`` rad/s along the golden-ratio sequence, so any prefix of the
 calls samples the whole range (a faster start bounces more, and costs more).  Each process
 prints one JSON line; this script prints them and a summary.
@@ -60,6 +65,42 @@ print(json.dumps({"n": n, "seconds_in_process": loop, "first_compiled_call": fir
 """
 
 
+#: One compile on empty caches: bind the parabola's engine (``shared``), run it once; CPU seconds as JSON.
+COMPILE = """
+import json, sys, time
+import symvib
+from symvib.numeric import driver
+from symvib.numeric.engine.bind import bind
+from symvib.prepare import prepare
+shared, simulate_only = sys.argv[1] == "shared", sys.argv[2] == "simulate"
+if shared and simulate_only:   # the shared binding's sample and sweep entries are not compiled
+    from numba.core.dispatcher import Dispatcher
+    compile_ = Dispatcher.compile
+    def compile_some(self, sig):
+        if self.py_func.__name__ in ("sample_scene", "sweep_block"):
+            return None
+        return compile_(self, sig)
+    Dispatcher.compile = compile_some
+    disable_ = Dispatcher.disable_compile
+    Dispatcher.disable_compile = lambda self, val=True: disable_(self, val) if self.signatures else None
+scene = symvib.load_scene("paper-parabola")
+mod = prepare(scene).kernels
+start = time.process_time()
+engine = bind(mod, "numba", shared=shared)
+engine.simulate(tuple(scene.param_values), driver.scene_row(scene), driver.rules(driver.NODES), True)
+print(json.dumps({"cpu": time.process_time() - start}))
+"""
+
+
+def compile_cpu(binding: str, entries: str, caches: Path) -> float:
+    """CPU seconds of one compile (:data:`COMPILE`) in a fresh process on the empty caches under ``caches``."""
+    environ = {k: v for k, v in os.environ.items() if k not in ("SYMVIB_BACKEND", "SYMVIB_TIER")}
+    environ.update(SYMVIB_CACHE=str(caches / "kernels"), NUMBA_CACHE_DIR=str(caches / "numba"))
+    done = subprocess.run([sys.executable, "-c", COMPILE, binding, entries], env=environ, cwd=ROOT,
+                          capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])["cpu"]
+
+
 def run(n: int, caches: Path, **env) -> dict:
     """One fresh process of :data:`WORKER` on the caches under ``caches``; its JSON and its wall time."""
     environ = {k: v for k, v in os.environ.items() if k not in ("SYMVIB_BACKEND", "SYMVIB_TIER")}
@@ -78,9 +119,18 @@ def main(argv=None) -> None:
     parser.add_argument("--n", type=int, default=100_000, help="simulate calls per loop (default 100,000)")
     parser.add_argument("--plain-prefix", type=int, default=2000,
                         help="plain-only calls measured; the plain time of --n calls is extrapolated from them")
+    parser.add_argument("--compile", action="store_true",
+                        help="measure the compile CPU of each binding on empty caches instead")
     args = parser.parse_args(argv)
     print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, load {os.getloadavg()[0]:.1f}, "
           f"{os.cpu_count()} cores", flush=True)
+    if args.compile:
+        for binding, entries in (("specialized", "simulate"), ("shared", "simulate"), ("shared", "all")):
+            with tempfile.TemporaryDirectory(prefix="bench-tiered-") as tmp:
+                cpu = compile_cpu(binding, entries, Path(tmp))
+            print(f"  {binding} binding, {entries} entries: {cpu:.1f} s of CPU (load {os.getloadavg()[0]:.1f})",
+                  flush=True)
+        return
     with tempfile.TemporaryDirectory(prefix="bench-tiered-") as tmp:
         tiered = run(args.n, Path(tmp) / "tiered")
         print("tiered, empty caches:", json.dumps(tiered), flush=True)

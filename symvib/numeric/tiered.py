@@ -21,9 +21,9 @@ with one :class:`TierWarning` line.  ``$SYMVIB_TIER=off``, ``$SYMVIB_BACKEND`` a
 ``backend=`` start no child.  The start and the end of a compile are logged at INFO on the
 logger ``symvib.numeric.tiered``; which engine ran a run is ``Result.stats["backend"]``.
 
-Why the specialized binding: compiling its ``simulate`` entry on empty caches took 19.3 s
-of CPU against 19.2 s for the shared binding's (docs/benchmarks.md, "The tiered engine"), the
-same; it then runs faster, and later processes take it with no tier at all (its marker).
+Why the specialized binding: compiling its ``simulate`` entry on empty caches took 18.3-20.4 s
+of CPU against 18.9-19.2 s for the shared binding's (docs/benchmarks.md, "The tiered engine"),
+the same within the noise; it then runs faster, and later processes take it with no tier at all (its marker).
 
 Examples
 --------
