@@ -183,3 +183,45 @@ print(json.dumps({"warnings": tier_warnings, "backends": sorted({r.stats["backen
     assert out["backends"] == ["python"] and out["children"] == 0
     assert len(out["warnings"]) == 1 and says in out["warnings"][0], out["warnings"]
     assert "stays on the plain engine" in out["warnings"][0]
+
+
+@needs_numba
+def test_a_process_forked_from_the_loop_leaves_its_parent_s_compile_child_alone(tmp_path):
+    # A worker forked from the loop's process inherits its tiers: its exit must not kill the
+    # parent's compile child, nor may it count that child as its own.
+    out = _run(tmp_path, """
+        for i in range(3):
+            run(i)
+        (child,) = tiered.children_of_tiers()
+        pid = os.fork()
+        if pid == 0:
+            own = len(tiered.children_of_tiers())
+            tiered.stop_children()
+            os._exit(own)
+        _, status = os.waitpid(pid, 0)
+        print(json.dumps({"worker_saw": os.waitstatus_to_exitcode(status), "alive": child.exitcode is None}))
+    """)
+    assert out["worker_saw"] == 0 and out["alive"]
+
+
+def test_turned_off_the_tier_leaves_auto_to_the_disk_cache(tmp_path, monkeypatch):
+    # SYMVIB_TIER=off must give back the behaviour without tiers: auto takes an engine that
+    # another process compiled meanwhile.
+    import importlib
+
+    from symvib.numeric import driver, tiered
+    from symvib.numeric.scene import resolve_scene
+
+    bind_module = importlib.import_module("symvib.numeric.engine.bind")   # (the package's `bind` is the function)
+
+    monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
+    monkeypatch.setenv("SYMVIB_TIER", "off")
+    monkeypatch.delenv("SYMVIB_BACKEND", raising=False)
+    monkeypatch.setattr(tiered, "TIER_CALLS", 2)
+    monkeypatch.setattr(tiered, "TIER_SECONDS", 0.0)
+    monkeypatch.setattr(driver, "_BOUND", {})
+    scene = resolve_scene("paper-parabola")
+    results = [driver.simulate(scene, samples=False) for _ in range(4)]
+    assert {r.stats["backend"] for r in results} == {"python"} and not tiered.children_of_tiers()
+    monkeypatch.setattr(bind_module, "is_compiled", lambda module, entry="simulate_bound": True)
+    assert driver.run_backend(scene.shape) == "numba"

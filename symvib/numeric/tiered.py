@@ -74,13 +74,13 @@ def tier_enabled(environ=os.environ) -> bool:
 class _Tier:
     """One curve's tier in this process: its plain runs, its compile child, its state."""
 
-    __slots__ = ("module", "label", "calls", "seconds", "child", "pipe", "state", "started")
+    __slots__ = ("module", "label", "owner", "calls", "seconds", "child", "pipe", "state", "started")
 
     def __init__(self, module, label):
-        self.module, self.label = module, label
+        self.module, self.label, self.owner = module, label, os.getpid()
         self.calls, self.seconds = 0, 0.0
         self.child = self.pipe = None
-        self.state = "plain"   # plain -> compiling -> compiled | failed
+        self.state = "plain"   # plain -> compiling -> compiled | failed; or plain -> off
         self.started = 0.0
 
 
@@ -89,9 +89,15 @@ _TIERS: dict = {}
 _LOCK = threading.Lock()
 
 
-def _tier(module, label=None) -> _Tier:
+def _own(module) -> _Tier | None:
+    """The tier of ``module`` in this process (a forked process's copies of its parent's are not its own)."""
     tier = _TIERS.get(id(module))
-    if tier is None or tier.module is not module:
+    return tier if tier is not None and tier.module is module and tier.owner == os.getpid() else None
+
+
+def _tier(module, label=None) -> _Tier:
+    tier = _own(module)
+    if tier is None:
         tier = _TIERS[id(module)] = _Tier(module, label or getattr(module, "__name__", "curve"))
     return tier
 
@@ -100,11 +106,13 @@ def ready(module) -> bool | None:
     """Whether the curve's compiled engine may run now, as its tier knows: True once its child
     ended cleanly; False while it compiles or after it failed; None where no child started
     (then the disk cache decides, :func:`symvib.numeric.engine.bind.is_compiled`)."""
-    tier = _TIERS.get(id(module))
-    if tier is None or tier.module is not module or tier.state == "plain":
+    tier = _own(module)
+    if tier is None or tier.state in ("plain", "off"):
         return None
     if tier.state == "compiling":
-        _poll(tier)
+        with _LOCK:
+            if tier.state == "compiling":
+                _poll(tier)
     return tier.state == "compiled"
 
 
@@ -137,7 +145,7 @@ def _start(tier: _Tier, call) -> None:
     ctx = _context()
     if (not tier_enabled() or not getattr(tier.module, "__file__", None) or ctx is None
             or importlib.util.find_spec("numba") is None):
-        tier.state = "failed"   # silently: turned off, a view compiled per process, no fork or no numba
+        tier.state = "off"   # silently: turned off, a view compiled per process, no fork or no numba
         return
     receive, send = ctx.Pipe(duplex=False)
     child = ctx.Process(target=_compile, args=(os.getpid(), tier.module, call, send),
@@ -207,7 +215,8 @@ def _fail(tier: _Tier, reason: str) -> None:
 
 def children_of_tiers() -> list:
     """The compile children started in this process that are still running (their ``Process``)."""
-    return [t.child for t in list(_TIERS.values()) if t.child is not None and t.child.exitcode is None]
+    return [t.child for t in list(_TIERS.values())
+            if t.owner == os.getpid() and t.child is not None and t.child.exitcode is None]
 
 
 def stop_children() -> None:
