@@ -149,7 +149,7 @@ def _hint(why: str) -> str:
 _FALLBACKS: dict = {}
 #: Warnings already given in this process.
 _WARNED: set = set()
-#: The numba cache folder :func:`configure_numba` checked and set in this process (one item).
+#: The numba cache folder :func:`configure_numba` checked and set in this process (its text and its Path).
 _CONFIGURED: list = []
 
 
@@ -197,9 +197,9 @@ def configure_numba() -> Path:
     reads no cache file from a folder that was not checked; child processes inherit the setting.
     """
     if _CONFIGURED and os.environ.get(NUMBA_CACHE_ENV) == _CONFIGURED[0]:
-        return Path(_CONFIGURED[0])   # checked in this process already
+        return _CONFIGURED[1]   # checked in this process already (every run asks: no new Path)
     folder = numba_cache()
-    _CONFIGURED[:] = [str(folder)]
+    _CONFIGURED[:] = [str(folder), folder]
     if os.environ.get(NUMBA_CACHE_ENV) != str(folder):
         os.environ[NUMBA_CACHE_ENV] = str(folder)
         config = sys.modules.get("numba.core.config")

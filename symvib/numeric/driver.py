@@ -23,7 +23,8 @@ in ``stats["error"]``), and a run whose energy budget misses by more than
 False and ``symvib run`` exits with status 3.
 
 The engine runs compiled by numba (a main dependency) where it is compiled
-already, and as plain Python otherwise; both give the same events.
+already, and as plain Python otherwise; both give the same events.  A loop of
+runs of one curve compiles it in the background (:mod:`symvib.numeric.tiered`).
 
 Examples
 --------
@@ -43,11 +44,12 @@ import importlib.util
 import math
 import os
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from functools import lru_cache, partial
 
 import numpy as np
 
+from symvib.numeric import tiered
 from symvib.numeric.engine import bind
 from symvib.numeric.engine.state import Rules
 from symvib.numeric.events import EnergyBudget, Event, Result, Samples, Status, ZenoInfo, kind_of, status_of
@@ -110,6 +112,10 @@ BACKEND_ENV = "SYMVIB_BACKEND"
 BUDGET_RTOL = 1e-9
 #: (kernels, bound engine) by the identity of the kernels (a module, or a prepared view) and the backend.
 _BOUND: dict = {}
+#: Kernels (by identity) whose compiled engine has run in this process: it compiles nothing more.
+_RAN_COMPILED: dict = {}
+#: Kernels whose compiled entry :func:`run_backend` found on disk, by (identity, entry, kernel cache).
+_ON_DISK: dict = {}
 
 
 def backend_available(name: str) -> bool:
@@ -159,6 +165,8 @@ def run_backend(curve, backend: str = "auto", entry: str = "simulate_bound") -> 
     and the plain-Python engine otherwise (milliseconds per paper scene, where a
     first compilation takes seconds: docs/benchmarks.md, "The driver and first
     calls").  ``$SYMVIB_BACKEND`` and an explicit backend are obeyed.  Sweeps compile (:func:`sweep_function`).
+    A process that runs a curve's plain engine many times compiles it in a child process and
+    then takes it (:mod:`symvib.numeric.tiered`).
     """
     if backend != "auto" or os.environ.get(BACKEND_ENV):
         return resolve_backend(backend)
@@ -166,7 +174,20 @@ def run_backend(curve, backend: str = "auto", entry: str = "simulate_bound") -> 
         return "python"
     from symvib.numeric.engine.bind import is_compiled
 
-    return "numba" if is_compiled(_kernels(curve), entry) else "python"
+    mod = _kernels(curve)
+    if entry == "simulate_bound":   # a background compile started by this process decides (tiered.ready)
+        compiled = tiered.ready(mod)
+        if compiled is not None:
+            return "numba" if compiled else "python"
+    # Found on disk once, taken without asking the disk again (the cache folder's trust check and
+    # the marker cost as much as a compiled run); by the kernel cache folder, which a test may change.
+    key = (id(mod), entry, os.environ.get("SYMVIB_CACHE"))
+    if _ON_DISK.get(key) is mod:
+        return "numba"
+    if not is_compiled(mod, entry):
+        return "python"
+    _ON_DISK[key] = mod
+    return "numba"
 
 
 #: Entries of the compiled engine whose disk-cache markers :func:`quiet_compiler` removes.
@@ -266,8 +287,10 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         computes them on first use, so a run costs its events only.
     backend : {"auto", "numba", "python"}
         ``"auto"``: the compiled engine where it is on disk already, else the plain one
-        (:func:`run_backend`); ``"numba"`` compiles it on first use (once per curve; its
-        time: docs/benchmarks.md, "The driver and first calls").
+        (:func:`run_backend`; a loop of runs compiles it in the background and then takes
+        it, :mod:`symvib.numeric.tiered`; ``stats["backend"]`` says which ran); ``"numba"``
+        compiles it on first use (once per curve; its time: docs/benchmarks.md, "The driver
+        and first calls").
     samples_per_interval : int, optional
         Samples per motion interval, at least (each logged interval is cut into
         :func:`sample_pieces` equal pieces in ``q``, each with its Gauss nodes,
@@ -315,13 +338,20 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     row = scene_row(scene)
     if wall_time is not None and backend == "python":
         row[SceneRow.deadline] = time.monotonic() + wall_time
+    started = time.perf_counter()
+    # (a compiled engine that ran once in this process compiles nothing more: no warnings to catch)
+    quiet = nullcontext() if _RAN_COMPILED.get(id(mod)) is mod else quiet_compiler(mod, backend)
     try:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet_compiler(mod, backend):
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet:
             out = eng.simulate(cp, row, R, samples)  # the status says what overflowed
     except (ArithmeticError, ValueError) as exc:
         if not _math_error(exc):
             raise
         return _non_finite(scene, exc)
+    if backend == "numba":
+        _RAN_COMPILED[id(mod)] = mod
+    elif requested == "auto":   # a loop's plain runs compile the curve in the background
+        tiered.ran(mod, time.perf_counter() - started, scene.shape.name, partial(_run_once, cp, row, R, samples))
     status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
     # A run into a singular point (the end of a narrowed domain) ends left_domain there, or, where the
     # steps into a pole lose the budget or the interval into it cannot be timed, with those errors.
@@ -387,6 +417,11 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
                   interpolant=interpolant,
                   energy_budget=budget, t_final=float(out.t), q_final=float(out.q), qdot_final=float(out.qdot),
                   zeno=zinfo, stats=stats)
+
+
+def _run_once(cp, row, R, samples, eng):
+    """``eng.simulate`` on a run's arguments (a background compile's first call: :mod:`.tiered`)."""
+    return eng.simulate(cp, row, R, samples)
 
 
 def _dense(mod, cp, ivs, R, result):

@@ -32,6 +32,7 @@ import math
 import numbers
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 
 from symvib import expr as _expr
 
@@ -338,9 +339,26 @@ def declared_domain(s, values=None) -> tuple:
     [-3.141593, 3.141593]
     """
     names = [n for n, _ in s.params]
-    values = dict(s.params) if values is None else dict(zip(names, (float(v) for v in values)))
+    pairs = tuple(s.params) if values is None else tuple(zip(names, (float(v) for v in values)))
+    domain = tuple(str(end) for end in s.shape.domain)
+    try:   # the values bit for bit (0.0 and -0.0 apart), as the key of a loop's repeated parse
+        key = tuple((n, float(v).hex()) for n, v in pairs)
+    except (TypeError, ValueError):
+        return _domain_at(domain, dict(pairs))
+    return _remembered_domain(domain, key)
+
+
+@lru_cache(maxsize=256)
+def _remembered_domain(domain: tuple, key: tuple) -> tuple:
+    """:func:`_domain_at` remembered by the parameters' exact values (``(name, float.hex)``):
+    a loop of runs of one curve parses its domain once."""
+    return _domain_at(domain, {n: float.fromhex(h) for n, h in key})
+
+
+def _domain_at(domain: tuple, values: dict) -> tuple:
+    """The ends ``domain`` (text) as floats at the parameter ``values`` (:func:`declared_domain`)."""
     out = []
-    for i, end in enumerate(s.shape.domain):
+    for i, end in enumerate(domain):
         text = str(end).strip()
         if text.lstrip("+-") in INFINITE:
             out.append(-math.inf if text.startswith("-") else math.inf)
