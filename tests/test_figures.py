@@ -164,6 +164,24 @@ def test_the_equilibrium_band_is_the_friction_cone(name, factor):
     assert a == pytest.approx(-edge, rel=1e-12) and b == pytest.approx(edge, rel=1e-12)
 
 
+def test_the_equilibrium_band_widens_to_the_static_friction_cone():
+    # circle: alpha = phi, so the band is |phi| <= atan(mu_s) where static friction exceeds mu.
+    scene = resolve_scene("paper-circle-7")
+    mu_s = 3 * scene.mu
+    r = simulate(scene.replace(mu_s=mu_s), backend="python", samples=True)
+    (a, b), = equilibrium_arcs(r, -1.0, 1.0)
+    assert a == pytest.approx(-math.atan(mu_s), rel=1e-12) and b == pytest.approx(math.atan(mu_s), rel=1e-12)
+    figures = dict((n, (fig, caption)) for n, fig, caption in run_figures(r, only=("phase", "sketch")))
+    for name, (fig, caption) in figures.items():
+        labels = fig.axes[0].get_legend_handles_labels()[1]
+        assert r"relative equilibrium $|\tan\alpha| \leq \mu_s$" in labels, (name, labels)
+        assert "$\\mu_s$ = " in fig.axes[0].get_title()
+        assert "|tan alpha| <= mu_s (static friction)" in caption, name
+    plain = run_figures(_run("paper-circle-7", HIGH_K, samples=True), only=("phase",))[0]
+    assert r"relative equilibrium $|\tan\alpha| \leq \mu$" in plain[1].axes[0].get_legend_handles_labels()[1]
+    assert "mu_s" not in plain[2] and "mu_s" not in plain[1].axes[0].get_title()
+
+
 # --- figures --------------------------------------------------------------------------------------
 
 UNIT = re.compile(r"\[[^\]]+\]")

@@ -36,7 +36,8 @@ from symvib import expr as _expr
 from symvib.numeric.scene_checks import SceneError, finite, show_value
 from symvib.shapes import Shape
 
-__all__ = ["FIELD_UNITS", "STATIC_FRICTION_FIELDS", "TEXT_FIELDS", "VALUE_UNITS", "ANGLE_UNIT", "TRIGONOMETRIC", "field_unit",
+__all__ = ["FIELD_UNITS", "STATIC_FRICTION_FIELDS",
+           "TEXT_FIELDS", "VALUE_UNITS", "ANGLE_UNIT", "TRIGONOMETRIC", "field_unit",
            "angle_parameters", "units_table", "friction_coefficient", "read_number"]
 
 #: The SI unit of every scene field that is a quantity, the one table of them: the schema docs

@@ -402,7 +402,7 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
     Dq_last = Dw_last = None
     for i, ev in enumerate(result.events):
         kind = ev.kind.code
-        own = _not_differentiable(ev, scene, c, kind)
+        own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
         if broken or own:
             reasons.append(own or f"follows event {first_broken}, which has no derivatives ({broken})")
             if not broken:
@@ -476,8 +476,9 @@ def _on_cone_edge(alpha: float, mu: float) -> bool:
     return edge <= CONE_EDGE * max(abs(math.sin(alpha)), mu * abs(math.cos(alpha)), 1e-300)
 
 
-def _not_differentiable(ev, scene, c, kind) -> str:
-    """Why event ``ev`` has no derivatives (empty when it has)."""
+def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
+    """Why event ``ev`` has no derivatives (empty when it has); ``moved``: the particle moved to it
+    (a turning point of ``G``, not a rest test where it already was)."""
     if kind == EventCode.NORMAL_SIGN_CHANGE:
         return "a sign change of the normal force (not derived yet); this event and the ones after it"
     if kind == EventCode.LEFT_CURVE:
@@ -488,7 +489,7 @@ def _not_differentiable(ev, scene, c, kind) -> str:
         a = float(c.alpha(ev.q))
         if _on_cone_edge(a, scene.mu_static):   # the rest test's (static) cone: the decision flips there
             return "a turning point on the edge of the friction cone (arrest or reversal changes with the parameters)"
-        if scene.mu_static != scene.mu and _on_cone_edge(a, scene.mu):
+        if moved and scene.mu_static != scene.mu and _on_cone_edge(a, scene.mu):
             return ("a turning point on the edge of the sliding friction cone |tan alpha| = mu (a double root of "
                     "the phase trajectory: its position has no derivative)")
         for limiter in (scene.left, scene.right):
