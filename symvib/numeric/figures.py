@@ -515,7 +515,7 @@ def _forces_at(result, mod, cp, sample: int | None) -> tuple:
     A run that ends where it starts (at rest in the friction cone, on a limiter) has no
     samples: its forces are those of the initial state, the normal force ``m (kappa v**2 +
     g cos alpha)`` and, at rest, the static friction that holds the particle (``m g sin
-    alpha`` along the tangent, at most ``mu |F_N|``).
+    alpha`` along the tangent, at most ``mu_s |F_N|``: physics.md, "Events" 2).
     """
     S = result.samples
     if sample is not None and S is not None and -len(S.t) <= sample < len(S.t):
@@ -529,7 +529,8 @@ def _forces_at(result, mod, cp, sample: int | None) -> tuple:
     normal = sc.m * (kappa * v * v + sc.g * np.cos(a))
     if v != 0.0:
         return sc.q0, 0.0, v, normal, -np.sign(v) * sc.mu * abs(normal), r"friction force $F_\mu$"
-    static = float(np.clip(sc.m * sc.g * np.sin(a), -sc.mu * abs(normal), sc.mu * abs(normal)))
+    hold = sc.mu_static * abs(normal)   # static friction: mu_s (mu unless the scene gives it)
+    static = float(np.clip(sc.m * sc.g * np.sin(a), -hold, hold))
     return sc.q0, 0.0, 0.0, normal, static, r"static friction $F_\mu$"
 
 
