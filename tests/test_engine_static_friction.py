@@ -176,3 +176,18 @@ def test_a_sweep_over_mu_has_mu_s_follow_it_unless_the_scene_gives_mu_s():
 
     with pytest.raises(SceneError, match=r"physics\.mu_s: .*below the kinetic mu.*sweep row 1"):
         sweep(circle(mu_s=0.7), {"mu": [MU, 0.75]}, backend="python")
+
+
+def test_the_mpmath_phase_reference_makes_the_same_rest_decisions_with_mu_s():
+    # symvib.checks.reference: its own rest test (physics.md, "Events" 2) and 30-digit events
+    from symvib.checks.reference import phase_reference
+
+    for scene in (circle(mu_s=TAN_T * (1 + MARGIN)), circle(mu_s=TAN_T * (1 - MARGIN)),
+                  circle(mu_s=0.45, restitution=0.0, limiters={"right": 0.4}),
+                  circle(mu_s=0.55, initial={"q": 0.5, "qdot": 0.0}),      # tan 0.5 = 0.546: held at the start
+                  circle(mu_s=0.54, initial={"q": 0.5, "qdot": 0.0})):     # slides
+        ref = phase_reference(scene, max_events=4)
+        got = simulate(scene, backend="python")
+        assert [e.kind for e in ref] == kinds(got)[:len(ref)]
+        for a, b in zip(ref, got.events):
+            assert b.q == pytest.approx(float(a.q), abs=Q_TOL) and b.t == pytest.approx(float(a.t), rel=1e-9)
