@@ -251,7 +251,8 @@ def _cmd_run(args) -> int:
 
     result = simulate(scene, backend=args.backend, rtol=rtol, atol=atol, wall_time=wall_time,
                       prepared=prepare(scene))
-    print(f"scene {scene.name}: {scene.shape.name}, mu = {scene.mu:.6g}, k = {scene.k:g}, "
+    static = "" if scene.mu_s is None else f", mu_s = {scene.mu_s:.6g}"
+    print(f"scene {scene.name}: {scene.shape.name}, mu = {scene.mu:.6g}{static}, k = {scene.k:g}, "
           f"limiters {scene.left} .. {scene.right}, {scene.shape.q}0 = {scene.q0:.6g}, "
           f"{scene.shape.q}dot0 = {scene.qdot0:.6g}")
     print(result.event_table(scene.shape.q))

@@ -41,6 +41,27 @@ def test_bad_scene_is_one_line_naming_the_field(tmp_path):
     assert out.returncode == 2 and "initial.q" in out.stderr and "Traceback" not in out.stderr
 
 
+def test_run_and_sweep_take_static_friction_from_the_scene_and_vary_it(tmp_path):
+    static = tmp_path / "static.toml"
+    text = SCENE.read_text()
+    assert "\nrestitution = " in text
+    static.write_text(text.replace("\nrestitution = ", "\nmu_s = 5.0\nrestitution = ", 1))
+    out = cli("run", static, "--json", tmp_path / "r.json")
+    assert out.returncode == 0, out.stderr
+    assert "mu_s = 5" in out.stdout
+    data = json.loads((tmp_path / "r.json").read_text())
+    assert [e["kind"] for e in data["events"]] == ["impact", "arrest"]     # held at its first turning point
+    assert data["units"]["scene"]["physics.mu_s"] == "1"
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("\nrestitution = ", "\nmu_s = 0.01\nrestitution = ", 1))
+    out = cli("run", bad)
+    assert out.returncode == 2 and out.stderr.startswith("symvib run: error: physics.mu_s: static friction")
+    out = cli("sweep", SCENE, "--vary", "mu_s=0.2,5", "-o", tmp_path / "sweep", "--backend", "python", "--quiet")
+    assert out.returncode == 0, out.stderr
+    out = cli("sweep", SCENE, "--vary", "mu_s=0.01,5", "-o", tmp_path / "bad-sweep", "--backend", "python")
+    assert out.returncode == 2 and "physics.mu_s" in out.stderr
+
+
 def test_derive_and_audit():
     out = cli("derive", "circle")
     assert out.returncode == 0 and "route: sympy" in out.stdout and "s = +1: symbolic" in out.stdout

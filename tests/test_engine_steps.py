@@ -107,6 +107,23 @@ def test_a_plastic_impact_leaves_the_limiter_where_gravity_pulls_away():
     assert x.sigma == -1 and x.status == StatusCode.RUNNING
 
 
+def test_a_plastic_impact_where_gravity_pulls_away_is_arrested_by_mu_s_inside_its_cone():
+    # tan(pi/4) = 1 > mu = 0.05: with mu_s = 1.01 the particle stays on the limiter, arrested; 0.99 slides
+    K, cp, S, _ = parabola(k=0.0)
+    for mu_s, arrested in ((1.01, True), (0.99, False)):
+        x, _ = impact_step(state(RIGHT, 3.0, 1, impact_next=True), S._replace(mu_s=mu_s), K, cp)
+        x, ev, _, _, _ = after_impact(x, 3.0, S._replace(mu_s=mu_s), K, cp)
+        assert (ev.kind == EventCode.ARREST) == arrested
+        assert x.status == (StatusCode.ARRESTED if arrested else StatusCode.RUNNING)
+
+
+def test_a_start_at_rest_is_held_by_mu_s():
+    K, cp, S, _ = parabola(mu=0.05)
+    for mu_s, arrested in ((0.11, True), (0.1, False)):   # tan 0.1 = 0.1003
+        x, _, ev = start(S._replace(mu_s=mu_s), K, cp, 0.1, 0.0)
+        assert (ev.kind == EventCode.ARREST) == arrested and (x.sigma == 0) == arrested
+
+
 def test_a_plastic_impact_rests_on_a_limiter_that_gravity_pushes_into():
     K, cp, S, _ = parabola(k=0.0)
     S = S._replace(has_right=True, right=-0.3)  # a right limiter left of the bottom: gravity pushes into it
@@ -154,12 +171,23 @@ def test_departure_stops_at_t_max_when_the_time_from_a_turning_point_passes_it()
 
 
 # --- events 2: the turning point's rest test --------------------------------------------------------
-def at_turn(phi, mu, sigma):
+def at_turn(phi, mu, sigma, mu_s=None):
     K, cp, S, _ = parabola(mu=mu)
+    if mu_s is not None:
+        S = S._replace(mu_s=mu_s)   # the scene's static friction (physics.md, "Events" 2)
     x = state(phi, 0.0, sigma, t=2.0)
     iv = Interval(0.0, phi, 1.0, 0.0, sigma, sigma, End.TURN, 0.5, 0.0, 0.0, QUAD_OK)
     roots, count = np.empty((4, 1)), np.zeros(4, dtype=np.int64)
     return turning_point(x, iv, S, K, cp, roots, count)
+
+
+@pytest.mark.parametrize("phi, mu_s, held", [(0.3, 0.31, True), (0.3, 0.309, False), (-0.3, 0.31, True),
+                                             (0.04, 0.05, True)])
+def test_at_a_turning_point_static_friction_mu_s_decides_and_kinetic_mu_does_not(phi, mu_s, held):
+    # mu = 0.05 < |tan 0.3| = 0.3093: the sliding cone alone reverses; mu_s decides (0.309 < 0.3093 <= 0.31)
+    x, ev = at_turn(phi, 0.05, 1 if phi > 0 else -1, mu_s=mu_s)
+    assert (ev.kind == EventCode.ARREST) == held == (abs(math.tan(phi)) <= mu_s)
+    assert x.status == (StatusCode.ARRESTED if held else StatusCode.RUNNING)
 
 
 @pytest.mark.parametrize("phi, mu", [(0.04, 0.05), (-0.04, 0.05), (0.3, 0.31), (0.3, 0.309)])

@@ -164,6 +164,40 @@ def test_the_equilibrium_band_is_the_friction_cone(name, factor):
     assert a == pytest.approx(-edge, rel=1e-12) and b == pytest.approx(edge, rel=1e-12)
 
 
+def test_the_equilibrium_band_widens_to_the_static_friction_cone():
+    # circle: alpha = phi, so the band is |phi| <= atan(mu_s) where static friction exceeds mu.
+    scene = resolve_scene("paper-circle-7")
+    mu_s = 3 * scene.mu
+    r = simulate(scene.replace(mu_s=mu_s), backend="python", samples=True)
+    (a, b), = equilibrium_arcs(r, -1.0, 1.0)
+    assert a == pytest.approx(-math.atan(mu_s), rel=1e-12) and b == pytest.approx(math.atan(mu_s), rel=1e-12)
+    figures = dict((n, (fig, caption)) for n, fig, caption in run_figures(r, only=("phase", "sketch")))
+    for name, (fig, caption) in figures.items():
+        labels = fig.axes[0].get_legend_handles_labels()[1]
+        assert r"relative equilibrium $|\tan\alpha| \leq \mu_s$" in labels, (name, labels)
+        assert "$\\mu_s$ = " in fig.axes[0].get_title()
+        assert "|tan alpha| <= mu_s (static friction)" in caption, name
+    plain = run_figures(_run("paper-circle-7", HIGH_K, samples=True), only=("phase",))[0]
+    assert r"relative equilibrium $|\tan\alpha| \leq \mu$" in plain[1].axes[0].get_legend_handles_labels()[1]
+    assert "mu_s" not in plain[2] and "mu_s" not in plain[1].axes[0].get_title()
+
+
+
+def test_the_force_plan_of_a_start_held_by_mu_s_shows_the_whole_pull():
+    # circle at rest at phi0 = 0.3, mu = 0.1 < tan 0.3 <= mu_s = 0.35: arrested at once, so static
+    # friction balances the pull m g sin phi0 (with mu alone it could give at most mu F_N)
+    from symvib.numeric.figures import _forces_at, _kernels
+
+    scene = resolve_scene("paper-circle-7").replace(mu=0.1, mu_s=0.35, q0=0.3, qdot0=0.0, k=1.0)
+    r = simulate(scene, backend="python")
+    assert r.status.value == "arrested" and r.t_final == 0.0
+    mod, cp = _kernels(r)
+    _, _, v, normal, friction, label = _forces_at(r, mod, cp, None)
+    assert v == 0.0 and normal == pytest.approx(scene.m * scene.g * math.cos(0.3), rel=1e-14)
+    assert friction == pytest.approx(scene.m * scene.g * math.sin(0.3), rel=1e-14) and "static" in label
+    assert abs(friction) > scene.mu * abs(normal)
+
+
 # --- figures --------------------------------------------------------------------------------------
 
 UNIT = re.compile(r"\[[^\]]+\]")

@@ -33,6 +33,16 @@ def test_noise_free_impacts_give_back_mu_and_k_from_a_start_that_makes_fewer_of_
     assert result.matched == 6 and np.max(np.abs(result.residuals)) < 1e-10
 
 
+def test_a_scene_with_static_friction_fits_mu_as_without_it():
+    # mu_s = 0.06 given (the fit's default bounds keep mu in [0, mu_s]: beyond it the scene is refused);
+    # the impacts, which slide, do not see mu_s and give mu back as without it
+    truth = TRUTH.replace(mu_s=0.06)
+    times = impact_times(truth, 6)
+    assert times == impact_times(TRUTH, 6)                  # sliding does not see mu_s
+    result = fit(truth.replace(mu=0.055, k=0.7), observed_events(times, kinds=["impact"] * 6), free=("mu", "k"))
+    assert result.status == "converged" and result.estimates["mu"] == pytest.approx(0.03, rel=1e-9)
+
+
 def test_noisy_impacts_give_estimates_within_their_standard_errors_and_errors_that_match_the_spread():
     # 1 ms of noise on 6 impact times; over 12 noise draws the estimates scatter as their reported
     # standard errors say (within the sampling error of 12 draws) and cover the truth.

@@ -123,3 +123,77 @@ def test_scene_is_immutable_and_round_trips():
     again = scene_from_dict(s.to_dict())
     assert again == s
     assert isinstance(again, Scene)
+
+
+# Static friction mu_s (physics.md, "Events" 2): default equal to mu, mu_s >= mu, errors naming the field.
+
+@pytest.mark.parametrize("physics, field, text", [
+    ({"mu_s": float("nan")}, "physics.mu_s", "finite"),
+    ({"mu_s": "nan"}, "physics.mu_s", "not allowed"),
+    ({"mu_s": float("inf")}, "physics.mu_s", "finite"),
+    ({"mu_s": -0.1}, "physics.mu_s", "must be >= 0"),
+    ({"mu_s": "fast"}, "physics.mu_s", "not allowed"),
+    ({"mu_s": True}, "physics.mu_s", "must be a number"),
+    ({"mu_s": [0.1]}, "physics.mu_s", "must be a number or an expression string"),
+    ({"mu_s": 0.01}, "physics.mu_s", "not a Coulomb contact"),
+    ({"mu_s": "3 deg"}, "physics.mu_s", "takes no unit"),
+    ({"alpha0_s": 0.01}, "physics.mu_s", "below the kinetic mu"),
+    ({"alpha0_s": 2.0}, "physics.alpha0_s", "[0, pi/2)"),
+    ({"alpha0_s": -0.1}, "physics.alpha0_s", "[0, pi/2)"),
+    ({"alpha0_s": "90 deg"}, "physics.alpha0_s", "[0, pi/2)"),
+    ({"alpha0_s": "3 furlongs"}, "physics.alpha0_s", "unknown unit"),
+    ({"mu_s": 0.1, "alpha0_s": 0.1}, "physics", "mu_s or alpha0_s"),
+    ({"mu_s": 0.1, "alpha0_s": "atan(0.1)"}, "physics", "not both"),
+])
+def test_bad_static_friction_names_the_field(physics, field, text):
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(base(physics={"g": 9.81, "m": 0.2, "alpha0": 0.05, "restitution": 0.8, **physics}))
+    assert info.value.field == field, str(info.value)
+    assert text in str(info.value)
+
+
+def test_static_below_kinetic_says_why_and_what_to_change():
+    s = scene_from_dict(base())
+    with pytest.raises(SceneError) as info:
+        s.replace(mu_s=0.02)
+    message = str(info.value)
+    assert info.value.field == "physics.mu_s"
+    assert "0.02" in message and repr(s.mu) in message     # both numbers
+    assert "give mu_s >= mu" in message and "leave mu_s out" in message
+
+
+def test_static_friction_given_twice_through_the_api_must_agree():
+    s = scene_from_dict(base())
+    with pytest.raises(SceneError) as info:
+        dataclasses.replace(s, mu_s=0.3, alpha0_s=0.1)     # tan(0.1) = 0.1003 is not 0.3
+    assert info.value.field == "physics.alpha0_s" and "give one of them" in str(info.value)
+    agree = dataclasses.replace(s, mu_s=math.tan(0.1), alpha0_s=0.1)
+    assert agree.mu_s == math.tan(0.1)
+    with pytest.raises(SceneError, match=r"physics\.mu_s: must be a number"):
+        dataclasses.replace(s, mu_s="0.3", alpha0_s=0.1)
+
+
+def test_mu_s_defaults_to_mu_and_follows_it():
+    s = scene_from_dict(base())
+    assert s.mu_s is None and s.mu_static == s.mu == math.tan(0.05)
+    moved = s.replace(mu=0.2)                               # unset: still mu's
+    assert moved.mu_s is None and moved.mu_static == 0.2
+    given = s.replace(mu_s=0.3)
+    assert given.mu_static == 0.3 and given.replace(mu=0.2).mu_static == 0.3   # given: its own
+    with pytest.raises(SceneError, match=r"physics\.mu_s: .*below the kinetic mu"):
+        given.replace(mu=0.4)
+    angle = s.replace(alpha0_s=0.3)
+    assert angle.mu_s == math.tan(0.3) and angle.replace(mu_s=0.5).alpha0_s is None
+
+
+def test_a_scene_without_mu_s_writes_none_and_mu_s_round_trips():
+    plain = scene_from_dict(base())
+    assert "mu_s" not in plain.to_dict()["physics"] and "alpha0_s" not in plain.to_dict()["physics"]
+    assert scene_from_dict(plain.to_dict()) == plain
+    for physics, key in (({"mu_s": 0.08}, "mu_s"), ({"alpha0_s": "4 deg"}, "alpha0_s")):
+        s = scene_from_dict(base(physics={"g": 9.81, "m": 0.2, "alpha0": 0.05, "restitution": 0.8, **physics}))
+        data = s.to_dict()
+        assert set(data["physics"]) & {"mu_s", "alpha0_s"} == {key}
+        again = scene_from_dict(data)
+        assert again == s and again.mu_static == s.mu_static and again.alpha0_s == s.alpha0_s
+    assert scene_from_dict(base(physics__mu_s=0.08)) != plain   # a given mu_s is part of the scene

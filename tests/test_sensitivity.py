@@ -212,3 +212,24 @@ def test_the_labelled_table_has_an_event_and_a_parameter_dimension():
     pytest.importorskip("pandas")
     frame = sens.to_dataframe()
     assert len(frame) == 2 * len(res.events) and set(frame["wrt"]) == {"mu", "qdot0"}
+
+
+def test_an_arrest_decided_by_mu_s_has_the_kinetic_derivatives_and_its_edge_has_none():
+    # The circle of tests/test_engine_static_friction.py: its first turning point PHI_T (closed form)
+    # has mu < |tan PHI_T| < mu_s, so mu_s arrests it; where it lies depends on mu only (sliding).
+    from test_engine_static_friction import MU, PHI_T, TAN_T, circle, turning_point_mp
+
+    scene = circle(mu_s=0.6)
+    res = simulate(scene, backend="python")
+    assert [e.kind for e in res.events] == [EventKind.ARREST] and res.events[0].q == pytest.approx(PHI_T, abs=1e-10)
+    sens = assert_matches_step_study(scene, wrt=("mu", "qdot0"))
+    assert not any(sens.reasons)
+    # d PHI_T / d mu of the closed form (mpmath differentiates it; mu_s stays 0.6, it decides nothing)
+    import mpmath
+
+    with mpmath.workdps(30):
+        dq_dmu = float(mpmath.diff(lambda m: turning_point_mp(0.0, 2.5, +1, PHI_T, mu=m), MU))
+    assert sens.q[0, 0] == pytest.approx(dq_dmu, rel=1e-7)
+    # mu_s on the edge |tan PHI_T|: arrest or reversal flips with the parameters, no derivative
+    edge = sensitivities(simulate(circle(mu_s=TAN_T), backend="python"), wrt=("mu",))
+    assert "edge of the friction cone" in edge.reasons[0] and np.all(np.isnan(edge.q))

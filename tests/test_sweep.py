@@ -30,7 +30,8 @@ def single(spec_scene, fields: dict):
     """The scene of one sweep row, built through Scene.replace (validated as any scene)."""
     changes, params = {}, {}
     attr = {"initial.q": "q0", "initial.qdot": "qdot0", "physics.mu": "mu", "physics.restitution": "k",
-            "limiters.left": "left", "limiters.right": "right", "physics.g": "g", "physics.m": "m"}
+            "limiters.left": "left", "limiters.right": "right", "physics.g": "g", "physics.m": "m",
+            "physics.mu_s": "mu_s", "physics.alpha0_s": "alpha0_s"}
     for fld, v in fields.items():
         if fld.startswith("parameters."):
             params[fld.split(".", 1)[1]] = float(v)
@@ -100,6 +101,9 @@ def test_random_rows_are_reproducible_and_in_range():
     ({"qdot": "__import__('os').system('true'):2:3"}, {}, "vary.qdot"),
     ({"p": "0:1:3"}, {}, "parameters.p"),
     ({"alpha0": "0:2:3"}, {}, "physics.alpha0"),
+    ({"mu_s": "0.1,0.2", "alpha0_s": "0.1,0.2"}, {}, "vary"),
+    ({"mu_s": "0:0.2:3"}, {}, "physics.mu_s"),          # 0 is below the kinetic mu = 0.05
+    ({"alpha0_s": "0.1:2:3"}, {}, "physics.alpha0_s"),
     ({}, {}, "vary"),
     ({"qdot": "1:2:3"}, {"chunk": 0}, "chunk"),
 ])
@@ -122,6 +126,9 @@ SAME_ERROR = [
     ("run", "t_max", -1.0, "t_max", "-1.0"),
     ("run", "max_events", 0, "max_events", "0"),
     ("parameters", "p", -1.0, "p", "-1.0"),
+    ("physics", "mu_s", -0.1, "mu_s", "-0.1"),
+    ("physics", "mu_s", 0.01, "mu_s", "0.01"),
+    ("physics", "alpha0_s", 2.0, "alpha0_s", "2.0"),
 ]
 
 
@@ -162,6 +169,18 @@ def test_alpha0_axis_matches_tan():
     res = sweep(base(), {"alpha0": "0.02,0.1"}, log_events=32)
     assert np.allclose(res["physics.alpha0"], [0.02, 0.1])
     assert_same_as_driver(res, [0, 1])
+
+
+def test_static_friction_axes_equal_the_driver_and_mu_s_follows_a_varied_mu():
+    # mu_s above every mu: arrests and reversals decided by it, row for row as the driver does.
+    res = sweep(base(), {"mu": "0:0.1", "mu_s": "0.1:0.6", "qdot": "3:9"}, random=12, seed=5, log_events=300)
+    assert_same_as_driver(res, range(12))
+    angle = sweep(base(), {"alpha0_s": "0.06,0.3"}, log_events=300)
+    assert np.allclose(angle["physics.alpha0_s"], [0.06, 0.3])
+    assert_same_as_driver(angle, [0, 1])
+    # no mu_s in the scene: each row's mu_s is its mu (as Scene.replace(mu=...) gives)
+    follows = sweep(base(), {"mu": "0.01,0.3"}, log_events=300)
+    assert_same_as_driver(follows, [0, 1])
 
 
 def test_energy_columns_balance():

@@ -10,6 +10,7 @@ from symvib import simulate
 from symvib.numeric import scene as scene_mod
 from symvib.numeric.scene import (
     FIELD_UNITS,
+    STATIC_FRICTION_FIELDS,
     TEXT_FIELDS,
     SceneError,
     field_unit,
@@ -129,8 +130,13 @@ def test_result_json_carries_the_units_of_the_table():
     assert units["scene"]["physics.g"] == FIELD_UNITS["physics.g"]
     assert units["scene"]["parameters.R"] == "m"
     for name in FIELD_UNITS:  # every scene quantity (the curve's expressions of a catalogue shape aside)
-        if not name.startswith(("curve.", "parameters.")):
+        if not name.startswith(("curve.", "parameters.")) and name not in STATIC_FRICTION_FIELDS:
             assert units["scene"][name] == field_unit(name, scene.shape)
+    # static friction's units only where the scene gives it (a scene without it: its JSON as before)
+    assert not set(STATIC_FRICTION_FIELDS) & set(units["scene"])
+    static = simulate(scene.replace(mu_s=scene.mu + 0.1), backend="python", samples=False).to_dict()["units"]
+    assert {name: static["scene"][name] for name in STATIC_FRICTION_FIELDS} == {"physics.mu_s": "1",
+                                                                                "physics.alpha0_s": "rad"}
     # every number of the JSON has a unit: the events' columns, the samples' columns, the budget's entries
     assert set(units["events"]) == {k for e in data["events"] for k in e if k not in ("kind", "detail")}
     assert set(units["samples"]) == set(data["samples"])

@@ -88,7 +88,7 @@ TIME_TOL = 1e-9
 REF_TOL_FRACTION = 0.1
 #: A grazing impact: ``w`` at the impact below this fraction of the segment's ``v**2``.
 GRAZE_RTOL = 1e-12
-#: The cone edge: ``|tan alpha| / mu`` within this of ``1 + CONE_RTOL`` at the turning point.
+#: The cone edge: ``|tan alpha| / mu_s`` within this of ``1 + CONE_RTOL`` at the turning point.
 CONE_BAND = 1e-10
 #: A time difference within an event's ``t_err`` plus this counts as flagged.
 FLAG_SLACK = 1e-12
@@ -240,7 +240,8 @@ def _ambiguous(i, sym, ref, reference, scene, split_at) -> str:
         qs = [e[2] for e in (b, a) if e is not None and (e is b and e[0] in _TURNS or e[1] == 0.0)]
         for q in qs:
             _, s, c, _ = frame(q)
-            ratio = abs(s) / (scene.mu * abs(c)) if scene.mu * c != 0 else math.inf
+            mu_s = scene.mu_static   # the rest test's cone (physics.md, "Events" 2)
+            ratio = abs(s) / (mu_s * abs(c)) if mu_s * c != 0 else math.inf
             if abs(ratio - 1.0 - CONE_RTOL) <= CONE_BAND:
                 return f"cone edge: |tan alpha| / mu = 1 + {ratio - 1:.3g} at q = {q:.17g}"
     return ""

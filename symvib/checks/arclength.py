@@ -18,7 +18,7 @@ first terminal event: the limiter ahead (an impact), ``v = 0`` (a turning point)
 integration restarts there), the end of the declared domain, or ``t_max``.  The
 laws at events are physics.md's ("Events"): impact ``v -> -k v``; at a point at
 rest, rest on a limiter that gravity pushes into, else arrest iff
-``|sin alpha| <= mu |cos alpha| (1 + CONE_RTOL) + CONE_ATOL``, else a reversal
+``|sin alpha| <= mu_s |cos alpha| (1 + CONE_RTOL) + CONE_ATOL`` (``mu_s``: the static friction), else a reversal
 downhill.  A start at rest that slides records no event (as the engine does); a
 start on a limiter moving into it is an impact at ``t = 0``.  A Zeno accumulation
 is not summed: the bounces go on until ``max_events`` (the comparison,
@@ -184,6 +184,7 @@ class _Physics:
         self.sqrt = mpmath.sqrt if self.mp else math.sqrt
         self.cp = tuple(num(v) for v in scene.param_values)
         self.g, self.mu, self.k = num(scene.g), num(scene.mu), num(scene.k)
+        self.mu_s = num(scene.mu_static)   # the rest test's (static) friction
         self.left = None if scene.left is None else num(scene.left)
         self.right = None if scene.right is None else num(scene.right)
         with mpmath.workdps(30):
@@ -229,7 +230,7 @@ class _Physics:
         _, sin, cos, _ = self.frame(q)
         if side != 0 and -sin * side > 0:
             return "rest_on_limiter", 0
-        if abs(sin) <= self.mu * abs(cos) * (1 + CONE_RTOL) + CONE_ATOL:
+        if abs(sin) <= self.mu_s * abs(cos) * (1 + CONE_RTOL) + CONE_ATOL:
             return "arrest", 0
         return "slide", (1 if -sin > 0 else -1)
 

@@ -3,7 +3,7 @@
 Both integrate the equation of motion (eq. 1) in time from the generated
 kernels (``qddot_p``/``qddot_m``), with the branch fixed per segment and the
 same physics at events as the driver (impact ``v -> -k v``; at rest: arrest
-when ``|tan alpha| <= mu``, rest on a limiter that gravity pushes into, else
+when ``|tan alpha| <= mu_s`` (static friction), rest on a limiter that gravity pushes into, else
 slide downhill):
 
 * :func:`solve_ivp_events` -- :func:`scipy.integrate.solve_ivp` (RK45,
@@ -62,6 +62,7 @@ class _Physics:
         self.mod = load(scene.shape)
         self.cp = scene.param_values
         self.g, self.mu, self.k = scene.g, scene.mu, scene.k
+        self.mu_s = scene.mu_static   # the rest test's (static) friction
         self.qdd = {1: self.mod.qddot_p_scalar, -1: self.mod.qddot_m_scalar}
         self.calls = 0
 
@@ -90,7 +91,7 @@ class _Physics:
         cos = self.mod.dx_scalar(q, *self.cp) / h
         if side and -sin * side > 0:
             return "rest_on_limiter", 0
-        if abs(sin) <= self.mu * abs(cos) * (1 + CONE_RTOL) + 4e-16:
+        if abs(sin) <= self.mu_s * abs(cos) * (1 + CONE_RTOL) + 4e-16:
             return "arrest", 0
         return "slide", 1 if -sin > 0 else -1
 

@@ -71,6 +71,7 @@ class _Model:
                 self.F[s] = lam(br.F.expr)
         self.g = mpmath.mpf(repr(scene.g))
         self.mu = mpmath.mpf(repr(scene.mu))
+        self.mu_s = mpmath.mpf(repr(scene.mu_static))   # the rest test's (static) friction
         self.scale = float(c.q_scale.subs(vals))
 
     def N(self, q, w):
@@ -150,7 +151,7 @@ def phase_reference(scene, *, dps: int = 30, max_events: int | None = None, deri
             side = at_limiter(x)
             if side and -sin * side > 0:
                 return "rest_on_limiter", 0
-            if abs(sin) <= M.mu * abs(cos) * (1 + mp("1e-9")):
+            if abs(sin) <= M.mu_s * abs(cos) * (1 + mp("1e-9")):
                 return "arrest", 0
             return "slide", 1 if -sin > 0 else -1
 

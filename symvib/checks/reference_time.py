@@ -24,7 +24,7 @@ are checked at its end; the earliest one that became ``>= 0`` is located by
 an Illinois iteration on the length of a fresh extrapolated step from the
 step's start, so an event is as accurate as a step.  At events the physics is
 physics.md's (impact ``qdot -> -k qdot``; at rest: arrest when
-``|tan alpha| <= mu``, rest on a limiter that gravity pushes into, else slide
+``|tan alpha| <= mu_s``, the static friction, rest on a limiter that gravity pushes into, else slide
 downhill).
 
 It is slow (about 10 ms per step at 30 digits); results used by the
@@ -91,6 +91,7 @@ class _Model:
         self.h, self.xp, self.zp, self.kappa = lam(c.h), lam(c.xp), lam(c.zp), lam(c.kappa)
         self.g = mpmath.mpf(repr(scene.g))
         self.mu = mpmath.mpf(repr(scene.mu))
+        self.mu_s = mpmath.mpf(repr(scene.mu_static))   # the rest test's (static) friction
 
     def N(self, q, v):
         h = self.h(q)
@@ -233,7 +234,7 @@ def _run(scene, dps, max_events, budget, max_step, times):
             side = at_limiter(x)
             if side and -sin * side > 0:
                 return "rest_on_limiter", 0
-            if abs(sin) <= M.mu * abs(cos) * (1 + mp(CONE_RTOL)):
+            if abs(sin) <= M.mu_s * abs(cos) * (1 + mp(CONE_RTOL)):
                 return "arrest", 0
             return "slide", 1 if -sin > 0 else -1
 

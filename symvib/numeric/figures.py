@@ -6,8 +6,9 @@
   the curve (paper fig. 1 b);
 * :func:`phase_portrait` -- ``(q, qdot)``, the two branches (``v > 0``,
   ``v < 0``) in two line styles, impacts as arrows on the limiter line,
-  reversals and the final rest marked, the band ``|tan alpha| <= mu`` of
-  relative equilibrium shaded (paper figs. 4, 6, 13, 20, 21);
+  reversals and the final rest marked, the band ``|tan alpha| <= mu_s`` of
+  relative equilibrium shaded (paper figs. 4, 6, 13, 20, 21; ``mu_s = mu`` unless the
+  scene gives static friction);
 * :func:`energy_vs_q` -- ``F_N``, ``P_mu``, ``Ek``, ``Ep`` or ``E`` against
   ``q``, one curve per motion interval with an arrow in its direction of motion
   (figs. 7-11, 14-18, 22-26);
@@ -63,7 +64,7 @@ LIMITER_STYLE = {"color": "0.35", "lw": 1.0, "ls": "-.", "zorder": 1}
 IMPACT_COLOUR = "tab:red"
 #: Relative-equilibrium band: face colour and hatch.
 BAND_STYLE = {"facecolor": "tab:green", "alpha": 0.15, "hatch": "...", "edgecolor": "tab:green", "lw": 0.0}
-#: Points of the grid on which the band |tan alpha| <= mu and the sketch's curve are evaluated.
+#: Points of the grid on which the band |tan alpha| <= mu_s and the sketch's curve are evaluated.
 GRID_POINTS = 2001
 #: Bisections that refine each edge of the band between two grid points.
 EDGE_BISECTIONS = 50
@@ -116,7 +117,20 @@ def _title(result, what, paper=None):
     # A `$` of the scene's name would start mathtext (and an odd one fails to draw): escaped.
     name = result.scene.name.replace("$", r"\$")
     ref = f" - paper {paper}" if paper else ""
-    return f"{name}: {what}{ref}\n(k = {result.scene.k:g}, $\\mu$ = {result.scene.mu:.4g})"
+    static = "" if result.scene.mu_s is None else f", $\\mu_s$ = {result.scene.mu_s:.4g}"
+    return f"{name}: {what}{ref}\n(k = {result.scene.k:g}, $\\mu$ = {result.scene.mu:.4g}{static})"
+
+
+def _static_above_kinetic(result) -> bool:
+    """Whether the scene's static friction ``mu_s`` exceeds its kinetic ``mu`` (the band is then
+    ``|tan alpha| <= mu_s``, wider than the sliding cone)."""
+    return result.scene.mu_static > result.scene.mu
+
+
+def _band_label(result) -> str:
+    """The legend of the relative-equilibrium band: ``mu_s`` where static friction exceeds ``mu``."""
+    bound = r"\mu_s" if _static_above_kinetic(result) else r"\mu"
+    return rf"relative equilibrium $|\tan\alpha| \leq {bound}$"
 
 
 def _new_axes(ax):
@@ -186,8 +200,9 @@ def event_style(kind) -> tuple:
 
 
 def equilibrium_arcs(result, lo: float, hi: float) -> list:
-    """The ``q`` intervals within ``[lo, hi]`` where ``|tan alpha| <= mu`` (relative
-    equilibrium, paper fig. 4: static friction can hold the particle), on a grid of
+    """The ``q`` intervals within ``[lo, hi]`` where ``|tan alpha| <= mu_s`` (relative
+    equilibrium, paper fig. 4: static friction can hold the particle; physics.md, "Events" 2,
+    with ``mu_s = mu`` unless the scene gives static friction), on a grid of
     :data:`GRID_POINTS`.
 
     >>> from symvib.numeric.driver import simulate
@@ -197,11 +212,11 @@ def equilibrium_arcs(result, lo: float, hi: float) -> list:
     [(-0.05, 0.05)]
     """
     mod, cp = _kernels(result)
-    mu = result.scene.mu
+    mu_s = result.scene.mu_static
 
-    def held(x):  # |tan alpha| <= mu, written without a division
+    def held(x):  # |tan alpha| <= mu_s, written without a division
         alpha = np.broadcast_to(mod.alpha(x, *cp), np.shape(x))
-        return np.abs(np.sin(alpha)) <= mu * np.abs(np.cos(alpha))
+        return np.abs(np.sin(alpha)) <= mu_s * np.abs(np.cos(alpha))
 
     q = np.linspace(lo, hi, GRID_POINTS)
     inside_band = held(q)
@@ -233,7 +248,7 @@ def _limiters(ax, result):
 
 def _band(ax, result):
     lo, hi = ax.get_xlim()
-    label = r"relative equilibrium $|\tan\alpha| \leq \mu$"
+    label = _band_label(result)
     for a, b in equilibrium_arcs(result, lo, hi):
         ax.axvspan(a, b, label=label, zorder=0, **BAND_STYLE)
         label = None
@@ -403,7 +418,7 @@ def scene_sketch(result, ax=None, *, paper=None):
     sc = result.scene
     lo, hi = _sketch_range(result)
     q, x, z, span = _draw_curve(ax, result, mod, cp, lo, hi, color="k", lw=1.4)
-    label = r"relative equilibrium $|\tan\alpha| \leq \mu$"
+    label = _band_label(result)
     for a, b in equilibrium_arcs(result, lo, hi):
         sel = (q >= a) & (q <= b)
         ax.plot(x[sel], z[sel], color="tab:green", lw=5, alpha=0.6, solid_capstyle="butt", label=label)
@@ -500,7 +515,7 @@ def _forces_at(result, mod, cp, sample: int | None) -> tuple:
     A run that ends where it starts (at rest in the friction cone, on a limiter) has no
     samples: its forces are those of the initial state, the normal force ``m (kappa v**2 +
     g cos alpha)`` and, at rest, the static friction that holds the particle (``m g sin
-    alpha`` along the tangent, at most ``mu |F_N|``).
+    alpha`` along the tangent, at most ``mu_s |F_N|``: physics.md, "Events" 2).
     """
     S = result.samples
     if sample is not None and S is not None and -len(S.t) <= sample < len(S.t):
@@ -514,7 +529,8 @@ def _forces_at(result, mod, cp, sample: int | None) -> tuple:
     normal = sc.m * (kappa * v * v + sc.g * np.cos(a))
     if v != 0.0:
         return sc.q0, 0.0, v, normal, -np.sign(v) * sc.mu * abs(normal), r"friction force $F_\mu$"
-    static = float(np.clip(sc.m * sc.g * np.sin(a), -sc.mu * abs(normal), sc.mu * abs(normal)))
+    hold = sc.mu_static * abs(normal)   # static friction: mu_s (mu unless the scene gives it)
+    static = float(np.clip(sc.m * sc.g * np.sin(a), -hold, hold))
     return sc.q0, 0.0, 0.0, normal, static, r"static friction $F_\mu$"
 
 
@@ -548,6 +564,8 @@ def run_figures(result, *, only=None, paper=None) -> list:
         ax = fig.subplots()
         draw(result, ax, paper=paper.get(name))
         text = caption(name, paper.get(name))
+        if _static_above_kinetic(result):   # the band is static friction's, wider than the sliding cone
+            text = text.replace("|tan alpha| <= mu ", "|tan alpha| <= mu_s (static friction) ")
         lines = textwrap.fill(text, CAPTION_WIDTH)
         fig.text(0.01, 0.01, lines, fontsize=CAPTION_POINTS, va="bottom", ha="left")
         height = (lines.count("\n") + 1) * CAPTION_POINTS * 1.35 / 72 / FIGSIZE[1] + 0.02

@@ -172,7 +172,8 @@ class FitResult:
 def _default_bounds(scene: Scene, name: str) -> tuple:
     left = scene.left if scene.left is not None else -math.inf
     right = scene.right if scene.right is not None else math.inf
-    return {"mu": (0.0, math.inf), "k": (0.0, 1.0), "qdot0": (-math.inf, math.inf),
+    mu_top = math.inf if scene.mu_s is None else scene.mu_s   # a given static friction bounds mu (mu <= mu_s)
+    return {"mu": (0.0, mu_top), "k": (0.0, 1.0), "qdot0": (-math.inf, math.inf),
             "q0": (left, right), "left": (-math.inf, scene.q0), "right": (scene.q0, math.inf)}[name]
 
 
@@ -255,8 +256,9 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
     free : sequence of str
         Names from :data:`symvib.numeric.sensitivity.PARAMETERS`.
     bounds : dict, optional
-        Parameter -> ``(low, high)``; default: the physical ranges (``mu >= 0``, ``0 <= k <= 1``,
-        ``q0`` between the limiters, a limiter on its side of ``q0``).
+        Parameter -> ``(low, high)``; default: the physical ranges (``mu >= 0``, and ``mu <= mu_s``
+        where the scene gives static friction, ``0 <= k <= 1``, ``q0`` between the limiters, a
+        limiter on its side of ``q0``).
     weights : array, optional
         ``1 / sigma`` of each observation (times, then positions; for samples each coordinate at
         every sample, ``x`` then ``z``).

@@ -110,6 +110,9 @@ class SceneRow(enum.IntEnum):
     #: The plain engine's deadline (``time.monotonic()`` seconds; 0: none).  The compiled engine
     #: has no clock and ignores it.
     deadline = 13
+    #: The static friction coefficient of the rest test (physics.md, "Events" 2); ``mu`` when the
+    #: scene gives none.
+    mu_s = 14
 
 
 class Summary(enum.IntEnum):

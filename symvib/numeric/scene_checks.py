@@ -143,7 +143,7 @@ class SceneNumbers:
         ``(lo, hi)``, or a function returning it (called once, when first read).
     """
 
-    NAMES = ("g", "m", "mu", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max",
+    NAMES = ("g", "m", "mu", "mu_s", "k", "has_left", "left", "has_right", "right", "q0", "qdot0", "t_max",
              "max_events", "contact")
 
     def __init__(self, *, params: dict, kinds: dict, domain, **values):
@@ -157,7 +157,7 @@ class SceneNumbers:
     def of(cls, s) -> SceneNumbers:
         """The numbers of scene ``s``, a :class:`~symvib.numeric.scene.Scene` (its domain computed on first use)."""
         return cls(params=dict(s.params), kinds=dict(s.shape.params), domain=lambda: declared_domain(s),
-                   g=s.g, m=s.m, mu=s.mu, k=s.k, has_left=s.left is not None, left=s.left,
+                   g=s.g, m=s.m, mu=s.mu, mu_s=s.mu_static, k=s.k, has_left=s.left is not None, left=s.left,
                    has_right=s.right is not None, right=s.right, q0=s.q0, qdot0=s.qdot0, t_max=s.t_max,
                    max_events=s.max_events, contact=s.contact)
 
@@ -218,6 +218,14 @@ def _finite_check(field: str, name: str, when=None) -> Check:
     return Check(field, _attr(name), when=when)
 
 
+def _static_friction_reason(n: SceneNumbers) -> str:
+    """Why ``mu_s < mu`` is refused, and what to change."""
+    return (f"static friction coefficient {show_value(n.mu_s)} is below the kinetic mu = {show_value(n.mu)}: "
+            f"static friction below kinetic is not a Coulomb contact (at rest where mu_s < |tan alpha| < mu "
+            f"the particle would start to slide, and kinetic friction stop it at once); give mu_s >= mu, "
+            f"lower mu, or leave mu_s out (it is then equal to mu)")
+
+
 def _limit_reason(side: str) -> Callable:
     where = "left of the left" if side == "left" else "right of the right"
     return lambda n: (f"{show_value(float(n.q0))} is outside the limiters: {where} limiter at "
@@ -260,6 +268,9 @@ CHECKS = (
     Check("physics.m", _attr("m"), lambda n: n.m > 0, "must be positive"),
     _finite_check("physics.mu", "mu"),
     Check("physics.mu", _attr("mu"), lambda n: n.mu >= 0, "friction coefficient must be >= 0"),
+    _finite_check("physics.mu_s", "mu_s"),
+    Check("physics.mu_s", _attr("mu_s"), lambda n: n.mu_s >= 0, "static friction coefficient must be >= 0"),
+    Check("physics.mu_s", _attr("mu_s"), lambda n: n.mu_s >= n.mu, _static_friction_reason),
     _finite_check("physics.restitution", "k"),
     Check("physics.restitution", lambda n: float(n.k), lambda n: (n.k >= 0) & (n.k <= 1),
           "must be in [0, 1] (1 = ideally elastic, 0 = plastic)"),

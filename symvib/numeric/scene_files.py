@@ -15,6 +15,7 @@ A scene loads from TOML (:mod:`tomllib`) with this schema::
     g = 9.81
     m = 0.2
     alpha0 = 0.05               # friction angle (mu = tan alpha0), or mu = ...: one of them, not both
+    # mu_s = 0.08               # static friction (rest test), or alpha0_s = ...; >= mu; default: mu
     restitution = 0.8
     [limiters]                  # positions in the coordinate q; either may be absent
     left = "-pi/6"
@@ -87,7 +88,7 @@ MAX_DESCRIPTION_LENGTH = 10_000
 SECTIONS = {
     "curve": {"shape", "x", "z", "q", "name", "domain", "h", "alpha", "q_scale", "params", "closed_form"},
     "parameters": None,  # free names: the curve's symbols
-    "physics": {"g", "m", "mu", "alpha0", "restitution", "contact"},
+    "physics": {"g", "m", "mu", "alpha0", "mu_s", "alpha0_s", "restitution", "contact"},
     "limiters": {"left", "right"},
     "initial": {"q", "qdot"},
     "run": {"t_max", "max_events"},
@@ -240,6 +241,10 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         mu = friction_coefficient(alpha0)
     else:
         mu = read_number(phys, "mu", "physics", shape=shape)
+    if "mu_s" in phys and "alpha0_s" in phys:
+        raise SceneError("physics", "give mu_s or alpha0_s (mu_s = tan(alpha0_s)), not both")
+    alpha0_s = read_number(phys, "alpha0_s", "physics", shape=shape)
+    mu_s = read_number(phys, "mu_s", "physics", shape=shape) if alpha0_s is None else None
     if "restitution" not in phys:
         raise SceneError("physics.restitution", "missing: the restitution coefficient k in [0, 1]")
     lim = data.get("limiters", {})
@@ -267,6 +272,8 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         t_max=read_number(run, "t_max", "run", default=DEFAULT_T_MAX, shape=shape),
         max_events=max_events,
         contact=phys.get("contact", "bilateral"),
+        mu_s=mu_s,
+        alpha0_s=alpha0_s,
     )
 
 

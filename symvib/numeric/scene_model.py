@@ -5,7 +5,9 @@ A :class:`Scene` is immutable and always valid: it runs every check of
 :class:`~symvib.numeric.scene.SceneError` naming its field, and a copy with
 fields changed (:meth:`Scene.replace`) is checked again.  Its numbers are SI
 (:mod:`symvib.numeric.scene_units`); friction is the coefficient ``mu``, with
-the friction angle ``alpha0`` kept when the scene was given one.
+the friction angle ``alpha0`` kept when the scene was given one, and static
+friction the coefficient ``mu_s >= mu`` of the rest test (or its angle
+``alpha0_s``), equal to ``mu`` unless given (:attr:`Scene.mu_static`).
 :meth:`Scene.to_dict` writes it back as the tables of a scene file, which
 :func:`symvib.numeric.scene.scene_from_dict` reads
 (:mod:`symvib.numeric.scene_files`).
@@ -29,7 +31,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-from symvib.numeric.scene_checks import SceneError, SceneNumbers, check_name, check_numbers
+from symvib.numeric.scene_checks import SceneError, SceneNumbers, check_name, check_numbers, finite
 from symvib.numeric.scene_units import friction_coefficient
 from symvib.shapes import Shape
 
@@ -63,6 +65,16 @@ def _friction_dict(s: Scene) -> dict:
     return {"mu": s.mu}
 
 
+def _static_friction_dict(s: Scene) -> dict:
+    """``{}`` when the scene gives no static friction (``mu_s`` follows ``mu``), ``{"alpha0_s": ...}``
+    when its ``mu_s`` is ``tan(alpha0_s)``, else ``{"mu_s": ...}``."""
+    if s.mu_s is None:
+        return {}
+    if s.alpha0_s is not None and friction_coefficient(s.alpha0_s, "physics.alpha0_s") == s.mu_s:
+        return {"alpha0_s": s.alpha0_s}
+    return {"mu_s": s.mu_s}
+
+
 @dataclass(frozen=True)
 class Scene:
     """A validated scene (immutable).  Build with :func:`~symvib.numeric.scene.load_scene`,
@@ -76,7 +88,7 @@ class Scene:
     params : tuple of (str, float)
         Values of the curve parameters, in the curve's order.
     g, m, mu, k : float
-        Gravity, mass, friction coefficient ``mu = tan(alpha0)``, restitution.
+        Gravity, mass, (kinetic) friction coefficient ``mu = tan(alpha0)``, restitution.
     left, right : float or None
         Limiter positions in ``q``.
     q0, qdot0 : float
@@ -88,6 +100,13 @@ class Scene:
         only pushes it along the normal ``n = (-sin alpha, cos alpha)`` (a particle
         on top of a graph; for a parametric curve, on the left of the direction
         of increasing ``q``), :data:`~symvib.numeric.scene_checks.CONTACTS`.
+    mu_s : float or None
+        The static friction coefficient of the rest test (physics.md, "Events" 2),
+        ``mu_s >= mu``; ``None`` (the default): equal to ``mu``, also after
+        ``replace(mu=...)``.  :attr:`mu_static` is the value the rest test uses.
+    alpha0_s : float or None
+        The static friction angle, ``mu_s = tan(alpha0_s)``, kept when the scene was
+        given one (a scene given both must have them agree).
     """
 
     name: str
@@ -105,9 +124,24 @@ class Scene:
     max_events: int = DEFAULT_MAX_EVENTS
     alpha0: float | None = field(default=None, compare=False)
     contact: str = "bilateral"
+    mu_s: float | None = None
+    alpha0_s: float | None = field(default=None, compare=False)
 
     def __post_init__(self):
+        if self.alpha0_s is not None:
+            mu_s = friction_coefficient(self.alpha0_s, "physics.alpha0_s")
+            if self.mu_s is None:
+                object.__setattr__(self, "mu_s", mu_s)
+            elif finite(self.mu_s, "physics.mu_s") != mu_s:
+                raise SceneError("physics.alpha0_s", f"gives mu_s = tan(alpha0_s) = {mu_s!r}, but mu_s = "
+                                                     f"{float(self.mu_s)!r} is given too: give one of them")
         _validate(self)
+
+    @property
+    def mu_static(self):
+        """The static friction coefficient the rest test uses: ``mu_s``, or ``mu`` when the
+        scene gives none (physics.md, "Events" 2)."""
+        return self.mu if self.mu_s is None else self.mu_s
 
     @property
     def param_values(self) -> tuple:
@@ -121,7 +155,8 @@ class Scene:
     def replace(self, **changes) -> Scene:
         """A copy with fields changed (validated again).
 
-        ``params`` may be given as a dict of the names to change.
+        ``params`` may be given as a dict of the names to change.  A scene without
+        ``mu_s`` keeps none: its static friction follows a new ``mu``.
         """
         if isinstance(changes.get("params"), dict):
             merged = dict(self.params)
@@ -135,6 +170,10 @@ class Scene:
             changes["alpha0"] = None
         if "alpha0" in changes and changes["alpha0"] is not None and "mu" not in changes:
             changes["mu"] = friction_coefficient(changes["alpha0"])
+        if "mu_s" in changes and "alpha0_s" not in changes:
+            changes["alpha0_s"] = None
+        if "alpha0_s" in changes and changes["alpha0_s"] is not None and "mu_s" not in changes:
+            changes["mu_s"] = friction_coefficient(changes["alpha0_s"], "physics.alpha0_s")
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict:
@@ -145,11 +184,13 @@ class Scene:
         ``h``, ``alpha``, ``q_scale``, ``params``), so user curves round-trip too
         (sweep manifests and Dask tasks carry scenes this way).  The friction
         angle ``alpha0`` is written when the scene was given one (so it survives
-        the round trip), else ``mu``.
+        the round trip), else ``mu``; likewise ``alpha0_s`` or ``mu_s``, and neither
+        when the scene gives no static friction (its file and outputs stay as they were).
         """
         sh = self.shape
         out = {"name": self.name, "curve": _curve_dict(sh), "parameters": dict(self.params),
-               "physics": {"g": self.g, "m": self.m, **_friction_dict(self), "restitution": self.k},
+               "physics": {"g": self.g, "m": self.m, **_friction_dict(self), **_static_friction_dict(self),
+                           "restitution": self.k},
                "initial": {"q": self.q0, "qdot": self.qdot0},
                "run": {"t_max": self.t_max, "max_events": self.max_events}}
         out["physics"]["contact"] = self.contact

@@ -36,7 +36,8 @@ from symvib import expr as _expr
 from symvib.numeric.scene_checks import SceneError, finite, show_value
 from symvib.shapes import Shape
 
-__all__ = ["FIELD_UNITS", "TEXT_FIELDS", "VALUE_UNITS", "ANGLE_UNIT", "TRIGONOMETRIC", "field_unit",
+__all__ = ["FIELD_UNITS", "STATIC_FRICTION_FIELDS",
+           "TEXT_FIELDS", "VALUE_UNITS", "ANGLE_UNIT", "TRIGONOMETRIC", "field_unit",
            "angle_parameters", "units_table", "friction_coefficient", "read_number"]
 
 #: The SI unit of every scene field that is a quantity, the one table of them: the schema docs
@@ -58,6 +59,8 @@ FIELD_UNITS = {
     "physics.m": "kg",
     "physics.mu": "1",
     "physics.alpha0": "rad",
+    "physics.mu_s": "1",
+    "physics.alpha0_s": "rad",
     "physics.restitution": "1",
     "limiters.left": "[q]",
     "limiters.right": "[q]",
@@ -66,6 +69,10 @@ FIELD_UNITS = {
     "run.t_max": "s",
     "run.max_events": "1",
 }
+#: Fields of :data:`FIELD_UNITS` a scene has only when it gives static friction (``mu_s`` or
+#: ``alpha0_s``): the JSON of a result of a scene without them lists no unit for them, so that its
+#: outputs are what they were before static friction existed.
+STATIC_FRICTION_FIELDS = ("physics.mu_s", "physics.alpha0_s")
 #: Scene fields that are text or names, not quantities (they have no unit).
 TEXT_FIELDS = ("name", "description", "curve.shape", "curve.name", "curve.q", "curve.params", "curve.closed_form",
                "physics.contact")

@@ -33,4 +33,5 @@ def scene_row(scene) -> np.ndarray:
     row[SceneRow.q0], row[SceneRow.qdot0] = scene.q0, scene.qdot0
     row[SceneRow.t_max], row[SceneRow.max_events] = scene.t_max, scene.max_events
     row[SceneRow.unilateral] = scene.contact == "unilateral"
+    row[SceneRow.mu_s] = scene.mu_static
     return row

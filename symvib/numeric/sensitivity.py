@@ -23,7 +23,9 @@ inverse-square-root ends as ``T``'s, which ``u = (1 - cos theta) / 2`` removes
 An impact maps ``w -> k^2 w``; the impact loss and (by the energy budget) the
 friction work follow.  Where an event is not differentiable the table says so
 instead of a number: a turning point on the friction cone's edge (arrest or
-reversal changes with the parameters), a turning point on a limiter (grazing),
+reversal changes with the parameters: the rest test's cone, ``|tan alpha| = mu_s``), a
+turning point on the sliding cone's edge ``|tan alpha| = mu`` where static friction
+exceeds it (a double root of ``G``: its position has no derivative), a turning point on a limiter (grazing),
 a Zeno accumulation, a start at rest for ``qdot0`` (its sign chooses the
 direction), and (not yet derived) a sign change of the normal force.
 
@@ -54,8 +56,9 @@ __all__ = ["sensitivities", "interval_tangents", "Sensitivities", "Tangents", "L
 
 #: Parameters a run's events can be differentiated with respect to.
 PARAMETERS = ("mu", "k", "qdot0", "q0", "left", "right")
-#: Relative distance of ``|sin alpha|`` from ``mu |cos alpha|`` below which a turning point is on
-#: the friction cone's edge (the engine's rest test decides there within ``1e-9``).
+#: Relative distance of ``|sin alpha|`` from ``mu_s |cos alpha|`` (or ``mu |cos alpha|``) below which a
+#: turning point is on the edge of the static (or sliding) friction cone (the engine's rest test, with
+#: ``mu_s``, decides there within ``1e-9``).
 CONE_EDGE = 1e-7
 #: Distance of a turning point from a limiter, in units of ``q_scale``, below which it grazes it.
 GRAZING = 1e-9
@@ -406,7 +409,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
     legs, t_a = [], 0.0
     for i, ev in enumerate(result.events):
         kind = ev.kind.code
-        own = _not_differentiable(ev, scene, c, kind)
+        own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
         if broken or own:
             reasons.append(own or f"follows event {first_broken}, which has no derivatives ({broken})")
             if not broken:
@@ -477,8 +480,15 @@ def _branch(c, q_a, w_a, sigma, mid_q) -> int:
     return sigma if c.N(mid_q, w_mid) >= 0 else -sigma
 
 
-def _not_differentiable(ev, scene, c, kind) -> str:
-    """Why event ``ev`` has no derivatives (empty when it has)."""
+def _on_cone_edge(alpha: float, mu: float) -> bool:
+    """Whether ``|tan alpha|`` is within :data:`CONE_EDGE` (relative) of the friction coefficient ``mu``."""
+    edge = abs(abs(math.sin(alpha)) - mu * abs(math.cos(alpha)))
+    return edge <= CONE_EDGE * max(abs(math.sin(alpha)), mu * abs(math.cos(alpha)), 1e-300)
+
+
+def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
+    """Why event ``ev`` has no derivatives (empty when it has); ``moved``: the particle moved to it
+    (a turning point of ``G``, not a rest test where it already was)."""
     if kind == EventCode.NORMAL_SIGN_CHANGE:
         return "a sign change of the normal force (not derived yet); this event and the ones after it"
     if kind == EventCode.LEFT_CURVE:
@@ -487,9 +497,11 @@ def _not_differentiable(ev, scene, c, kind) -> str:
         return "a Zeno accumulation of impacts (infinitely many events); this event and the ones after it"
     if kind in (EventCode.REVERSAL, EventCode.ARREST):
         a = float(c.alpha(ev.q))
-        edge = abs(abs(math.sin(a)) - scene.mu * abs(math.cos(a)))
-        if edge <= CONE_EDGE * max(abs(math.sin(a)), scene.mu * abs(math.cos(a)), 1e-300):
+        if _on_cone_edge(a, scene.mu_static):   # the rest test's (static) cone: the decision flips there
             return "a turning point on the edge of the friction cone (arrest or reversal changes with the parameters)"
+        if moved and scene.mu_static != scene.mu and _on_cone_edge(a, scene.mu):
+            return ("a turning point on the edge of the sliding friction cone |tan alpha| = mu (a double root of "
+                    "the phase trajectory: its position has no derivative)")
         for limiter in (scene.left, scene.right):
             if limiter is not None and abs(ev.q - limiter) <= GRAZING * c.scale:
                 return "a turning point on a limiter (grazing)"

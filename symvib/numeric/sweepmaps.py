@@ -124,6 +124,8 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
         varied = {a.field for a in res.spec.axes}
         fixed = "" if "physics.restitution" in varied else f", k = {scene.k:g}"
         fixed += "" if varied & {"physics.mu", "physics.alpha0"} else f", $\\mu$ = {scene.mu:.4g}"
+        if scene.mu_s is not None and not varied & {"physics.mu_s", "physics.alpha0_s"}:
+            fixed += f", $\\mu_s$ = {scene.mu_s:.4g}"
         ax.set_title(f"{scene.name}: {MAPS[name]}{note}\n({res.count} scenes{fixed})", fontsize=10)
         fig.tight_layout()
         path = out / f"{name}.png"

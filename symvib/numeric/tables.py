@@ -36,7 +36,7 @@ import dataclasses
 import numpy as np
 
 from symvib.numeric.layout import EVENT_KINDS
-from symvib.numeric.scene import FIELD_UNITS, field_unit
+from symvib.numeric.scene import FIELD_UNITS, STATIC_FRICTION_FIELDS, field_unit
 
 __all__ = ["events_frame", "samples_frame", "to_pandas", "quantity_units", "result_units", "require_pandas",
            "QUANTITY_UNITS"]
@@ -90,7 +90,8 @@ def quantity_units(shape) -> dict:
 
 def result_units(result, *, samples: bool = False) -> dict:
     """The ``"units"`` entry of :meth:`symvib.numeric.events.Result.to_dict`: the unit of
-    every number of the JSON, nested as the JSON is, and of every scene field."""
+    every number of the JSON, nested as the JSON is, and of every scene field (the static
+    friction's only where the scene gives it: :data:`~symvib.numeric.scene.STATIC_FRICTION_FIELDS`)."""
     shape = result.scene.shape
     units = quantity_units(shape)
     out = {"t_final": units["t"], "q_final": units["q"], "qdot_final": units["qdot"],
@@ -103,6 +104,8 @@ def result_units(result, *, samples: bool = False) -> dict:
         if name == "parameters.*":
             for p in shape.params:
                 scene_units[f"parameters.{p}"] = field_unit(f"parameters.{p}", shape)
+        elif name in STATIC_FRICTION_FIELDS and result.scene.mu_s is None:
+            continue
         elif not name.startswith("curve.") or not shape.in_catalogue:
             scene_units[name] = field_unit(name, shape)
     out["scene"] = scene_units

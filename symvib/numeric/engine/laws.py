@@ -23,7 +23,7 @@ __all__ = ["Fs", "dFs", "ddFs", "dF_edge", "node", "energy", "qdot_of", "finite_
 
 #: Unit roundoff of a double.
 EPS = 2.220446049250313e-16
-#: Relative tolerance of the arrest test |tan alpha| <= mu at a turning point.
+#: Relative tolerance of the arrest test |tan alpha| <= mu_s at a turning point.
 CONE_RTOL = 1e-9
 #: Absolute slack of the arrest test, a few rounding errors of a sine of order 1.
 CONE_ATOL = 4.0 * EPS
@@ -135,13 +135,15 @@ def side_at(q, has_left, left, has_right, right):
     return 0
 
 
-def rest(q, side, mu, K, cp):
-    """The rest test at ``q`` with zero speed (physics.md, "Events" 2).
+def rest(q, side, mu_s, K, cp):
+    """The rest test at ``q`` with zero speed (physics.md, "Events" 2), with the static friction
+    coefficient ``mu_s`` (``Setup.mu_s``, ``>= mu``; the scene's ``mu`` when it gives none).
 
     Returns ``(what, direction)``: :data:`REST_ON_LIMITER` where gravity's pull
     along the curve pushes into the limiter the particle touches (``side``),
-    :data:`ARREST` where friction holds it (``|tan alpha| <= mu``, within
-    :data:`CONE_RTOL`), else :data:`SLIDE` and the direction it slides to.
+    :data:`ARREST` where static friction holds it (``|tan alpha| <= mu_s``, within
+    :data:`CONE_RTOL`), else :data:`SLIDE` and the direction it slides to (the
+    motion after it is the sliding one, with ``mu``).
     """
     hh = K.h(q, *cp)
     sin = K.dz(q, *cp) / hh
@@ -149,7 +151,7 @@ def rest(q, side, mu, K, cp):
     pull = -sin
     if side != 0 and pull * side > 0.0:
         return REST_ON_LIMITER, 0
-    if abs(sin) <= mu * abs(cos) * (1.0 + CONE_RTOL) + CONE_ATOL:
+    if abs(sin) <= mu_s * abs(cos) * (1.0 + CONE_RTOL) + CONE_ATOL:
         return ARREST, 0
     return SLIDE, (1 if pull > 0.0 else -1)
 

@@ -237,7 +237,7 @@ def start(S, K, cp, q0, qdot0):
         ev = Event(EventCode.LEFT_CURVE.value, t, q0, qdot0, qdot0, E0, t_err)
         status = StatusCode.LEFT_CURVE
     elif sigma == 0:
-        what, direction = rest(q0, side, S.mu, K, cp)
+        what, direction = rest(q0, side, S.mu_s, K, cp)
         if what != SLIDE:
             code, status = rest_outcome(what)
             ev = Event(code.value, t, q0, 0.0, 0.0, energy(q0, 0.0, S.m, S.g, K, cp), t_err)
@@ -283,7 +283,7 @@ def after_impact(x, w_before, S, K, cp):
     """
     q, side = x.q, x.side
     if x.w == 0.0:
-        what, direction = rest(q, side, S.mu, K, cp)
+        what, direction = rest(q, side, S.mu_s, K, cp)
         if what != SLIDE:
             code, status = rest_outcome(what)
             ev = Event(code.value, x.t, q, 0.0, 0.0, energy(q, 0.0, S.m, S.g, K, cp), x.t_err)
@@ -438,7 +438,7 @@ def turning_point(x, iv, S, K, cp, roots, count):
     Returns ``(x, event)``."""
     qb, Gb, s = iv.qb, iv.Gb, iv.s
     side = side_at(qb, S.has_left, S.left, S.has_right, S.right)
-    what, direction = rest(qb, side, S.mu, K, cp)
+    what, direction = rest(qb, side, S.mu_s, K, cp)
     ev = Event(EventCode.REVERSAL.value, x.t, qb, 0.0, 0.0, energy(qb, 0.0, S.m, S.g, K, cp), x.t_err)
     if what != SLIDE:
         code, status = rest_outcome(what)
@@ -508,7 +508,7 @@ def setup_scaled(row, K, cp, scale):
     lo, hi = K.domain(*cp)
     return Setup(row[SceneRow.g], row[SceneRow.m], row[SceneRow.mu], row[SceneRow.k], row[SceneRow.has_left] != 0.0,
                  row[SceneRow.left], row[SceneRow.has_right] != 0.0, row[SceneRow.right], lo, hi, scale,
-                 row[SceneRow.unilateral] != 0.0, row[SceneRow.deadline])
+                 row[SceneRow.unilateral] != 0.0, row[SceneRow.deadline], row[SceneRow.mu_s])
 
 
 def same_scale(rows, cp_rows, i):

@@ -61,8 +61,10 @@ assert Kernels._fields == tuple(KERNEL_INTERFACE), "Kernels must list KERNEL_INT
 
 class Setup(NamedTuple):
     """One scene's constants: gravity, mass, friction, restitution, limiters, the curve's
-    regular domain ``(lo, hi)``, its length scale ``scale`` (``q_scale``), its contact and the
-    plain engine's wall-clock deadline (``time.monotonic()`` seconds, 0: none)."""
+    regular domain ``(lo, hi)``, its length scale ``scale`` (``q_scale``), its contact, the
+    plain engine's wall-clock deadline (``time.monotonic()`` seconds, 0: none) and the static
+    friction coefficient ``mu_s >= mu`` of the rest test (physics.md, "Events" 2; sliding
+    uses ``mu``)."""
 
     g: float
     m: float
@@ -77,6 +79,7 @@ class Setup(NamedTuple):
     scale: float
     unilateral: bool
     deadline: float
+    mu_s: float
 
 
 class Rules(NamedTuple):

@@ -1,7 +1,7 @@
 """The fields a sweep can vary and its axes: one varied field's values, from ``--vary`` text.
 
 A field is named with the scene file's own keys (``qdot``, ``q``, ``mu``,
-``alpha0``, ``restitution``, ``g``, ``m``, ``left``, ``right``, ``t_max``,
+``alpha0``, ``mu_s``, ``alpha0_s``, ``restitution``, ``g``, ``m``, ``left``, ``right``, ``t_max``,
 ``max_events``, a curve parameter such as ``p``, or the dotted form
 ``initial.qdot``, ``parameters.p``); its values are a grid ``start:stop:count``
 (ends included), a list ``a,b,c``, or a random range ``start:stop``
@@ -34,16 +34,19 @@ from symvib.numeric.sweep.limits import SweepError
 __all__ = ["FIELDS", "Axis", "canonical_field", "parse_axis", "linspace_at"]
 
 #: Scene fields a sweep can vary: canonical name -> its column of the scene row
-#: (:class:`symvib.numeric.layout.SceneRow`; ``alpha0`` is stored as ``mu = tan(alpha0)``).
+#: (:class:`symvib.numeric.layout.SceneRow`; ``alpha0`` is stored as ``mu = tan(alpha0)``,
+#: ``alpha0_s`` as ``mu_s``; a scene without ``mu_s`` has its rows' ``mu_s`` follow ``mu``).
 FIELDS = {
     "initial.q": SceneRow.q0, "initial.qdot": SceneRow.qdot0, "physics.mu": SceneRow.mu,
-    "physics.alpha0": SceneRow.mu, "physics.restitution": SceneRow.k, "physics.g": SceneRow.g,
+    "physics.alpha0": SceneRow.mu, "physics.mu_s": SceneRow.mu_s, "physics.alpha0_s": SceneRow.mu_s,
+    "physics.restitution": SceneRow.k, "physics.g": SceneRow.g,
     "physics.m": SceneRow.m, "limiters.left": SceneRow.left, "limiters.right": SceneRow.right,
     "run.t_max": SceneRow.t_max, "run.max_events": SceneRow.max_events,
 }
 #: Short names of the fields (as on the command line) -> canonical names.
 _SHORT = {"q": "initial.q", "qdot": "initial.qdot", "q0": "initial.q", "qdot0": "initial.qdot",
-          "mu": "physics.mu", "alpha0": "physics.alpha0", "restitution": "physics.restitution",
+          "mu": "physics.mu", "alpha0": "physics.alpha0", "mu_s": "physics.mu_s", "alpha0_s": "physics.alpha0_s",
+          "restitution": "physics.restitution",
           "k": "physics.restitution", "g": "physics.g", "m": "physics.m", "left": "limiters.left",
           "right": "limiters.right", "t_max": "run.t_max", "max_events": "run.max_events"}
 

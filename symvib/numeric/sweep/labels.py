@@ -39,6 +39,8 @@ FIELD_LABELS = {
     "initial.qdot": ("qdot0", "initial speed", "\\dot{{{q}}}_0"),
     "physics.mu": ("mu", "friction coefficient", "\\mu"),
     "physics.alpha0": ("alpha0", "friction angle", "\\alpha_0"),
+    "physics.mu_s": ("mu_s", "static friction coefficient", "\\mu_s"),
+    "physics.alpha0_s": ("alpha0_s", "static friction angle", "\\alpha_{{0s}}"),
     "physics.restitution": ("k", "restitution coefficient", "k"),
     "physics.g": ("g", "gravitational acceleration", "g"),
     "physics.m": ("m", "mass", "m"),

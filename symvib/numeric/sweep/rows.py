@@ -72,19 +72,21 @@ def scene_rows(scene, axes, values, rows=None) -> tuple:
         if axis.field.startswith("parameters."):
             params[:, names.index(axis.field.split(".", 1)[1])] = v
             continue
-        if axis.field == "physics.alpha0":
+        if axis.field in ("physics.alpha0", "physics.alpha0_s"):
             v = _friction_coefficients(v, axis.field, where)
         out[:, FIELDS[axis.field]] = v
         if axis.field == "limiters.left":
             out[:, SceneRow.has_left] = 1.0
         elif axis.field == "limiters.right":
             out[:, SceneRow.has_right] = 1.0
+    if scene.mu_s is None and not {a.field for a in axes} & {"physics.mu_s", "physics.alpha0_s"}:
+        out[:, SceneRow.mu_s] = out[:, SceneRow.mu]   # the scene gives no static friction: mu_s follows mu
     check_rows(scene, out, params, vary_params=any(a.field.startswith("parameters.") for a in axes), where=where)
     return np.ascontiguousarray(out), np.ascontiguousarray(params)
 
 
 def _friction_coefficients(alpha0: np.ndarray, field: str, where) -> np.ndarray:
-    """``mu = tan(alpha0)`` per row, by the scene's own conversion
+    """``mu = tan(alpha0)`` (or ``mu_s = tan(alpha0_s)``) per row, by the scene's own conversion
     (:func:`~symvib.numeric.scene.friction_coefficient`)."""
     out = np.empty_like(alpha0)
     for i, a in enumerate(alpha0):

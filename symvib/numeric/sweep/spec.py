@@ -192,6 +192,8 @@ def make_spec(scene: Scene, vary: dict, *, random: int | None = None, seed: int 
             raise SceneError(f"vary.{fld}", "varied twice")
     if "physics.mu" in fields and "physics.alpha0" in fields:
         raise SceneError("vary", "vary mu or alpha0 (mu = tan(alpha0)), not both")
+    if "physics.mu_s" in fields and "physics.alpha0_s" in fields:
+        raise SceneError("vary", "vary mu_s or alpha0_s (mu_s = tan(alpha0_s)), not both")
     if random is not None:
         if isinstance(random, bool) or not isinstance(random, int) or random < 1:
             raise SceneError("random", f"number of samples must be a positive integer, got {random!r}")
