@@ -55,7 +55,8 @@ def test_status_codes_enums_and_names_are_in_step():
     assert {status_of(c) for c in ERROR_CODES} == set(ERROR_STATUSES)
     assert Status.NON_FINITE.is_error and Status.ENERGY_BUDGET_MISMATCH.is_error
     assert not any(s.is_error for s in Status if s not in ERROR_STATUSES)
-    assert SceneRow.deadline == len(SceneRow) - 1 and SceneRow.unilateral == 12 and SceneRow.max_events == 11
+    assert SceneRow.mu_s == len(SceneRow) - 1 and SceneRow.deadline == 13 and SceneRow.unilateral == 12
+    assert SceneRow.max_events == 11
 
 
 # --- overflow and non-finite states -----------------------------------------------------------

@@ -63,7 +63,7 @@ from symvib.shapes import Shape
 __all__ = ["simulate", "NODES", "MAX_F_PANELS", "check_panels", "quiet_compiler",
            "RTOL", "ATOL", "check_tolerances", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET",
            "sample_pieces",
-           "backend_available", "resolve_backend", "run_backend", "checked_status",
+           "backend_available", "resolve_backend", "run_backend", "checked_status", "compile_by_running",
            "guarded_sweep", "check_wall_time", "DEFAULT_WALL_TIME",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
 
@@ -351,7 +351,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     if backend == "numba":
         _RAN_COMPILED[id(mod)] = mod
     elif requested == "auto":   # a loop's plain runs compile the curve in the background
-        tiered.ran(mod, time.perf_counter() - started, scene.shape.name, partial(_run_once, cp, row, R, samples))
+        tiered.ran(mod, time.perf_counter() - started, scene.shape.name,
+                   partial(compile_by_running, mod, cp, row, R, samples))
     status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
     # A run into a singular point (the end of a narrowed domain) ends left_domain there, or, where the
     # steps into a pole lose the budget or the interval into it cannot be timed, with those errors.
@@ -419,9 +420,13 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
                   zeno=zinfo, stats=stats)
 
 
-def _run_once(cp, row, R, samples, eng):
-    """``eng.simulate`` on a run's arguments (a background compile's first call: :mod:`.tiered`)."""
-    return eng.simulate(cp, row, R, samples)
+def compile_by_running(mod, cp, row, R, samples):
+    """Compile ``mod``'s engine by running it once on a run's arguments (a background compile's
+    job, :mod:`symvib.numeric.tiered`): numba compiles at the first call and writes its disk cache;
+    a cache it cannot write removes the marker (:func:`quiet_compiler`)."""
+    mod, eng = bound_engine(mod, "numba")
+    with quiet_compiler(mod, "numba"):
+        return eng.simulate(cp, row, R, samples)
 
 
 def _dense(mod, cp, ivs, R, result):

@@ -120,8 +120,9 @@ def ran(module, seconds: float, label: str, call) -> None:
     """Count one plain run of ``module``'s curve (``seconds`` of engine time); start its compile
     child once the thresholds are passed.
 
-    ``call(engine)`` runs the engine once on the run's arguments: the child compiles by calling
-    the compiled engine so (numba compiles a function at its first call, then marks it cached).
+    ``call()`` runs the curve's compiled engine once on the run's arguments (the driver's
+    :func:`~symvib.numeric.driver.compile_by_running`): the child compiles by calling it so
+    (numba compiles a function at its first call, then marks it cached).
     """
     tier = _tier(module, label)
     tier.calls += 1
@@ -172,11 +173,7 @@ def _compile(parent: int, module, call, send) -> None:
 
     tether(parent)
     try:
-        from symvib.numeric import driver
-
-        mod, eng = driver.bound_engine(module, "numba")
-        with driver.quiet_compiler(mod, "numba"):   # a cache numba cannot write removes the marker
-            call(eng)
+        call()
     except BaseException as exc:   # noqa: BLE001 - whatever it is, the parent says it in one line
         send.send(f"{type(exc).__name__}: {exc}".splitlines()[0] if str(exc) else type(exc).__name__)
         send.close()
