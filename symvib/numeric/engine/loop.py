@@ -44,7 +44,7 @@ from symvib.numeric.engine.laws import (
     zeno_series,
 )
 from symvib.numeric.engine.scan import CRIT_STEP, End, curve_scale, grown_roots, locate, map_arrays, map_start, scratch
-from symvib.numeric.engine.state import NO_EVENT, Event, Interval, Outcome, RunState, RunArrays, Setup, Zeno
+from symvib.numeric.engine.state import NO_EVENT, Event, Interval, Outcome, RunArrays, RunState, Setup, Zeno
 from symvib.numeric.engine.timing import (
     EPS,
     NONE,
@@ -71,9 +71,9 @@ from symvib.numeric.layout import (
     Summary,
 )
 
-__all__ = ["run", "run_on", "run_arrays", "start", "with_status", "checked", "impact_step", "after_impact", "impacts_at", "depart",
-           "interval", "within_tolerance", "stop_at_t_max", "arrive", "turning_point", "finish", "RUN_STEPS",
-           "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene",
+__all__ = ["run", "run_on", "run_arrays", "start", "with_status", "checked", "impact_step", "after_impact",
+           "impacts_at", "depart", "interval", "within_tolerance", "stop_at_t_max", "arrive", "turning_point", "finish",
+           "RUN_STEPS", "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene",
            "sample_scene", "sweep_scenes", "sweep_block", "sweep_arrays"]
 
 #: Rows the event log starts with (it doubles when full).

@@ -26,9 +26,9 @@ from symvib.numeric.engine.anchor import anchored_G, root_anchored
 from symvib.numeric.engine.laws import EPS, Fs
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update, root_G
 
-__all__ = ["End", "Region", "scratch", "map_new", "map_arrays", "map_start", "room", "grown_roots", "locate", "curve_scale", "branch_cut",
-           "next_cut", "turn_angle", "CRIT_STEP", "CRIT_TURN", "WINDOW", "CHUNK", "DIP_ITER", "SCALE_POINTS",
-           "SCALE_TURN"]
+__all__ = ["End", "Region", "scratch", "map_new", "map_arrays", "map_start", "room", "grown_roots", "locate",
+           "curve_scale", "branch_cut", "next_cut", "turn_angle", "CRIT_STEP", "CRIT_TURN", "WINDOW", "CHUNK",
+           "DIP_ITER", "SCALE_POINTS", "SCALE_TURN"]
 
 #: Search window where no limiter bounds the motion, in units of q_scale.
 WINDOW = 2.0

@@ -25,8 +25,8 @@ from typing import NamedTuple
 
 from symvib.kernelformat import KERNEL_INTERFACE  # declared with the format of a generated module
 
-__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno", "RunState", "RunArrays", "Interval", "Event",
-           "NO_EVENT"]
+__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno", "RunState", "RunArrays", "Interval",
+           "Event", "NO_EVENT"]
 
 
 class Kernels(NamedTuple):
