@@ -35,6 +35,8 @@ from symvib.numeric.engine.loop import (
     impact_step,
     interval,
     run,
+    run_arrays,
+    run_on,
     start,
     stop_at_t_max,
     turning_point,
@@ -270,6 +272,26 @@ def test_the_start_and_the_finish():
     assert ev.kind == NO_EVENT and x.impact_next and x.w == pytest.approx(h(RIGHT) ** 2, rel=1e-14)
     done, qdot, E = finish(x._replace(status=StatusCode.MAX_EVENTS, w=0.0), S, K, cp)
     assert done.sigma == 0 and qdot == 0.0 and E == pytest.approx(M * G * z(RIGHT), rel=1e-14)
+
+
+def test_a_run_in_reused_arrays_is_the_run_in_fresh_ones():
+    # A sweep runs its scenes in one set of arrays (run_arrays): whatever an earlier run left there,
+    # and however small the logs start (they grow between passes), the run is the same.
+    K, cp, S, _ = parabola(mu=0.02, k=0.9)
+    R = rules(NODES)
+    fresh = run(S, K, cp, R, 0.0, 6.0, 30.0, 200, True)
+    assert fresh.n_events > 8 and fresh.n_intervals > 8  # more than the small logs below hold
+    A = run_arrays(R, 3, 1)
+    run_on(S, K, cp, R, 0.3, -4.0, 5.0, 200, True, A)  # another run leaves its state in A
+    A.region[:] = np.nan
+    A.work[:] = np.nan
+    A.roots[:] = np.linspace(-0.4, 0.6, A.roots.size).reshape(A.roots.shape)  # stale points on the path
+    A.count[:] = A.roots.shape[1]
+    again = run_on(S, K, cp, R, 0.0, 6.0, 30.0, 200, True, A)
+    assert (again.status, again.n_events, again.n_intervals) == (fresh.status, fresh.n_events, fresh.n_intervals)
+    assert np.array_equal(again.events[:again.n_events], fresh.events[:fresh.n_events])
+    assert np.array_equal(again.intervals[:again.n_intervals], fresh.intervals[:fresh.n_intervals])
+    assert (again.t, again.q, again.qdot, again.E_final) == (fresh.t, fresh.q, fresh.qdot, fresh.E_final)
 
 
 # --- time: the steps of the quadrature --------------------------------------------------------------

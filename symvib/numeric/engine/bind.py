@@ -160,7 +160,8 @@ HOT_INLINE = ("cumulate", "next_crit", "next_cut", "crit_near", "dF_best")
 #: of them returns an array (a returned array would be freed under its new owner).
 NO_REFCOUNT = ("panel", "quad", "interval", "turning_point", "stop_at_t_max", "impacts_at", "anchored_G",
                "root_anchored", "tail_time", "turn_departure", "time_excess", "root_time", "locate", "walk",
-               "map_extend", "extend_side", "crossing", "branch_cut", "add_root", "room")
+               "map_extend", "extend_side", "crossing", "branch_cut", "add_root", "room", "map_start", "put_event",
+               "put_interval")
 #: numba's error model of the compiled engine and kernels: a division by zero gives inf or NaN (as
 #: numpy does; the run then ends ``non_finite``), not a Python exception, so no division carries a
 #: test and a branch to raise it (a few per cent of a sweep's time; docs/benchmarks.md).

@@ -43,8 +43,8 @@ from symvib.numeric.engine.laws import (
     side_at,
     zeno_series,
 )
-from symvib.numeric.engine.scan import CRIT_STEP, End, curve_scale, grown_roots, locate, map_new, scratch
-from symvib.numeric.engine.state import NO_EVENT, Event, Interval, Outcome, RunState, Setup, Zeno
+from symvib.numeric.engine.scan import CRIT_STEP, End, curve_scale, grown_roots, locate, map_arrays, map_start, scratch
+from symvib.numeric.engine.state import NO_EVENT, Event, Interval, Outcome, RunArrays, RunState, Setup, Zeno
 from symvib.numeric.engine.timing import (
     EPS,
     NONE,
@@ -71,9 +71,9 @@ from symvib.numeric.layout import (
     Summary,
 )
 
-__all__ = ["run", "start", "with_status", "checked", "impact_step", "after_impact", "impacts_at", "depart",
-           "interval", "within_tolerance", "stop_at_t_max", "arrive", "turning_point", "finish", "RUN_STEPS",
-           "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene",
+__all__ = ["run", "run_on", "run_arrays", "start", "with_status", "checked", "impact_step", "after_impact",
+           "impacts_at", "depart", "interval", "within_tolerance", "stop_at_t_max", "arrive", "turning_point", "finish",
+           "RUN_STEPS", "params_of", "setup_of", "run_scale", "setup_scaled", "same_scale", "simulate_scene",
            "sample_scene", "sweep_scenes", "sweep_block", "sweep_arrays"]
 
 #: Rows the event log starts with (it doubles when full).
@@ -82,6 +82,9 @@ EVENT_LOG_START = 64
 INTERVAL_LOG_START = 64
 #: Spare event rows beyond ``max_events`` (the events of the last step).
 EVENT_LOG_SPARE = 4
+#: Most events one pass of :func:`run_on`'s loop logs (an impact, then a rest or the next
+#: interval's end): the log grows before a pass that could fill it.
+EVENTS_PER_PASS = 2
 #: Columns of the event log, the interval log and the sweep summary.
 EVENT_WIDTH, INTERVAL_WIDTH, SUMMARY_WIDTH = len(EVENT_COLUMNS), len(INTERVAL_COLUMNS), len(SUMMARY_COLUMNS)
 #: An interval whose estimated time error exceeds this many times the tolerance of the time at its
@@ -102,10 +105,9 @@ I_QA, I_QB, I_GA, I_GB, I_S, I_SIGMA, I_T0, I_T, I_W, I_TERR = (int(c) for c in 
 
 
 def put_event(events, ne, ev):
-    """Append the event ``ev`` (an :class:`~symvib.numeric.engine.state.Event`; columns
-    :class:`~symvib.numeric.layout.EventColumn`); the log doubles when full."""
-    if ne == events.shape[0]:
-        events = grown(events, ne, 2 * events.shape[0])
+    """Write the event ``ev`` (an :class:`~symvib.numeric.engine.state.Event`; columns
+    :class:`~symvib.numeric.layout.EventColumn`) into row ``ne`` of the log; returns ``ne + 1``
+    (the caller grows the log: this call neither allocates nor returns an array)."""
     events[ne, E_KIND] = ev.kind
     events[ne, E_T] = ev.t
     events[ne, E_Q] = ev.q
@@ -113,14 +115,13 @@ def put_event(events, ne, ev):
     events[ne, E_AFTER] = ev.after
     events[ne, E_ENERGY] = ev.energy
     events[ne, E_TERR] = ev.t_err
-    return events, ne + 1
+    return ne + 1
 
 
 def put_interval(ivs, ni, iv, t0):
-    """Append the motion interval ``iv`` (an :class:`~symvib.numeric.engine.state.Interval`) that
-    starts at ``t0`` (columns :class:`~symvib.numeric.layout.IntervalColumn`)."""
-    if ni == ivs.shape[0]:
-        ivs = grown(ivs, ni, 2 * ivs.shape[0])
+    """Write the motion interval ``iv`` (an :class:`~symvib.numeric.engine.state.Interval`) that
+    starts at ``t0`` into row ``ni`` of the log (columns :class:`~symvib.numeric.layout.IntervalColumn`);
+    returns ``ni + 1`` (the caller grows the log)."""
     ivs[ni, I_QA] = iv.qa
     ivs[ni, I_QB] = iv.qb
     ivs[ni, I_GA] = iv.Ga
@@ -131,11 +132,30 @@ def put_interval(ivs, ni, iv, t0):
     ivs[ni, I_T] = iv.T
     ivs[ni, I_W] = iv.W
     ivs[ni, I_TERR] = iv.T_err
-    return ivs, ni + 1
+    return ni + 1
 
 
 def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
-    """Simulate one scene from ``(q0, qdot0)`` until a rest, ``t_max`` or ``max_events``.
+    """Simulate one scene from ``(q0, qdot0)`` until a rest, ``t_max`` or ``max_events``
+    (:func:`run_on` on arrays of its own).  Returns an :class:`~symvib.numeric.engine.state.Outcome`."""
+    A = run_arrays(R, min(max_events + EVENT_LOG_SPARE, EVENT_LOG_START),
+                   INTERVAL_LOG_START if keep_intervals else 1)
+    return run_on(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals, A)
+
+
+def run_arrays(R, event_rows, interval_rows):
+    """The arrays a run works in (:class:`~symvib.numeric.engine.state.RunArrays`), with logs of
+    ``event_rows`` events and ``interval_rows`` intervals (each grows when full): a sweep allocates
+    them once per block of scenes, not once per scene."""
+    region, roots, count = map_arrays()
+    return RunArrays(np.zeros((event_rows, EVENT_WIDTH)), np.zeros((interval_rows, INTERVAL_WIDTH)), region, roots,
+                     count, scratch(1, WORK_ROWS * max(len(R.Xw), len(R.Xp)))[0], np.empty((1, 4)))
+
+
+def run_on(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals, A):
+    """Simulate one scene from ``(q0, qdot0)`` until a rest, ``t_max`` or ``max_events``, in the
+    arrays ``A`` (:class:`~symvib.numeric.engine.state.RunArrays`, from :func:`run_arrays`; their
+    contents on entry do not matter).
 
     ``S``: the scene's constants (:class:`~symvib.numeric.engine.state.Setup`); with
     ``S.unilateral`` the curve only pushes along its normal, so where ``N`` reaches 0
@@ -155,59 +175,70 @@ def run(S, K, cp, R, q0, qdot0, t_max, max_events, keep_intervals):
     the split costs nothing: the steps on numbers alone (:data:`RUN_STEPS`) are inlined, and
     those that read the run's arrays are calls without reference counting.
     """
-    region, roots, count = map_new(q0, S.lo, S.hi, S.mu, K, cp, CRIT_STEP * S.scale)
-    work = scratch(1, WORK_ROWS * max(len(R.Xw), len(R.Xp)))[0]
-    dummy = np.empty((1, 4))
-    events = np.zeros((min(max_events + EVENT_LOG_SPARE, EVENT_LOG_START), EVENT_WIDTH))
+    events, ivs, region, roots, count, work, dummy = A
+    map_start(region, roots, count, q0, S.lo, S.hi, S.mu, K, cp, CRIT_STEP * S.scale)
     ne = 0
-    ivs = np.zeros((INTERVAL_LOG_START if keep_intervals else 1, INTERVAL_WIDTH))
     ni = 0
     zeno = Zeno(0.0, 0.0, 0.0, 0.0)
     q_bad = math.nan
     x, E0, ev = start(S, K, cp, q0, qdot0)
     if ev.kind != NO_EVENT:
-        events, ne = put_event(events, ne, ev)
+        ne = put_event(events, ne, ev)
+    s = 0
+    again = False  # the interval from x on the branch s is to be asked for again (its roots were full)
     while x.status == StatusCode.RUNNING:
-        x = checked(x, S)
-        if x.status != StatusCode.RUNNING:
-            break
-        if x.impact_next:
-            w_before = x.w
-            x, ev = impact_step(x, S, K, cp)
-            events, ne = put_event(events, ne, ev)
-            x, ev, series, ratio, remaining = after_impact(x, w_before, S, K, cp)
-            if ev.kind != NO_EVENT:
-                if series:  # a Zeno series, after the impacts simulated at this limiter
-                    zeno = Zeno(ratio, float(impacts_at(events, ne, x.q)), remaining, float(x.side))
-                events, ne = put_event(events, ne, ev)
-                break
-        if ne >= max_events:
-            x = with_status(x, StatusCode.MAX_EVENTS)
-            break
-        x, ev, s = depart(x, S, K, cp, t_max)
-        if ev.kind != NO_EVENT:
-            events, ne = put_event(events, ne, ev)
-            break
-        iv = interval(x, s, S, K, cp, R, region, roots, count, work, dummy)
-        while iv.end == End.ROOM:
+        # The arrays grow here, outside the loop of passes: numba counts the references of an
+        # array a loop rebinds on every pass of that loop.
+        if ne + EVENTS_PER_PASS > events.shape[0]:
+            events = grown(events, ne, 2 * events.shape[0])
+        if keep_intervals and ni == ivs.shape[0]:
+            ivs = grown(ivs, ni, 2 * ivs.shape[0])
+        if again:
             roots = grown_roots(roots, count)
+        while x.status == StatusCode.RUNNING:
+            if ne + EVENTS_PER_PASS > events.shape[0] or (keep_intervals and ni == ivs.shape[0]):
+                break  # (to grow the logs)
+            if not again:
+                x = checked(x, S)
+                if x.status != StatusCode.RUNNING:
+                    break
+                if x.impact_next:
+                    w_before = x.w
+                    x, ev = impact_step(x, S, K, cp)
+                    ne = put_event(events, ne, ev)
+                    x, ev, series, ratio, remaining = after_impact(x, w_before, S, K, cp)
+                    if ev.kind != NO_EVENT:
+                        if series:  # a Zeno series, after the impacts simulated at this limiter
+                            zeno = Zeno(ratio, float(impacts_at(events, ne, x.q)), remaining, float(x.side))
+                        ne = put_event(events, ne, ev)
+                        break
+                if ne >= max_events:
+                    x = with_status(x, StatusCode.MAX_EVENTS)
+                    break
+                x, ev, s = depart(x, S, K, cp, t_max)
+                if ev.kind != NO_EVENT:
+                    ne = put_event(events, ne, ev)
+                    break
             iv = interval(x, s, S, K, cp, R, region, roots, count, work, dummy)
-        if not within_tolerance(x, iv, R):
-            # The interval's time could not be brought within its tolerance: stop at its start.
-            x = with_status(x, StatusCode.TOLERANCE_NOT_MET)
-            q_bad = iv.qb
-            break
-        t0 = x.t
-        if t0 + iv.T > t_max:
-            x, iv = stop_at_t_max(x, iv, t_max, S, K, cp, R, work, dummy, roots, count)
-        else:
-            x, ev = arrive(x, iv, S, K, cp)
-            if iv.end == End.TURN:
-                x, ev = turning_point(x, iv, S, K, cp, roots, count)
-            if ev.kind != NO_EVENT:
-                events, ne = put_event(events, ne, ev)
-        if keep_intervals:
-            ivs, ni = put_interval(ivs, ni, iv, t0)
+            again = iv.end == End.ROOM
+            if again:
+                break  # (to grow the roots)
+            if not within_tolerance(x, iv, R.rtol, R.atol):
+                # The interval's time could not be brought within its tolerance: stop at its start.
+                x = with_status(x, StatusCode.TOLERANCE_NOT_MET)
+                q_bad = iv.qb
+                break
+            t0 = x.t
+            if t0 + iv.T > t_max:
+                x, iv = stop_at_t_max(x, iv, t_max, S, K, cp, R, work, dummy, roots, count)
+            else:
+                x, ev = arrive(x, iv, S, K, cp)
+                if iv.end == End.TURN:
+                    x, ev = turning_point(x, iv, S, K, cp, roots, count)
+                if ev.kind != NO_EVENT:
+                    ne = put_event(events, ne, ev)
+            if keep_intervals:
+                ni = put_interval(ivs, ni, iv, t0)
     x, qdot, E = finish(x, S, K, cp)
     return Outcome(x.status.value, ne, events, ni, ivs, x.t, x.q, qdot, x.W_friction, x.W_impacts, E0, E, zeno,
                    S.scale, x.t_err, q_bad)
@@ -370,10 +401,12 @@ def interval(x, s, S, K, cp, R, region, roots, count, work, dummy):
     return Interval(q, qb, Ga, Gb, s, sigma, end, T, Wi, Te, flag)
 
 
-def within_tolerance(x, iv, R):
-    """Whether the interval's time is within its tolerance: the quadrature's budget was enough and
-    its estimated error at most :data:`TOLERANCE_FACTOR` times the tolerance of the time at its end."""
-    return iv.flag != QUAD_BUDGET and iv.T_err <= TOLERANCE_FACTOR * (R.rtol * (x.t + iv.T) + R.atol)
+def within_tolerance(x, iv, rtol, atol):
+    """Whether the interval's time is within its tolerance (the rules' ``rtol, atol``): the quadrature's
+    budget was enough and its estimated error at most :data:`TOLERANCE_FACTOR` times the tolerance of
+    the time at its end.  (Numbers, not the rules: their arrays passed to this inlined step would be
+    reference-counted on every interval.)"""
+    return iv.flag != QUAD_BUDGET and iv.T_err <= TOLERANCE_FACTOR * (rtol * (x.t + iv.T) + atol)
 
 
 def stop_at_t_max(x, iv, t_max, S, K, cp, R, work, dummy, roots, count):
@@ -563,6 +596,7 @@ def sweep_block(K, rows, cp_rows, R, max_log, out, logs, start, stop):
     """Entry point: scenes ``start`` to ``stop - 1`` of a sweep, their summaries into ``out``
     and their first ``max_log`` events into ``logs`` (see :func:`sweep_scenes`)."""
     scale = 0.0
+    A = run_arrays(R, EVENT_LOG_START, 1)   # (reused by every scene of the block)
     for i in range(start, stop):
         cp = params_of(cp_rows[i], cp_rows.shape[1])
         row = rows[i]
@@ -570,8 +604,8 @@ def sweep_block(K, rows, cp_rows, R, max_log, out, logs, start, stop):
         if i == start or not same_scale(rows, cp_rows, i):
             scale = run_scale(row, K, cp)
         S = setup_scaled(row, K, cp, scale)
-        o = run(S, K, cp, R, row[SceneRow.q0], row[SceneRow.qdot0], row[SceneRow.t_max],
-                int(row[SceneRow.max_events]), False)
+        o = run_on(S, K, cp, R, row[SceneRow.q0], row[SceneRow.qdot0], row[SceneRow.t_max],
+                   int(row[SceneRow.max_events]), False, A)
         impacts = 0
         reversals = 0
         flips = 0

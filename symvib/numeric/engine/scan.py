@@ -26,9 +26,9 @@ from symvib.numeric.engine.anchor import anchored_G, root_anchored
 from symvib.numeric.engine.laws import EPS, Fs
 from symvib.numeric.engine.roots import ROOT_MAXITER, illinois_point, illinois_update, root_G
 
-__all__ = ["End", "Region", "scratch", "map_new", "room", "grown_roots", "locate", "curve_scale", "branch_cut",
-           "next_cut", "turn_angle", "CRIT_STEP", "CRIT_TURN", "WINDOW", "CHUNK", "DIP_ITER", "SCALE_POINTS",
-           "SCALE_TURN"]
+__all__ = ["End", "Region", "scratch", "map_new", "map_arrays", "map_start", "room", "grown_roots", "locate",
+           "curve_scale", "branch_cut", "next_cut", "turn_angle", "CRIT_STEP", "CRIT_TURN", "WINDOW", "CHUNK",
+           "DIP_ITER", "SCALE_POINTS", "SCALE_TURN"]
 
 #: Search window where no limiter bounds the motion, in units of q_scale.
 WINDOW = 2.0
@@ -196,8 +196,21 @@ def scan_step(turn, step):
 
 def map_new(q0, lo, hi, mu, K, cp, step):
     """The scanned region (:class:`Region`) and critical points at the start ``q0`` (scan steps at
-    most ``step``, :func:`scan_step`)."""
-    region = scratch(1, REGION_SIZE)[0]
+    most ``step``, :func:`scan_step`): ``(region, roots, count)``."""
+    region, roots, count = map_arrays()
+    map_start(region, roots, count, q0, lo, hi, mu, K, cp, step)
+    return region, roots, count
+
+
+def map_arrays():
+    """Arrays for a scanned region and its critical points, ``(region, roots, count)``, to be set by
+    :func:`map_start` (a sweep reuses them from scene to scene)."""
+    return scratch(1, REGION_SIZE)[0], np.empty((ROOT_ROWS, ROOTS_CAPACITY)), np.zeros(ROOT_ROWS, dtype=np.int64)
+
+
+def map_start(region, roots, count, q0, lo, hi, mu, K, cp, step):
+    """Set ``region``, ``roots`` and ``count`` (:func:`map_arrays`) to the scanned region and critical
+    points at the start ``q0`` (:func:`map_new`)."""
     lo_in = lo + EDGE_RTOL * max(1.0, abs(lo)) if math.isfinite(lo) else -math.inf
     hi_in = hi - EDGE_RTOL * max(1.0, abs(hi)) if math.isfinite(hi) else math.inf
     x0 = min(max(q0, lo_in), hi_in)
@@ -215,13 +228,12 @@ def map_new(q0, lo, hi, mu, K, cp, step):
     region[DX_LO] = region[DX_HI] = xp
     region[LO_IN] = lo_in
     region[HI_IN] = hi_in
-    roots = np.empty((ROOT_ROWS, ROOTS_CAPACITY))
-    count = np.zeros(ROOT_ROWS, dtype=np.int64)
+    for b in range(ROOT_ROWS):
+        count[b] = 0
     if region[FP_LO] == 0.0:
         add_root(roots, count, 0, x0)
     if region[FM_LO] == 0.0:
         add_root(roots, count, 1, x0)
-    return region, roots, count
 
 
 def room(roots, count):

@@ -25,8 +25,8 @@ from typing import NamedTuple
 
 from symvib.kernelformat import KERNEL_INTERFACE  # declared with the format of a generated module
 
-__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno", "RunState", "Interval", "Event",
-           "NO_EVENT"]
+__all__ = ["KERNEL_INTERFACE", "Kernels", "Setup", "Rules", "Outcome", "Zeno", "RunState", "RunArrays", "Interval",
+           "Event", "NO_EVENT"]
 
 
 class Kernels(NamedTuple):
@@ -145,6 +145,24 @@ class RunState(NamedTuple):
     W_impacts: float
     t_err: float
     status: object
+
+
+class RunArrays(NamedTuple):
+    """The arrays a run writes (:func:`symvib.numeric.engine.loop.run_on`), allocated once and reused
+    run after run by a sweep: the event log and the interval log (rows of
+    :class:`~symvib.numeric.layout.EventColumn` and :class:`~symvib.numeric.layout.IntervalColumn`
+    values; they grow when full), the scanned region, its critical points and their count per row
+    (:func:`~symvib.numeric.engine.scan.map_arrays`), the time quadrature's flat scratch array
+    (:data:`~symvib.numeric.engine.timing.WORK_ROWS` rows of the larger rule's length) and its
+    unused output (one row)."""
+
+    events: object
+    intervals: object
+    region: object
+    roots: object
+    count: object
+    work: object
+    dummy: object
 
 
 class Interval(NamedTuple):
