@@ -272,10 +272,24 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
         Naming ``free`` (unknown, repeated, a missing limiter, more parameters than
         observations), ``observed.kind`` (a kind the scene cannot make), ``observed.t`` (a sample
         after the end of the start's run), ``weights`` (not one positive finite number per
-        observation) or ``scene`` (a run that failed).
+        observation), ``bounds`` (not a dict of parameter -> ``(low, high)``, ``low <= high``),
+        ``max_iterations`` (not a whole number >= 1), ``xtol`` (not positive and finite),
+        ``observed`` (not events or samples) or ``scene`` (not a Scene, or a run that failed).
     """
     from symvib.numeric.driver import simulate
 
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene: a Scene (symvib.load_scene), got {type(scene).__name__}")
+    if not isinstance(observed, (Observed, ObservedSamples)):
+        raise ValueError(f"observed: events (observed_events, read_events) or samples (observed_samples, "
+                         f"read_samples), got {type(observed).__name__}")
+    if isinstance(free, str) or not hasattr(free, "__iter__"):
+        raise ValueError(f"free: a sequence of names from {', '.join(PARAMETERS)} (such as ('mu', 'k')), "
+                         f"got {free!r:.80}")
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 1:
+        raise ValueError(f"max_iterations: a whole number of at least 1, got {max_iterations!r:.80}")
+    if not isinstance(xtol, (int, float, np.number)) or not (0 < xtol < math.inf):
+        raise ValueError(f"xtol: a positive finite number, got {xtol!r:.80}")
     free = tuple(free)
     if not free or len(set(free)) != len(free) or any(p not in PARAMETERS for p in free):
         raise ValueError(f"free: {free!r} must be distinct names from {', '.join(PARAMETERS)}")
@@ -290,10 +304,14 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
     if not samples and observed.kinds and ("impact" in observed.kinds or "rest_on_limiter" in observed.kinds) \
             and scene.left is None and scene.right is None:
         raise ValueError("observed.kind: impacts observed, but the scene has no limiter to make them")
-    w = np.ones(m) if weights is None else np.asarray(weights, dtype=float).ravel()
+    try:
+        w = np.ones(m) if weights is None else np.asarray(weights, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {weights!r:.80}") from None
     if len(w) != m or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {len(w)}")
-    bounds = {name: (bounds or {}).get(name, _default_bounds(scene, name)) for name in free}
+    given = _check_bounds(bounds)
+    bounds = {name: given.get(name, _default_bounds(scene, name)) for name in free}
     problem = _Problem(scene, free, run or (lambda s: simulate(s, samples=samples)),
                        *(np.array([bounds[n][i] for n in free]) for i in (0, 1)), weights is not None,
                        _sample_model if samples else _model)
@@ -314,6 +332,26 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
             return result
     return dataclasses.replace(result, iterations=total, history=tuple(history),
                                data=observed.coordinates if samples else "events")
+
+
+def _check_bounds(bounds) -> dict:
+    """The given ``bounds`` as ``name -> (low, high)`` floats, or an error naming ``bounds``."""
+    if bounds is None:
+        return {}
+    if not isinstance(bounds, dict):
+        raise ValueError(f"bounds: a dict of parameter -> (low, high), got {type(bounds).__name__}")
+    checked = {}
+    for name, pair in bounds.items():
+        if name not in PARAMETERS:
+            raise ValueError(f"bounds: {name!r} is not a parameter ({', '.join(PARAMETERS)})")
+        try:
+            low, high = (float(v) for v in pair)
+        except (TypeError, ValueError):
+            raise ValueError(f"bounds.{name}: a pair (low, high) of numbers, got {pair!r:.80}") from None
+        if math.isnan(low) or math.isnan(high) or low > high:
+            raise ValueError(f"bounds.{name}: low <= high, neither NaN (infinite for none), got {pair!r:.80}")
+        checked[name] = (low, high)
+    return checked
 
 
 def _stages(n_obs: int, n_free: int) -> list:

@@ -86,8 +86,16 @@ class ObservedSamples:
         return ObservedSamples(self.t[:n], self.coordinates, self.values[:n])
 
 
+def _floats(values, name: str) -> np.ndarray:
+    """``values`` as a flat float array, or an error naming ``observed.<name>``."""
+    try:
+        return np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"observed.{name}: give numbers (a sequence of floats), got {values!r:.80}") from None
+
+
 def _check_times(t, what: str) -> np.ndarray:
-    t = np.asarray(t, dtype=float).ravel()
+    t = _floats(t, "t")
     if not len(t):
         raise ValueError(f"observed.t: no {what}")
     if not np.all(np.isfinite(t)):
@@ -110,6 +118,8 @@ def observed_events(t, kinds=None, q=None) -> Observed:
     """
     t = _check_times(t, "event times")
     if kinds is not None:
+        if isinstance(kinds, str):
+            raise ValueError(f"observed.kind: one kind per time (a list such as [{kinds!r:.40}]), not a string")
         kinds = tuple(str(k).strip().lower() for k in kinds)
         valid = {k.value for k in EventKind}
         for i, k in enumerate(kinds):
@@ -118,7 +128,7 @@ def observed_events(t, kinds=None, q=None) -> Observed:
         if len(kinds) != len(t):
             raise ValueError(f"observed.kind: {len(kinds)} kinds for {len(t)} times")
     if q is not None:
-        q = np.asarray(q, dtype=float).ravel()
+        q = _floats(q, "q")
         if len(q) != len(t) or not np.all(np.isfinite(q)):
             raise ValueError("observed.q: one finite position per time")
     return Observed(t, kinds, q)
@@ -143,7 +153,7 @@ def observed_samples(t, *, q=None, x=None, z=None, s=None) -> ObservedSamples:
     for name, v in (("q", q), ("x", x), ("z", z), ("s", s)):
         if v is None:
             continue
-        v = np.asarray(v, dtype=float).ravel()
+        v = _floats(v, name)
         if len(v) != len(t):
             raise ValueError(f"observed.{name}: {len(v)} values for {len(t)} times")
         if not np.all(np.isfinite(v)):
@@ -157,7 +167,7 @@ def _read_columns(path, what: str) -> tuple:
     """The header (lower case) and the columns of a CSV file, numbers as floats (``kind`` as text)."""
     from symvib.paths import read_user_file
 
-    text = read_user_file(path, what=what)
+    text = read_user_file(path, what=what).removeprefix("\ufeff")   # a byte-order mark (spreadsheet export)
     rows = list(csv.reader(text.splitlines()))
     if not rows:
         raise ValueError(f"{path}: empty; give a header row (events: t[, kind][, q]; samples: t with q, x,z or s)")
@@ -165,6 +175,10 @@ def _read_columns(path, what: str) -> tuple:
     twice = sorted({h for h in header if header.count(h) > 1})
     if twice:
         raise ValueError(f"{path}: header {rows[0]!r} names column {twice[0]!r} twice")
+    if len(header) == 1 and any(sep in header[0] for sep in ";\t"):
+        raise ValueError(f"{path}: header {rows[0]!r}: separate the columns by commas, not semicolons or tabs")
+    if "" in header:
+        raise ValueError(f"{path}: header {rows[0]!r}: column {header.index('') + 1} has no name")
     columns = {h: [] for h in header}
     for number, row in enumerate(rows[1:], start=2):
         if not any(cell.strip() for cell in row):
@@ -176,9 +190,14 @@ def _read_columns(path, what: str) -> tuple:
                 columns[h].append(cell)
                 continue
             try:
-                columns[h].append(float(cell))
+                if not cell.isascii() or "_" in cell:     # float() reads "1_0" as 10 and other scripts' digits
+                    raise ValueError
+                value = float(cell)
             except ValueError:
                 raise ValueError(f"{path}: row {number}, column {h}: {cell!r} is not a number") from None
+            if not np.isfinite(value):
+                raise ValueError(f"{path}: row {number}, column {h}: {cell.strip()!r} is not a finite number")
+            columns[h].append(value)
     return rows[0], header, columns
 
 
@@ -203,12 +222,19 @@ def read_observations(path):
 def _events(path, raw, header, columns) -> Observed:
     unknown = [h for h in header if h not in CSV_COLUMNS]
     if "t" not in header or unknown:
-        raise ValueError(f"{path}: header {raw!r}: needs a column t and only {', '.join(CSV_COLUMNS)}")
-    return observed_events(columns["t"], columns.get("kind"), columns.get("q"))
+        raise ValueError(f"{path}: header {raw!r}: needs a column t and only {', '.join(CSV_COLUMNS)} (events), "
+                         "or t with q, x and z, or s (a sampled trajectory)")
+    try:
+        return observed_events(columns["t"], columns.get("kind"), columns.get("q"))
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc} (data rows counted from 1 after the header)") from None
 
 
 def _samples(path, raw, header, columns) -> ObservedSamples:
     rest = tuple(sorted(h for h in header if h != "t"))
     if "t" not in header or rest not in SAMPLE_COLUMNS:
         raise ValueError(f"{path}: header {raw!r}: a sampled trajectory needs t and q, or t, x, z, or t, s")
-    return observed_samples(columns["t"], **{h: columns[h] for h in rest})
+    try:
+        return observed_samples(columns["t"], **{h: columns[h] for h in rest})
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc} (data rows counted from 1 after the header)") from None
