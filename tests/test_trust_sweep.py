@@ -608,6 +608,19 @@ def test_the_issues_race_two_processes_one_folder(tmp_path, capsys):
     ('scene = "paper-parabola"\n[vary]\nqdot = [[1, 2], [3, 4]]\n', "vary.qdot"),
     ('scene = "paper-parabola"\n[vary]\nqdot = 1979-05-27\n', "vary.qdot"),
     ('scene = "paper-parabola"\n[vary.qdot]\nstart = 3\nstop = 12\ncount = 1000000000\n', "vary.qdot"),
+    # the session's new surfaces: sensitivity columns and static friction
+    ('scene = "paper-parabola"\nsensitivities = 5\n[vary]\nqdot = "6,7"\n', "sensitivities"),
+    ('scene = "paper-parabola"\nsensitivities = ["mu", 1]\n[vary]\nqdot = "6,7"\n', "sensitivities"),
+    ('scene = "paper-parabola"\nsensitivities = "nu"\n[vary]\nqdot = "6,7"\n', "sensitivities: 'nu'"),
+    ('scene = "paper-parabola"\nsensitivities = "__import__(\'os\')"\n[vary]\nqdot = "6,7"\n', "sensitivities"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = "nan,0.3"\n', "vary.mu_s"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = [0.2, "x"]\n', "vary.mu_s: name 'x'"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = "-0.1,0.3"\n', "physics.mu_s: static friction coefficient must be >= 0"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = "0.01,0.3"\n', "physics.mu_s: static friction coefficient 0.01"),
+    ('scene = "paper-parabola"\n[vary]\nalpha0_s = "0.2,2.0"\n', "physics.alpha0_s: friction angle must be in"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = "0.2,0.3"\nalpha0_s = "0.2,0.3"\n', "vary: vary mu_s or alpha0_s"),
+    ('scene = "paper-parabola"\n[vary.mu_s]\nlow = 0.2\nhigh = 0.3\n', "vary.mu_s: a table of start, stop"),
+    ('scene = "paper-parabola"\n[vary.mu_s]\nstart = 0.2\n', "'stop' is missing"),
 ])
 def test_hostile_sweep_files_are_one_line_errors(tmp_path, capsys, text, field):
     sw = tmp_path / "sweep.toml"
