@@ -263,3 +263,19 @@ def test_hostile_fit_command_lines_are_one_line_errors_before_the_fit(args, matc
     assert code == 2 and "estimates" not in captured.out and "Traceback" not in captured.err
     assert re.search(match, err[-1]), err
     assert png_data.read_text(encoding="utf-8").startswith("t,kind") and not list(tmp_path.glob("*.png"))[1:]
+
+
+@pytest.mark.parametrize("text, match", [
+    ('t,q\n"' + "1" * 200_000 + '",0\n', "row 2: not comma-separated values"),   # csv.Error: was a traceback
+    ('t,q\n0.1,"0', "row 2: not comma-separated values"),
+    ("\ufefft,kind\r\n0.1,bounce\r\n", "observed.kind: event 1 is 'bounce'"),
+    ("t,q\n0.1,nan\n", "row 2, column q: 'nan' is not a finite number"),
+])
+def test_hostile_data_files_through_the_cli_are_one_line_errors(text, match, tmp_path, capsys):
+    from symvib.cli import main
+
+    data = tmp_path / "data.csv"
+    data.write_text(text, encoding="utf-8")
+    assert main(["fit", "paper-parabola", str(data)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and re.search(match, err) and str(data) in err and len(err) < 1000, err

@@ -39,6 +39,8 @@ __all__ = ["Observed", "ObservedSamples", "observed_events", "observed_samples",
 CSV_COLUMNS = ("t", "kind", "q")
 #: Column sets of a file of samples (besides ``t``) -> the coordinates they give.
 SAMPLE_COLUMNS = {("q",): "q", ("x", "z"): "xz", ("s",): "s"}
+#: Most columns a data file has (``t, kind, q`` or ``t, x, z``).
+MAX_COLUMNS = 3
 
 
 @dataclass(frozen=True)
@@ -86,6 +88,12 @@ class ObservedSamples:
         return ObservedSamples(self.t[:n], self.coordinates, self.values[:n])
 
 
+def _show(value, limit: int = 80) -> str:
+    """``repr(value)``, cut to about ``limit`` characters (a cell or a header of a hostile file may be long)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
 def _floats(values, name: str) -> np.ndarray:
     """``values`` as a flat float array, or an error naming ``observed.<name>``."""
     try:
@@ -124,7 +132,7 @@ def observed_events(t, kinds=None, q=None) -> Observed:
         valid = {k.value for k in EventKind}
         for i, k in enumerate(kinds):
             if k not in valid:
-                raise ValueError(f"observed.kind: event {i + 1} is {k!r}, not one of {', '.join(sorted(valid))}")
+                raise ValueError(f"observed.kind: event {i + 1} is {_show(k)}, not one of {', '.join(sorted(valid))}")
         if len(kinds) != len(t):
             raise ValueError(f"observed.kind: {len(kinds)} kinds for {len(t)} times")
     if q is not None:
@@ -168,17 +176,24 @@ def _read_columns(path, what: str) -> tuple:
     from symvib.paths import read_user_file
 
     text = read_user_file(path, what=what).removeprefix("\ufeff")   # a byte-order mark (spreadsheet export)
-    rows = list(csv.reader(text.splitlines()))
+    reader = csv.reader(text.splitlines(), strict=True)
+    try:
+        rows = list(reader)
+    except csv.Error as exc:     # a stray or unclosed quote, a cell beyond the module's field limit
+        raise ValueError(f"{path}: row {reader.line_num}: not comma-separated values ({exc})") from None
     if not rows:
         raise ValueError(f"{path}: empty; give a header row (events: t[, kind][, q]; samples: t with q, x,z or s)")
     header = [h.strip().lower() for h in rows[0]]
+    if len(header) > MAX_COLUMNS:     # (before any work per column: a header of 100,000 names)
+        raise ValueError(f"{path}: header {_show(rows[0])} has {len(header)} columns; a data file has at most "
+                         f"{MAX_COLUMNS} (events: t, kind, q; samples: t with q, x and z, or s)")
     twice = sorted({h for h in header if header.count(h) > 1})
     if twice:
-        raise ValueError(f"{path}: header {rows[0]!r} names column {twice[0]!r} twice")
+        raise ValueError(f"{path}: header {_show(rows[0])} names column {_show(twice[0])} twice")
     if len(header) == 1 and any(sep in header[0] for sep in ";\t"):
-        raise ValueError(f"{path}: header {rows[0]!r}: separate the columns by commas, not semicolons or tabs")
+        raise ValueError(f"{path}: header {_show(rows[0])}: separate the columns by commas, not semicolons or tabs")
     if "" in header:
-        raise ValueError(f"{path}: header {rows[0]!r}: column {header.index('') + 1} has no name")
+        raise ValueError(f"{path}: header {_show(rows[0])}: column {header.index('') + 1} has no name")
     columns = {h: [] for h in header}
     for number, row in enumerate(rows[1:], start=2):
         if not any(cell.strip() for cell in row):
@@ -194,9 +209,9 @@ def _read_columns(path, what: str) -> tuple:
                     raise ValueError
                 value = float(cell)
             except ValueError:
-                raise ValueError(f"{path}: row {number}, column {h}: {cell!r} is not a number") from None
+                raise ValueError(f"{path}: row {number}, column {h}: {_show(cell)} is not a number") from None
             if not np.isfinite(value):
-                raise ValueError(f"{path}: row {number}, column {h}: {cell.strip()!r} is not a finite number")
+                raise ValueError(f"{path}: row {number}, column {h}: {_show(cell.strip())} is not a finite number")
             columns[h].append(value)
     return rows[0], header, columns
 
@@ -222,7 +237,7 @@ def read_observations(path):
 def _events(path, raw, header, columns) -> Observed:
     unknown = [h for h in header if h not in CSV_COLUMNS]
     if "t" not in header or unknown:
-        raise ValueError(f"{path}: header {raw!r}: needs a column t and only {', '.join(CSV_COLUMNS)} (events), "
+        raise ValueError(f"{path}: header {_show(raw)}: needs a column t and only {', '.join(CSV_COLUMNS)} (events), "
                          "or t with q, x and z, or s (a sampled trajectory)")
     try:
         return observed_events(columns["t"], columns.get("kind"), columns.get("q"))
@@ -233,7 +248,7 @@ def _events(path, raw, header, columns) -> Observed:
 def _samples(path, raw, header, columns) -> ObservedSamples:
     rest = tuple(sorted(h for h in header if h != "t"))
     if "t" not in header or rest not in SAMPLE_COLUMNS:
-        raise ValueError(f"{path}: header {raw!r}: a sampled trajectory needs t and q, or t, x, z, or t, s")
+        raise ValueError(f"{path}: header {_show(raw)}: a sampled trajectory needs t and q, or t, x, z, or t, s")
     try:
         return observed_samples(columns["t"], **{h: columns[h] for h in rest})
     except ValueError as exc:
