@@ -12,6 +12,7 @@ import symvib
 from symvib.numeric.driver import simulate
 from symvib.numeric.fit import fit, observed_events, read_events
 from symvib.numeric.scene import resolve_scene, scene_from_dict
+from symvib.paths import UserPathError
 
 TRUTH = resolve_scene("paper-parabola").replace(mu=0.03, k=0.8)
 
@@ -279,3 +280,17 @@ def test_hostile_data_files_through_the_cli_are_one_line_errors(text, match, tmp
     assert main(["fit", "paper-parabola", str(data)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and re.search(match, err) and str(data) in err and len(err) < 1000, err
+
+
+def test_the_residual_figure_is_never_written_through_a_link(tmp_path):
+    result = fit(TRUTH, observed_events(impact_times(TRUTH, 3), kinds=["impact"] * 3), free=("mu",))
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me", encoding="utf-8")
+    link = tmp_path / "res.png"
+    link.symlink_to(victim)
+    with pytest.raises(UserPathError, match="is a symbolic link; symvib never writes through one"):
+        result.plot(link)                                    # (was: written through the link)
+    assert victim.read_text(encoding="utf-8") == "keep me" and link.is_symlink()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["res.png", "victim.txt"]   # no temporary left
+    result.plot(tmp_path / "plain.png")
+    assert (tmp_path / "plain.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

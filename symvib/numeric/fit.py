@@ -164,7 +164,10 @@ class FitResult:
                      fontsize=9)
         fig.tight_layout()
         if path is not None:
-            fig.savefig(path, dpi=120)
+            from symvib import safeio
+
+            with safeio.replacing_file(path, what="residual figure") as fh:   # never through a link there
+                fig.savefig(fh, format="png", dpi=120)
             plt.close(fig)
         return fig
 
