@@ -200,6 +200,10 @@ OBSERVED = observed_events([0.1, 0.2, 0.3])
     ({"bounds": {"mu": (1, 0)}}, "bounds.mu: low <= high"),
     ({"bounds": {"mu": (float("nan"), 1)}}, "bounds.mu: low <= high, neither NaN"),
     ({"bounds": [(0, 1)]}, "bounds: a dict of parameter"),
+    ({"bounds": {"mu": (-1, 1)}}, r"bounds.mu: \(-1, 1\) reaches beyond the values the scene allows, \[0, inf\]"),
+    ({"free": ("k",), "bounds": {"k": (0, 5)}}, r"bounds.k: .* \[0, 1\]"),
+    ({"free": ("q0",), "bounds": {"q0": (-10, 10)}}, r"bounds.q0: .* reaches beyond"),
+    ({"scene": TRUTH.replace(mu_s=0.04), "bounds": {"mu": (0, 1)}}, r"bounds.mu: .* \[0, 0.04\]"),
     ({"weights": "abc"}, "weights: one positive finite 1/sigma per observation"),
     ({"weights": [1, float("inf"), 1]}, "weights: one positive finite"),
     ({"weights": [1, 1]}, "weights: one positive finite"),
@@ -294,3 +298,12 @@ def test_the_residual_figure_is_never_written_through_a_link(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["res.png", "victim.txt"]   # no temporary left
     result.plot(tmp_path / "plain.png")
     assert (tmp_path / "plain.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_an_estimate_held_on_its_bound_says_so():
+    # the data come from mu = 0.05, but the scene's static friction mu_s = 0.04 bounds mu (mu <= mu_s)
+    obs = observed_events(impact_times(TRUTH.replace(mu=0.05), 5), kinds=["impact"] * 5)
+    result = fit(TRUTH.replace(mu=0.03, mu_s=0.04), obs, free=("mu",))
+    assert result.estimates["mu"] == 0.04 and "mu = 0.04 is at its bound (high)" in result.message
+    free = fit(TRUTH.replace(mu=0.03), obs, free=("mu",))
+    assert free.estimates["mu"] == pytest.approx(0.05, rel=1e-8) and "bound" not in free.message

@@ -261,7 +261,8 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
     bounds : dict, optional
         Parameter -> ``(low, high)``; default: the physical ranges (``mu >= 0``, and ``mu <= mu_s``
         where the scene gives static friction, ``0 <= k <= 1``, ``q0`` between the limiters, a
-        limiter on its side of ``q0``).
+        limiter on its side of ``q0``); given bounds lie within those (the scene is refused
+        beyond them).  An estimate on a bound is named in the message.
     weights : array, optional
         ``1 / sigma`` of each observation (times, then positions; for samples each coordinate at
         every sample, ``x`` then ``z``).
@@ -275,8 +276,8 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
         Naming ``free`` (unknown, repeated, a missing limiter, more parameters than
         observations), ``observed.kind`` (a kind the scene cannot make), ``observed.t`` (a sample
         after the end of the start's run), ``weights`` (not one positive finite number per
-        observation), ``bounds`` (not a dict of parameter -> ``(low, high)``, ``low <= high``),
-        ``max_iterations`` (not a whole number >= 1), ``xtol`` (not positive and finite),
+        observation), ``bounds`` (not a dict of parameter -> ``(low, high)``, ``low <= high``,
+        within the physical ranges), ``max_iterations`` (not a whole number >= 1), ``xtol`` (not positive and finite),
         ``observed`` (not events or samples) or ``scene`` (not a Scene, or a run that failed).
     """
     from symvib.numeric.driver import simulate
@@ -314,6 +315,11 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
     if len(w) != m or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {len(w)}")
     given = _check_bounds(bounds)
+    for name in set(given) & set(free):     # beyond them the scene is refused: steps there would just fail
+        (low, high), (d_low, d_high) = given[name], _default_bounds(scene, name)
+        if low < d_low or high > d_high:
+            raise ValueError(f"bounds.{name}: ({low:g}, {high:g}) reaches beyond the values the scene allows, "
+                             f"[{d_low:g}, {d_high:g}] (mu <= mu_s, k <= 1, q0 between the limiters)")
     bounds = {name: given.get(name, _default_bounds(scene, name)) for name in free}
     problem = _Problem(scene, free, run or (lambda s: simulate(s, samples=samples)),
                        *(np.array([bounds[n][i] for n in free]) for i in (0, 1)), weights is not None,
@@ -438,6 +444,9 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
         message += f"; {int(np.sum(~usable))} observation(s) without derivatives left out of the steps"
     if matched < len(observed.t):
         message += f"; the model makes only {matched} of the {len(observed.t)} observed events in their order and kinds"
+    for name, v, low, high in zip(free, x, lo, hi):
+        if v in (low, high):     # (the data may want it beyond: a minimum on the bound is not theirs)
+            message += f"; {name} = {v:g} is at its bound ({'low' if v == low else 'high'})"
     return _result(status, message, problem.at(x), free, x, J, r, w, problem.absolute, matched, iterations,
                    tuple(history))
 
