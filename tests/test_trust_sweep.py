@@ -672,3 +672,23 @@ def test_the_issues_overflow_inputs_fail_a_sweep(tmp_path, capsys):
         ok = ~res.failed
         for name in ("t_final", "q_final", "E0", "E_final", "friction_work", "impact_loss"):
             assert np.isfinite(res[name][ok]).all()
+
+
+# --------------------------------------------------------------------- static friction in sweeps
+
+@pytest.mark.parametrize("base, vary, field, text", [
+    ({"mu_s": 0.1}, {"mu": "0.05,0.2"}, "physics.mu_s", "is below the kinetic mu = 0.2"),
+    ({"mu_s": 0.1}, {"alpha0": "0.05,0.2"}, "physics.mu_s", "is below the kinetic mu = 0.2027"),
+    ({}, {"mu_s": "-0.1,0.3"}, "physics.mu_s", "must be >= 0"),
+    ({}, {"alpha0_s": "0.2,2.0"}, "physics.alpha0_s", "[0, pi/2)"),
+    ({}, {"mu_s": "0.2,0.3", "alpha0_s": "0.2,0.3"}, "vary", "not both"),
+    ({}, {"mu_s": "nan,0.3"}, "vary.mu_s", "not allowed"),
+])
+def test_rows_of_bad_static_friction_are_refused_naming_the_field_and_row(base, vary, field, text):
+    from symvib.numeric.scene import resolve_scene
+    from symvib.numeric.sweep import sweep as sweep_scene
+
+    with pytest.raises(SceneError) as info:
+        sweep_scene(resolve_scene("paper-parabola").replace(**base), vary, backend="python")
+    assert info.value.field == field and text in str(info.value), str(info.value)
+    assert "\n" not in str(info.value)
