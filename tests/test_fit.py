@@ -193,6 +193,8 @@ OBSERVED = observed_events([0.1, 0.2, 0.3])
     ({"free": None}, "free: a sequence of names"),
     ({"free": 5}, "free: a sequence of names"),
     ({"free": [1]}, "free: .* must be distinct names"),
+    ({"free": ("mu_s",)}, r"free: \('mu_s',\) must be distinct names from mu, k"),   # static friction: not fitted
+    ({"free": ("__import__('os')",)}, "free: .* must be distinct names"),
     ({"bounds": {"muu": (0, 1)}}, "bounds: 'muu' is not a parameter"),
     ({"bounds": {"mu": 5}}, r"bounds.mu: a pair \(low, high\) of numbers, got 5"),
     ({"bounds": {"mu": ("a", "b")}}, "bounds.mu: a pair"),
