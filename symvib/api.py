@@ -117,8 +117,14 @@ def fit(scene, observed, free=("mu", "k"), **options):
     if isinstance(observed, (str, Path)):
         observed = read_observations(observed)
     elif isinstance(observed, dict):
+        if "t" not in observed or not set(observed) <= {"t", "q", "x", "z", "s"}:
+            raise ValueError(f"observed: a dict of samples has the keys t with q, or x and z, or s; got "
+                             f"{', '.join(map(repr, observed)) or 'none'}")
         observed = observed_samples(**observed)
     elif not isinstance(observed, (Observed, ObservedSamples)):
+        if not hasattr(observed, "__iter__") or isinstance(observed, bytes):
+            raise ValueError(f"observed: a CSV file, a list of impact times, a dict of samples or observed "
+                             f"events or samples, got {type(observed).__name__}")
         times = list(observed)
         observed = observed_events(times, kinds=["impact"] * len(times))   # what a microphone hears
     prepared = prepare(scene)

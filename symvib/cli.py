@@ -189,12 +189,19 @@ def _inside(path, folder):
 
 
 def _cmd_fit(args) -> int:
+    from pathlib import Path
+
     from symvib.api import fit
     from symvib.numeric.fit import read_observations
-    from symvib.paths import check_output_file
+    from symvib.paths import UserPathError, check_output_file
 
     if args.plot:
         check_output_file(args.plot, "--plot file")
+        if Path(args.plot).suffix.lower() != ".png":     # checked before the fit, not by Matplotlib after it
+            raise UserPathError(args.plot, "the --plot file is a PNG figure: its name must end in .png")
+        for given, what in ((args.data, "data"), (args.scene, "scene")):
+            if Path(args.plot).resolve() == Path(given).resolve():
+                raise UserPathError(args.plot, f"--plot would overwrite the {what} file")
     free = tuple(p.strip() for p in args.free.split(",") if p.strip())
     observed = read_observations(args.data)
     weights = None

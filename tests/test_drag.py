@@ -146,3 +146,35 @@ def test_parabola_quadrature_against_a_30_digit_time_integration():
             for q, qdot in _integrated(c, sig, 1, values, q0, qdot0, ("0.04",)):
                 v2 = h(q) ** 2 * qdot**2
                 assert abs(v2 - w(q)) <= AGREEMENT * v2
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"seconds": "5"}, "seconds: a number of seconds in"), ({"seconds": float("nan")}, "seconds: .* got nan"),
+    ({"seconds": -1}, "seconds: .* got -1"), ({"seconds": float("inf")}, "seconds: .* got inf"),
+    ({"seconds": 1e300}, "seconds: .* got 1e"), ({"seconds": True}, "seconds: .* got True"),
+    ({"seconds": None}, "seconds: .* got None"), ({"seconds": 1j}, "seconds: .* got 1j"),
+    ({"arc_seconds": "x"}, "arc_seconds: a number of seconds in"), ({"arc_seconds": float("nan")}, "arc_seconds"),
+    ({"arc_seconds": -0.5}, "arc_seconds: .* got -0.5"),
+    ({"forms": "evil"}, "forms: 'evil' is not one of simplest, direct"), ({"forms": None}, "forms: None"),
+])
+def test_hostile_budgets_and_forms_are_refused_naming_the_argument(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        derive_drag("circle", **kwargs)
+
+
+@pytest.mark.parametrize("curve, error, match", [
+    ("nosuch", KeyError, "unknown shape 'nosuch'; known shapes: "), ("../../etc/passwd", KeyError, "unknown shape"),
+    ("__import__('os')", KeyError, "unknown shape"), ("", KeyError, "unknown shape ''"),
+    ("CIRCLE", KeyError, "unknown shape 'CIRCLE'"),
+    (None, TypeError, "needs a Curve, a Shape or a shape name, not NoneType"), (5, TypeError, "not int"),
+])
+def test_a_curve_that_is_not_one_is_refused_naming_what_was_given(curve, error, match):
+    with pytest.raises(error, match=match):
+        derive_drag(curve, seconds=0, arc_seconds=0)
+
+
+def test_numpy_budgets_are_accepted():
+    import numpy as np
+
+    d = derive_drag("circle", seconds=np.float64(0.0), arc_seconds=np.int64(0))
+    assert str(d.arc_length) == "R*phi" and d.branches[(1, 1)].D is None

@@ -1,4 +1,5 @@
 """Fitting parameters to observed event times (symvib/numeric/fit.py, symvib.fit, symvib fit)."""
+import re
 import subprocess
 import sys
 import warnings
@@ -11,6 +12,7 @@ import symvib
 from symvib.numeric.driver import simulate
 from symvib.numeric.fit import fit, observed_events, read_events
 from symvib.numeric.scene import resolve_scene, scene_from_dict
+from symvib.paths import UserPathError
 
 TRUTH = resolve_scene("paper-parabola").replace(mu=0.03, k=0.8)
 
@@ -181,3 +183,129 @@ def test_95_percent_intervals_cover_the_truth_90_to_99_percent_of_the_time():
             hits[j] += abs(result.estimates[name] - true) <= 1.96 * result.stderr[name]
     coverage = hits / runs
     assert np.all((coverage >= 0.90) & (coverage <= 0.99)), coverage
+
+
+OBSERVED = observed_events([0.1, 0.2, 0.3])
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"free": "mu"}, r"free: a sequence of names .* got 'mu'"),
+    ({"free": None}, "free: a sequence of names"),
+    ({"free": 5}, "free: a sequence of names"),
+    ({"free": [1]}, "free: .* must be distinct names"),
+    ({"free": ("mu_s",)}, r"free: \('mu_s',\) must be distinct names from mu, k"),   # static friction: not fitted
+    ({"free": ("__import__('os')",)}, "free: .* must be distinct names"),
+    ({"bounds": {"muu": (0, 1)}}, "bounds: 'muu' is not a parameter"),
+    ({"bounds": {"mu": 5}}, r"bounds.mu: a pair \(low, high\) of numbers, got 5"),
+    ({"bounds": {"mu": ("a", "b")}}, "bounds.mu: a pair"),
+    ({"bounds": {"mu": (1, 2, 3)}}, "bounds.mu: a pair"),
+    ({"bounds": {"mu": (1, 0)}}, "bounds.mu: low <= high"),
+    ({"bounds": {"mu": (float("nan"), 1)}}, "bounds.mu: low <= high, neither NaN"),
+    ({"bounds": [(0, 1)]}, "bounds: a dict of parameter"),
+    ({"bounds": {"mu": (-1, 1)}}, r"bounds.mu: \(-1, 1\) reaches beyond the values the scene allows, \[0, inf\]"),
+    ({"free": ("k",), "bounds": {"k": (0, 5)}}, r"bounds.k: .* \[0, 1\]"),
+    ({"free": ("q0",), "bounds": {"q0": (-10, 10)}}, r"bounds.q0: .* reaches beyond"),
+    ({"scene": TRUTH.replace(mu_s=0.04), "bounds": {"mu": (0, 1)}}, r"bounds.mu: .* \[0, 0.04\]"),
+    ({"weights": "abc"}, "weights: one positive finite 1/sigma per observation"),
+    ({"weights": [1, float("inf"), 1]}, "weights: one positive finite"),
+    ({"weights": [1, 1]}, "weights: one positive finite"),
+    ({"max_iterations": -1}, "max_iterations: a whole number of at least 1"),
+    ({"max_iterations": 0}, "max_iterations: a whole number"),
+    ({"max_iterations": "5"}, "max_iterations: a whole number"),
+    ({"max_iterations": float("nan")}, "max_iterations: a whole number"),
+    ({"max_iterations": True}, "max_iterations: a whole number"),
+    ({"xtol": -1}, "xtol: a positive finite number"),
+    ({"xtol": float("nan")}, "xtol: a positive finite number"),
+    ({"xtol": "1e-3"}, "xtol: a positive finite number"),
+    ({"observed": [0.1, 0.2]}, "observed: events .* or samples .* got list"),
+    ({"observed": None}, "observed: events"),
+    ({"scene": "paper-parabola"}, "scene: a Scene"),
+])
+def test_hostile_fit_arguments_are_refused_naming_the_argument(kwargs, match):
+    args = {"scene": TRUTH, "observed": OBSERVED, "free": ("mu",)} | kwargs
+    with pytest.raises(ValueError, match=match):
+        fit(args.pop("scene"), args.pop("observed"), **args)
+
+
+@pytest.mark.parametrize("kinds, match", [
+    ("impact", r"observed.kind: one kind per time \(a list such as \['impact'\]\), not a string"),
+    ([None], "observed.kind: event 1 is 'none'"),
+])
+def test_kinds_that_are_not_a_list_of_kinds_are_refused(kinds, match):
+    with pytest.raises(ValueError, match=match):
+        observed_events([0.1], kinds=kinds)
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--sigma", "nan"], "--sigma: must be a positive number"),
+    (["--sigma", "-1"], "--sigma: must be a positive number"),
+    (["--sigma", "inf"], "--sigma: must be a positive number"),
+    (["--sigma", "abc"], "invalid float value"),
+    (["--free", ","], r"free: \(\) must be distinct names"),
+    (["--free", "mu,mu"], "free: .* must be distinct names"),
+    (["--free", "__import__"], "free: .* must be distinct names"),
+    (["--plot", "{data}"], "the --plot file is a PNG figure"),
+    (["--plot", "{folder}/"], "is a directory; the --plot file must be a file name"),
+    (["--plot", "{folder}/figure"], "the --plot file is a PNG figure"),
+    (["--plot", "{folder}/scene.toml"], "the --plot file is a PNG figure"),
+    (["--plot", "/dev/null"], "is not a regular file"),
+    (["--plot", "{png_data}"], "--plot would overwrite the data file"),
+])
+def test_hostile_fit_command_lines_are_one_line_errors_before_the_fit(args, match, tmp_path, capsys):
+    from symvib.cli import main
+
+    data = tmp_path / "impacts.csv"
+    data.write_text("t,kind\n0.3,impact\n0.9,impact\n", encoding="utf-8")
+    png_data = tmp_path / "impacts.png"
+    png_data.write_text(data.read_text(encoding="utf-8"), encoding="utf-8")
+    names = {"data": str(data), "folder": str(tmp_path), "png_data": str(png_data)}
+    given = png_data if "{png_data}" in args else data
+    args = [a.format(**names) for a in args]
+    try:
+        code = main(["fit", "paper-parabola", str(given), *args])
+    except SystemExit as exc:                                  # argparse's own errors
+        code = exc.code
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert code == 2 and "estimates" not in captured.out and "Traceback" not in captured.err
+    assert re.search(match, err[-1]), err
+    assert png_data.read_text(encoding="utf-8").startswith("t,kind") and not list(tmp_path.glob("*.png"))[1:]
+
+
+@pytest.mark.parametrize("text, match", [
+    ('t,q\n"' + "1" * 200_000 + '",0\n', "row 2: not comma-separated values"),   # csv.Error: was a traceback
+    ('t,q\n0.1,"0', "row 2: not comma-separated values"),
+    ("\ufefft,kind\r\n0.1,bounce\r\n", "observed.kind: event 1 is 'bounce'"),
+    ("t,q\n0.1,nan\n", "row 2, column q: 'nan' is not a finite number"),
+])
+def test_hostile_data_files_through_the_cli_are_one_line_errors(text, match, tmp_path, capsys):
+    from symvib.cli import main
+
+    data = tmp_path / "data.csv"
+    data.write_text(text, encoding="utf-8")
+    assert main(["fit", "paper-parabola", str(data)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and re.search(match, err) and str(data) in err and len(err) < 1000, err
+
+
+def test_the_residual_figure_is_never_written_through_a_link(tmp_path):
+    result = fit(TRUTH, observed_events(impact_times(TRUTH, 3), kinds=["impact"] * 3), free=("mu",))
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me", encoding="utf-8")
+    link = tmp_path / "res.png"
+    link.symlink_to(victim)
+    with pytest.raises(UserPathError, match="is a symbolic link; symvib never writes through one"):
+        result.plot(link)                                    # (was: written through the link)
+    assert victim.read_text(encoding="utf-8") == "keep me" and link.is_symlink()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["res.png", "victim.txt"]   # no temporary left
+    result.plot(tmp_path / "plain.png")
+    assert (tmp_path / "plain.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_an_estimate_held_on_its_bound_says_so():
+    # the data come from mu = 0.05, but the scene's static friction mu_s = 0.04 bounds mu (mu <= mu_s)
+    obs = observed_events(impact_times(TRUTH.replace(mu=0.05), 5), kinds=["impact"] * 5)
+    result = fit(TRUTH.replace(mu=0.03, mu_s=0.04), obs, free=("mu",))
+    assert result.estimates["mu"] == 0.04 and "mu = 0.04 is at its bound (high)" in result.message
+    free = fit(TRUTH.replace(mu=0.03), obs, free=("mu",))
+    assert free.estimates["mu"] == pytest.approx(0.05, rel=1e-8) and "bound" not in free.message

@@ -11,6 +11,7 @@ from symvib.numeric.fit import fit, observed_samples, read_observations, read_sa
 from symvib.numeric.fit_data import Observed, ObservedSamples
 from symvib.numeric.sample_sensitivity import sample_positions
 from symvib.numeric.scene import resolve_scene
+from symvib.paths import UserPathError
 
 TRUTH = resolve_scene("paper-parabola").replace(mu=0.03, k=0.8)
 TIMES = np.linspace(0.05, 6.0, 30)
@@ -92,7 +93,7 @@ def test_a_csv_file_is_told_events_or_samples_by_its_columns(tmp_path):
     assert isinstance(read_observations(write("t\n0.1\n0.3\n")), Observed)
     for text, match in (("t,x\n0.1,0.5\n", "needs a column t"),
                         ("t,q\n0.2,0.5\n0.1,0.4\n", "observed.t: the times must be ascending"),
-                        ("t,q\n0.1,nan\n", "observed.q: sample 1 is not a finite number"),
+                        ("t,q\n0.1,nan\n", "row 2, column q: 'nan' is not a finite number"),
                         ("t,s\n0.1,__import__('os')\n", "row 2, column s: .* is not a number"),
                         ("t,x,z\n0.1,0.5\n", "row 2 has 2 cells for 3 columns"),
                         ("t,q,Q\n0.1,0.5,0.5\n", "names column 'q' twice")):
@@ -115,3 +116,88 @@ def test_symvib_fit_on_the_command_line_detects_a_sampled_trajectory(tmp_path):
     help_text = " ".join(subprocess.run([sys.executable, "-m", "symvib.cli", "fit", "--help"], capture_output=True,
                                         text=True, timeout=600).stdout.split())
     assert "sampled trajectory" in help_text and "x,z" in help_text
+
+
+#: Hostile data files -> what the error says (each names the file, and the row and column or the header).
+HOSTILE_CSV = {
+    "nan time": ("t,q\nnan,0.1\n0.2,0.1\n", "row 2, column t: 'nan' is not a finite number"),
+    "inf position": ("t,q\n0.1,inf\n", "row 2, column q: 'inf' is not a finite number"),
+    "overflowing number": ("t,q\n0.1,1e999\n", "row 2, column q: '1e999' is not a finite number"),
+    "digit separator": ("t,q\n1_0,0.1\n", "row 2, column t: '1_0' is not a number"),
+    "arabic-indic digit": ("t,q\n\u0661,0\n", "row 2, column t: .* is not a number"),
+    "nul byte": ("t,q\n\x00,0\n", "row 2, column t: .* is not a number"),
+    "semicolons": ("t;q\n0.1;0\n", "separate the columns by commas"),
+    "tabs": ("t\tq\n0.1\t0\n", "separate the columns by commas"),
+    "unnamed column": ("t,,q\n0.1,,0\n", "column 2 has no name"),
+    "x without z": ("t,x\n0.1,0\n", "or t with q, x and z, or s"),
+    "s and q": ("t,s,q\n0.1,0,0\n", "or t with q, x and z, or s"),
+    "unknown column": ("t,y\n0.1,0\n", "needs a column t"),
+    "header only": ("t,q\n", r"data.csv: observed.t: no sample times"),
+    "descending": ("t,q\n0.2,0\n0.1,0\n", r"data.csv: observed.t: the times must be ascending"),
+    "negative time": ("t,q\n-0.1,0\n", r"data.csv: observed.t: sample 1 is at -0.1 s"),
+    "code as kind": ("t,kind\n0.1,impact\n0.2,__import__('os')\n", r"data.csv: observed.kind: event 2 is"),
+    "unclosed quote": ('"t\n,q\n0.1,0\n', "row 3: not comma-separated values .*unexpected end of data"),
+    "unclosed quote at the end": ('t,q\n0.1,"0', "row 2: not comma-separated values"),
+    "text after a quote": ('t,q\n"0.1"x,0\n', "row 2: not comma-separated values"),
+    "cell beyond the csv field limit": ('t,q\n"' + "1" * 200_000 + '",0\n', "row 2: not comma-separated .*limit"),
+    "wide header": ("t," + ",".join(f"c{i}" for i in range(60_000)) + "\n", r"has 60001 columns; .* at most 3"),
+    "long column name": ("t," + "q" * 100_000 + "\n0.1,0\n", r"header \['t', 'qqqq.*\.\.\.: needs a column t"),
+    "long kind": ("t,kind\n0.1," + "x" * 100_000 + "\n", r"observed.kind: event 1 is 'xxxx.*\.\.\., not one of"),
+    "long cell": ("t,q\n0.1," + "9" * 400 + "x\n", r"row 2, column q: '9999.*\.\.\. is not a number"),
+    "short row": ("t,q\n0.1\n", "row 2 has 1 cells for 2 columns"),
+    "duplicate upper case": ("t,q,Q\n0.1,0,0\n", "names column 'q' twice"),
+    "empty": ("", "empty; give a header row"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(HOSTILE_CSV))
+def test_hostile_data_files_are_refused_naming_the_file_and_the_cell(case, tmp_path):
+    text, match = HOSTILE_CSV[case]
+    path = tmp_path / "data.csv"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ValueError, match=match) as info:
+        read_observations(path)
+    assert str(path) in str(info.value) and "\n" not in str(info.value) and len(str(info.value)) < 1000
+
+
+@pytest.mark.parametrize("raw, kind, t", [
+    (b"\xef\xbb\xbft,q\r\n0.1,0.0\r\n0.2,0.01\r\n", ObservedSamples, [0.1, 0.2]),   # spreadsheet: BOM, CRLF
+    (b" T , Q \n0.1,0\n", ObservedSamples, [0.1]),                                     # spaces, upper case
+    (b'kind,t\nimpact,"0.1"\n', Observed, [0.1]),                                      # columns swapped, quoted
+])
+def test_spreadsheet_exports_are_read(raw, kind, t, tmp_path):
+    path = tmp_path / "data.csv"
+    path.write_bytes(raw)
+    observed = read_observations(path)
+    assert isinstance(observed, kind) and observed.t.tolist() == t
+
+
+def test_a_utf16_data_file_is_refused_naming_the_file(tmp_path):
+    path = tmp_path / "data.csv"
+    path.write_text("t,q\n0.1,0\n", encoding="utf-16")
+    with pytest.raises(UserPathError, match="data.csv: data file is not UTF-8"):
+        read_observations(path)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"t": "abc", "q": [1, 2, 3]}, "observed.t: give numbers"),
+    ({"t": [1j, 2j], "q": [1, 2]}, "observed.t: give numbers"),
+    ({"t": [0.1, 0.2, 0.3], "q": ["a", "b", "c"]}, "observed.q: give numbers"),
+    ({"t": [0.1], "x": {"a": 1}, "z": [0]}, "observed.x: give numbers"),
+    ({"t": None, "q": [1]}, "observed.t: time 1 is not a finite number"),
+])
+def test_samples_that_are_not_numbers_are_refused_naming_the_field(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        observed_samples(kwargs.pop("t"), **kwargs)
+
+
+@pytest.mark.parametrize("observed, match", [
+    ({"t": [0.1, 0.2], "y": [0.0, 0.1]}, "observed: a dict of samples has the keys t with q.*'y'"),
+    ({"q": [0.0, 0.1]}, "observed: a dict of samples has the keys t"),
+    (0.5, "observed: a CSV file, a list of impact times.*got float"),
+    (None, "observed: a CSV file, a list of impact times.*got NoneType"),
+    (["a", "b"], "observed.t: give numbers"),
+])
+def test_the_top_level_fit_refuses_observations_of_the_wrong_shape(observed, match):
+    with pytest.raises(ValueError, match=match):
+        symvib.fit("paper-parabola", observed, free=("mu",))

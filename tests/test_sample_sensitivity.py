@@ -135,6 +135,33 @@ def test_unknown_coordinates_are_refused():
         sample_sensitivities(simulate("paper-parabola"), [0.1], coordinates="y")
 
 
+@pytest.mark.parametrize("function", [sample_sensitivities, sample_positions])
+@pytest.mark.parametrize("kwargs, match", [
+    ({"coordinates": "y"}, "coordinates: 'y' is not one of q, xz, s"),        # sample_positions gave q's values
+    ({"coordinates": ["q"]}, r"coordinates: \['q'\] is not one of"),
+    ({"coordinates": None}, "coordinates: None is not one of"),
+    ({"t": "abc"}, "t: sample times in seconds"),
+    ({"t": [0.1, "x"]}, "t: sample times in seconds"),
+    ({"t": [1j]}, "t: sample times in seconds"),
+    ({"t": [float("nan")]}, "t: .*nan"),
+    ({"t": [-5.0]}, "t: .*-5.0"),
+    ({"result": None}, "result: a run of symvib.simulate, got NoneType"),
+    ({"result": "paper-parabola"}, "result: a run of symvib.simulate, got str"),
+])
+def test_hostile_samples_requests_are_refused_naming_the_argument(function, kwargs, match):
+    args = {"result": simulate(resolve_scene("paper-parabola").replace(t_max=1.0)), "t": [0.1],
+            "coordinates": "q"} | kwargs
+    with pytest.raises(ValueError, match=match):
+        function(args.pop("result"), args.pop("t"), coordinates=args.pop("coordinates"))
+
+
+def test_a_run_without_intervals_is_refused_naming_the_dense_output():
+    res = simulate("paper-parabola", samples=False)
+    for function in (sample_sensitivities, sample_positions):
+        with pytest.raises(ValueError, match="dense output: this run kept no intervals"):
+            function(res, [0.1])
+
+
 def test_samples_inside_the_interval_a_run_stopped_in_say_why():
     res = simulate(resolve_scene("paper-parabola").replace(t_max=1.0))
     last = res.events[-1].t

@@ -144,12 +144,49 @@ def test_scene_is_immutable_and_round_trips():
     ({"alpha0_s": "3 furlongs"}, "physics.alpha0_s", "unknown unit"),
     ({"mu_s": 0.1, "alpha0_s": 0.1}, "physics", "mu_s or alpha0_s"),
     ({"mu_s": 0.1, "alpha0_s": "atan(0.1)"}, "physics", "not both"),
+    ({"mu_s": "oo"}, "physics.mu_s", "not allowed"),
+    ({"mu_s": "__import__('os')"}, "physics.mu_s", "not allowed"),
+    ({"mu_s": None}, "physics.mu_s", "must be a number or an expression string"),
+    ({"mu_s": {"a": 1}}, "physics.mu_s", "must be a number or an expression string"),
+    ({"mu_s": 10 ** 400}, "physics.mu_s", "number too large"),
+    ({"mu_s": ""}, "physics.mu_s", "empty expression"),
+    ({"mu_s": "\uff10.3"}, "physics.mu_s", "invalid character"),
+    ({"mu_s": "1/0"}, "physics.mu_s", "division by zero"),
+    ({"mu_s": "I"}, "physics.mu_s", "not allowed"),
+    ({"mu_s": "p"}, "physics.mu_s", "not allowed"),
+    ({"mu_s": 0}, "physics.mu_s", "below the kinetic mu"),
+    ({"alpha0_s": float("nan")}, "physics.alpha0_s", "finite"),
+    ({"alpha0_s": "pi/2"}, "physics.alpha0_s", "[0, pi/2)"),
+    ({"alpha0_s": False}, "physics.alpha0_s", "must be a number"),
+    ({"alpha0_s": "__import__('os')"}, "physics.alpha0_s", "not allowed"),
 ])
 def test_bad_static_friction_names_the_field(physics, field, text):
     with pytest.raises(SceneError) as info:
         scene_from_dict(base(physics={"g": 9.81, "m": 0.2, "alpha0": 0.05, "restitution": 0.8, **physics}))
     assert info.value.field == field, str(info.value)
     assert text in str(info.value)
+
+
+@pytest.mark.parametrize("changes, field, text", [
+    ({"mu_s": float("nan")}, "physics.mu_s", "finite"),
+    ({"mu_s": "0.3"}, "physics.mu_s", "must be a number, got '0.3'"),
+    ({"mu_s": [0.2]}, "physics.mu_s", "must be a number"),
+    ({"mu_s": 1j}, "physics.mu_s", "must be a number"),
+    ({"alpha0_s": "0.3"}, "physics.alpha0_s", "must be a number"),
+    ({"alpha0_s": -0.2}, "physics.alpha0_s", "[0, pi/2)"),
+    ({"alpha0_s": float("nan")}, "physics.alpha0_s", "finite"),
+    ({"mu_s": 0.3, "alpha0_s": 0.5}, "physics.alpha0_s", "give one of them"),
+])
+def test_bad_static_friction_through_replace_names_the_field(changes, field, text):
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(base()).replace(**changes)
+    assert info.value.field == field and text in str(info.value), str(info.value)
+
+
+def test_a_new_kinetic_mu_above_a_given_static_one_is_refused_naming_mu_s():
+    with pytest.raises(SceneError, match="below the kinetic mu = 0.5") as info:
+        scene_from_dict(base()).replace(mu_s=0.3).replace(mu=0.5)
+    assert info.value.field == "physics.mu_s"
 
 
 def test_static_below_kinetic_says_why_and_what_to_change():

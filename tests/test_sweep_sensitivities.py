@@ -59,7 +59,11 @@ def test_rows_without_derivatives_are_nan_and_say_why():
 
 
 @pytest.mark.parametrize("wrt, match", [(("nu",), "sensitivities: 'nu'"), (("mu", "mu"), "distinct"),
-                                        ("mu,left", "no left limiter")])
+                                        ("mu,left", "no left limiter"), (5, r"give parameter names .* got 5"),
+                                        (1.5, "give parameter names"), ([1], "sensitivities: 1: give distinct"),
+                                        (b"mu", "sensitivities: 109"), ("mu;k", "'mu;k': give distinct"),
+                                        ("mu,,mu", "distinct"), ("MU", "'MU'"), ("\u03bc", "sensitivities: '\u03bc'"),
+                                        ("mu_s", "'mu_s'"), ("__import__('os').system('true')", "give distinct")])
 def test_bad_sensitivity_names_are_refused_naming_the_option(wrt, match):
     scene = resolve_scene("paper-circle-3.8")          # no left limiter
     with pytest.raises(SceneError, match=match):
@@ -111,3 +115,22 @@ def test_a_definition_with_bad_sensitivities_is_refused_naming_the_key(value, ma
     definition["sensitivities"] = value
     with pytest.raises(SweepError, match=f"definition.sensitivities.*{match}"):
         SweepSpec.from_dict(definition)
+
+
+@pytest.mark.parametrize("axis, values, base", [("mu_s", "0.2,0.3", BASE), ("physics.mu_s", "0.1,0.25", BASE),
+                                                ("alpha0_s", "0.2,0.3", BASE.replace(mu_s=0.3))])
+def test_a_sweep_of_static_friction_has_each_row_s_single_scene_sensitivities(axis, values, base):
+    res = sweep(base, {axis: values}, backend="python", sensitivities=("mu", "k"))
+    field = "physics." + axis.split(".")[-1]
+    for row in range(2):
+        scene = base.replace(**{field.split(".")[1]: float(res[field][row])})
+        final = symvib.simulate(scene).sensitivities(wrt=("mu", "k")).final
+        assert res["d_t_final_d_mu"][row] == pytest.approx(final["t_final"][0], rel=1e-12)
+        assert res["d_q_final_d_k"][row] == pytest.approx(final["q_final"][1], rel=1e-12, abs=1e-15)
+
+
+def test_every_sweepable_field_has_a_scene_attribute_for_the_sensitivity_rows():
+    from symvib.numeric.sweep.axes import FIELDS
+    from symvib.numeric.sweep.sensitivity_columns import SCENE_ATTRIBUTES
+
+    assert set(FIELDS) == set(SCENE_ATTRIBUTES)

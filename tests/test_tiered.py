@@ -10,10 +10,12 @@ import subprocess
 import sys
 import textwrap
 import time
+import warnings
 from pathlib import Path
 
 import pytest
 
+from symvib.numeric import tiered
 from symvib.numeric.driver import backend_available
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -225,3 +227,19 @@ def test_turned_off_the_tier_leaves_auto_to_the_disk_cache(tmp_path, monkeypatch
     assert {r.stats["backend"] for r in results} == {"python"} and not tiered.children_of_tiers()
     monkeypatch.setattr(bind_module, "is_compiled", lambda module, entry="simulate_bound": True)
     assert driver.run_backend(scene.shape) == "numba"
+
+
+@pytest.mark.parametrize("value, enabled", [("off", False), (" OFF\n", False), ("0", False), ("False", False),
+                                            ("", True), ("on", True), ("Yes", True), ("1", True)])
+def test_symvib_tier_values_turn_the_tiered_engine_on_or_off(value, enabled):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert tiered.tier_enabled({"SYMVIB_TIER": value}) is enabled
+
+
+@pytest.mark.parametrize("value", ["disabled", "of", "never", "\uff4f\uff46\uff46", "off;rm -rf /", "$(id)",
+                                   "x" * 10_000])
+def test_an_unknown_symvib_tier_value_keeps_the_tiered_engine_off_and_names_the_variable(value):
+    with pytest.warns(tiered.TierWarning, match=r"\$SYMVIB_TIER=.* is not one of on, 1, yes, true or off") as info:
+        assert tiered.tier_enabled({"SYMVIB_TIER": value}) is False
+    assert len(str(info[0].message)) < 300

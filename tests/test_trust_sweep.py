@@ -608,6 +608,19 @@ def test_the_issues_race_two_processes_one_folder(tmp_path, capsys):
     ('scene = "paper-parabola"\n[vary]\nqdot = [[1, 2], [3, 4]]\n', "vary.qdot"),
     ('scene = "paper-parabola"\n[vary]\nqdot = 1979-05-27\n', "vary.qdot"),
     ('scene = "paper-parabola"\n[vary.qdot]\nstart = 3\nstop = 12\ncount = 1000000000\n', "vary.qdot"),
+    # the session's new surfaces: sensitivity columns and static friction
+    ('scene = "paper-parabola"\nsensitivities = 5\n[vary]\nqdot = "6,7"\n', "sensitivities"),
+    ('scene = "paper-parabola"\nsensitivities = ["mu", 1]\n[vary]\nqdot = "6,7"\n', "sensitivities"),
+    ('scene = "paper-parabola"\nsensitivities = "nu"\n[vary]\nqdot = "6,7"\n', "sensitivities: 'nu'"),
+    ('scene = "paper-parabola"\nsensitivities = "__import__(\'os\')"\n[vary]\nqdot = "6,7"\n', "sensitivities"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = "nan,0.3"\n', "vary.mu_s"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = [0.2, "x"]\n', "vary.mu_s: name 'x'"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = "-0.1,0.3"\n', "physics.mu_s: static friction coefficient must be >= 0"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = "0.01,0.3"\n', "physics.mu_s: static friction coefficient 0.01"),
+    ('scene = "paper-parabola"\n[vary]\nalpha0_s = "0.2,2.0"\n', "physics.alpha0_s: friction angle must be in"),
+    ('scene = "paper-parabola"\n[vary]\nmu_s = "0.2,0.3"\nalpha0_s = "0.2,0.3"\n', "vary: vary mu_s or alpha0_s"),
+    ('scene = "paper-parabola"\n[vary.mu_s]\nlow = 0.2\nhigh = 0.3\n', "vary.mu_s: a table of start, stop"),
+    ('scene = "paper-parabola"\n[vary.mu_s]\nstart = 0.2\n', "'stop' is missing"),
 ])
 def test_hostile_sweep_files_are_one_line_errors(tmp_path, capsys, text, field):
     sw = tmp_path / "sweep.toml"
@@ -659,3 +672,23 @@ def test_the_issues_overflow_inputs_fail_a_sweep(tmp_path, capsys):
         ok = ~res.failed
         for name in ("t_final", "q_final", "E0", "E_final", "friction_work", "impact_loss"):
             assert np.isfinite(res[name][ok]).all()
+
+
+# --------------------------------------------------------------------- static friction in sweeps
+
+@pytest.mark.parametrize("base, vary, field, text", [
+    ({"mu_s": 0.1}, {"mu": "0.05,0.2"}, "physics.mu_s", "is below the kinetic mu = 0.2"),
+    ({"mu_s": 0.1}, {"alpha0": "0.05,0.2"}, "physics.mu_s", "is below the kinetic mu = 0.2027"),
+    ({}, {"mu_s": "-0.1,0.3"}, "physics.mu_s", "must be >= 0"),
+    ({}, {"alpha0_s": "0.2,2.0"}, "physics.alpha0_s", "[0, pi/2)"),
+    ({}, {"mu_s": "0.2,0.3", "alpha0_s": "0.2,0.3"}, "vary", "not both"),
+    ({}, {"mu_s": "nan,0.3"}, "vary.mu_s", "not allowed"),
+])
+def test_rows_of_bad_static_friction_are_refused_naming_the_field_and_row(base, vary, field, text):
+    from symvib.numeric.scene import resolve_scene
+    from symvib.numeric.sweep import sweep as sweep_scene
+
+    with pytest.raises(SceneError) as info:
+        sweep_scene(resolve_scene("paper-parabola").replace(**base), vary, backend="python")
+    assert info.value.field == field and text in str(info.value), str(info.value)
+    assert "\n" not in str(info.value)

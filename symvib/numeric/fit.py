@@ -164,7 +164,10 @@ class FitResult:
                      fontsize=9)
         fig.tight_layout()
         if path is not None:
-            fig.savefig(path, dpi=120)
+            from symvib import safeio
+
+            with safeio.replacing_file(path, what="residual figure") as fh:   # never through a link there
+                fig.savefig(fh, format="png", dpi=120)
             plt.close(fig)
         return fig
 
@@ -258,7 +261,8 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
     bounds : dict, optional
         Parameter -> ``(low, high)``; default: the physical ranges (``mu >= 0``, and ``mu <= mu_s``
         where the scene gives static friction, ``0 <= k <= 1``, ``q0`` between the limiters, a
-        limiter on its side of ``q0``).
+        limiter on its side of ``q0``); given bounds lie within those (the scene is refused
+        beyond them).  An estimate on a bound is named in the message.
     weights : array, optional
         ``1 / sigma`` of each observation (times, then positions; for samples each coordinate at
         every sample, ``x`` then ``z``).
@@ -272,10 +276,24 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
         Naming ``free`` (unknown, repeated, a missing limiter, more parameters than
         observations), ``observed.kind`` (a kind the scene cannot make), ``observed.t`` (a sample
         after the end of the start's run), ``weights`` (not one positive finite number per
-        observation) or ``scene`` (a run that failed).
+        observation), ``bounds`` (not a dict of parameter -> ``(low, high)``, ``low <= high``,
+        within the physical ranges), ``max_iterations`` (not a whole number >= 1), ``xtol`` (not positive and finite),
+        ``observed`` (not events or samples) or ``scene`` (not a Scene, or a run that failed).
     """
     from symvib.numeric.driver import simulate
 
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene: a Scene (symvib.load_scene), got {type(scene).__name__}")
+    if not isinstance(observed, (Observed, ObservedSamples)):
+        raise ValueError(f"observed: events (observed_events, read_events) or samples (observed_samples, "
+                         f"read_samples), got {type(observed).__name__}")
+    if isinstance(free, str) or not hasattr(free, "__iter__"):
+        raise ValueError(f"free: a sequence of names from {', '.join(PARAMETERS)} (such as ('mu', 'k')), "
+                         f"got {free!r:.80}")
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, (int, np.integer)) or max_iterations < 1:
+        raise ValueError(f"max_iterations: a whole number of at least 1, got {max_iterations!r:.80}")
+    if not isinstance(xtol, (int, float, np.number)) or not (0 < xtol < math.inf):
+        raise ValueError(f"xtol: a positive finite number, got {xtol!r:.80}")
     free = tuple(free)
     if not free or len(set(free)) != len(free) or any(p not in PARAMETERS for p in free):
         raise ValueError(f"free: {free!r} must be distinct names from {', '.join(PARAMETERS)}")
@@ -290,10 +308,19 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
     if not samples and observed.kinds and ("impact" in observed.kinds or "rest_on_limiter" in observed.kinds) \
             and scene.left is None and scene.right is None:
         raise ValueError("observed.kind: impacts observed, but the scene has no limiter to make them")
-    w = np.ones(m) if weights is None else np.asarray(weights, dtype=float).ravel()
+    try:
+        w = np.ones(m) if weights is None else np.asarray(weights, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {weights!r:.80}") from None
     if len(w) != m or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {len(w)}")
-    bounds = {name: (bounds or {}).get(name, _default_bounds(scene, name)) for name in free}
+    given = _check_bounds(bounds)
+    for name in set(given) & set(free):     # beyond them the scene is refused: steps there would just fail
+        (low, high), (d_low, d_high) = given[name], _default_bounds(scene, name)
+        if low < d_low or high > d_high:
+            raise ValueError(f"bounds.{name}: ({low:g}, {high:g}) reaches beyond the values the scene allows, "
+                             f"[{d_low:g}, {d_high:g}] (mu <= mu_s, k <= 1, q0 between the limiters)")
+    bounds = {name: given.get(name, _default_bounds(scene, name)) for name in free}
     problem = _Problem(scene, free, run or (lambda s: simulate(s, samples=samples)),
                        *(np.array([bounds[n][i] for n in free]) for i in (0, 1)), weights is not None,
                        _sample_model if samples else _model)
@@ -314,6 +341,26 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
             return result
     return dataclasses.replace(result, iterations=total, history=tuple(history),
                                data=observed.coordinates if samples else "events")
+
+
+def _check_bounds(bounds) -> dict:
+    """The given ``bounds`` as ``name -> (low, high)`` floats, or an error naming ``bounds``."""
+    if bounds is None:
+        return {}
+    if not isinstance(bounds, dict):
+        raise ValueError(f"bounds: a dict of parameter -> (low, high), got {type(bounds).__name__}")
+    checked = {}
+    for name, pair in bounds.items():
+        if name not in PARAMETERS:
+            raise ValueError(f"bounds: {name!r} is not a parameter ({', '.join(PARAMETERS)})")
+        try:
+            low, high = (float(v) for v in pair)
+        except (TypeError, ValueError):
+            raise ValueError(f"bounds.{name}: a pair (low, high) of numbers, got {pair!r:.80}") from None
+        if math.isnan(low) or math.isnan(high) or low > high:
+            raise ValueError(f"bounds.{name}: low <= high, neither NaN (infinite for none), got {pair!r:.80}")
+        checked[name] = (low, high)
+    return checked
 
 
 def _stages(n_obs: int, n_free: int) -> list:
@@ -397,6 +444,9 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
         message += f"; {int(np.sum(~usable))} observation(s) without derivatives left out of the steps"
     if matched < len(observed.t):
         message += f"; the model makes only {matched} of the {len(observed.t)} observed events in their order and kinds"
+    for name, v, low, high in zip(free, x, lo, hi):
+        if v in (low, high):     # (the data may want it beyond: a minimum on the bound is not theirs)
+            message += f"; {name} = {v:g} is at its bound ({'low' if v == low else 'high'})"
     return _result(status, message, problem.at(x), free, x, J, r, w, problem.absolute, matched, iterations,
                    tuple(history))
 

@@ -39,6 +39,8 @@ __all__ = ["Observed", "ObservedSamples", "observed_events", "observed_samples",
 CSV_COLUMNS = ("t", "kind", "q")
 #: Column sets of a file of samples (besides ``t``) -> the coordinates they give.
 SAMPLE_COLUMNS = {("q",): "q", ("x", "z"): "xz", ("s",): "s"}
+#: Most columns a data file has (``t, kind, q`` or ``t, x, z``).
+MAX_COLUMNS = 3
 
 
 @dataclass(frozen=True)
@@ -86,8 +88,22 @@ class ObservedSamples:
         return ObservedSamples(self.t[:n], self.coordinates, self.values[:n])
 
 
+def _show(value, limit: int = 80) -> str:
+    """``repr(value)``, cut to about ``limit`` characters (a cell or a header of a hostile file may be long)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+def _floats(values, name: str) -> np.ndarray:
+    """``values`` as a flat float array, or an error naming ``observed.<name>``."""
+    try:
+        return np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"observed.{name}: give numbers (a sequence of floats), got {values!r:.80}") from None
+
+
 def _check_times(t, what: str) -> np.ndarray:
-    t = np.asarray(t, dtype=float).ravel()
+    t = _floats(t, "t")
     if not len(t):
         raise ValueError(f"observed.t: no {what}")
     if not np.all(np.isfinite(t)):
@@ -110,15 +126,17 @@ def observed_events(t, kinds=None, q=None) -> Observed:
     """
     t = _check_times(t, "event times")
     if kinds is not None:
+        if isinstance(kinds, str):
+            raise ValueError(f"observed.kind: one kind per time (a list such as [{kinds!r:.40}]), not a string")
         kinds = tuple(str(k).strip().lower() for k in kinds)
         valid = {k.value for k in EventKind}
         for i, k in enumerate(kinds):
             if k not in valid:
-                raise ValueError(f"observed.kind: event {i + 1} is {k!r}, not one of {', '.join(sorted(valid))}")
+                raise ValueError(f"observed.kind: event {i + 1} is {_show(k)}, not one of {', '.join(sorted(valid))}")
         if len(kinds) != len(t):
             raise ValueError(f"observed.kind: {len(kinds)} kinds for {len(t)} times")
     if q is not None:
-        q = np.asarray(q, dtype=float).ravel()
+        q = _floats(q, "q")
         if len(q) != len(t) or not np.all(np.isfinite(q)):
             raise ValueError("observed.q: one finite position per time")
     return Observed(t, kinds, q)
@@ -143,7 +161,7 @@ def observed_samples(t, *, q=None, x=None, z=None, s=None) -> ObservedSamples:
     for name, v in (("q", q), ("x", x), ("z", z), ("s", s)):
         if v is None:
             continue
-        v = np.asarray(v, dtype=float).ravel()
+        v = _floats(v, name)
         if len(v) != len(t):
             raise ValueError(f"observed.{name}: {len(v)} values for {len(t)} times")
         if not np.all(np.isfinite(v)):
@@ -157,14 +175,25 @@ def _read_columns(path, what: str) -> tuple:
     """The header (lower case) and the columns of a CSV file, numbers as floats (``kind`` as text)."""
     from symvib.paths import read_user_file
 
-    text = read_user_file(path, what=what)
-    rows = list(csv.reader(text.splitlines()))
+    text = read_user_file(path, what=what).removeprefix("\ufeff")   # a byte-order mark (spreadsheet export)
+    reader = csv.reader(text.splitlines(), strict=True)
+    try:
+        rows = list(reader)
+    except csv.Error as exc:     # a stray or unclosed quote, a cell beyond the module's field limit
+        raise ValueError(f"{path}: row {reader.line_num}: not comma-separated values ({exc})") from None
     if not rows:
         raise ValueError(f"{path}: empty; give a header row (events: t[, kind][, q]; samples: t with q, x,z or s)")
     header = [h.strip().lower() for h in rows[0]]
+    if len(header) > MAX_COLUMNS:     # (before any work per column: a header of 100,000 names)
+        raise ValueError(f"{path}: header {_show(rows[0])} has {len(header)} columns; a data file has at most "
+                         f"{MAX_COLUMNS} (events: t, kind, q; samples: t with q, x and z, or s)")
     twice = sorted({h for h in header if header.count(h) > 1})
     if twice:
-        raise ValueError(f"{path}: header {rows[0]!r} names column {twice[0]!r} twice")
+        raise ValueError(f"{path}: header {_show(rows[0])} names column {_show(twice[0])} twice")
+    if len(header) == 1 and any(sep in header[0] for sep in ";\t"):
+        raise ValueError(f"{path}: header {_show(rows[0])}: separate the columns by commas, not semicolons or tabs")
+    if "" in header:
+        raise ValueError(f"{path}: header {_show(rows[0])}: column {header.index('') + 1} has no name")
     columns = {h: [] for h in header}
     for number, row in enumerate(rows[1:], start=2):
         if not any(cell.strip() for cell in row):
@@ -176,9 +205,14 @@ def _read_columns(path, what: str) -> tuple:
                 columns[h].append(cell)
                 continue
             try:
-                columns[h].append(float(cell))
+                if not cell.isascii() or "_" in cell:     # float() reads "1_0" as 10 and other scripts' digits
+                    raise ValueError
+                value = float(cell)
             except ValueError:
-                raise ValueError(f"{path}: row {number}, column {h}: {cell!r} is not a number") from None
+                raise ValueError(f"{path}: row {number}, column {h}: {_show(cell)} is not a number") from None
+            if not np.isfinite(value):
+                raise ValueError(f"{path}: row {number}, column {h}: {_show(cell.strip())} is not a finite number")
+            columns[h].append(value)
     return rows[0], header, columns
 
 
@@ -203,12 +237,19 @@ def read_observations(path):
 def _events(path, raw, header, columns) -> Observed:
     unknown = [h for h in header if h not in CSV_COLUMNS]
     if "t" not in header or unknown:
-        raise ValueError(f"{path}: header {raw!r}: needs a column t and only {', '.join(CSV_COLUMNS)}")
-    return observed_events(columns["t"], columns.get("kind"), columns.get("q"))
+        raise ValueError(f"{path}: header {_show(raw)}: needs a column t and only {', '.join(CSV_COLUMNS)} (events), "
+                         "or t with q, x and z, or s (a sampled trajectory)")
+    try:
+        return observed_events(columns["t"], columns.get("kind"), columns.get("q"))
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc} (data rows counted from 1 after the header)") from None
 
 
 def _samples(path, raw, header, columns) -> ObservedSamples:
     rest = tuple(sorted(h for h in header if h != "t"))
     if "t" not in header or rest not in SAMPLE_COLUMNS:
-        raise ValueError(f"{path}: header {raw!r}: a sampled trajectory needs t and q, or t, x, z, or t, s")
-    return observed_samples(columns["t"], **{h: columns[h] for h in rest})
+        raise ValueError(f"{path}: header {_show(raw)}: a sampled trajectory needs t and q, or t, x, z, or t, s")
+    try:
+        return observed_samples(columns["t"], **{h: columns[h] for h in rest})
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc} (data rows counted from 1 after the header)") from None

@@ -102,9 +102,7 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
         Naming ``t`` (not finite, before the start or after the run's end), ``coordinates``,
         or (from the event sensitivities) ``wrt`` and ``result``.
     """
-    if coordinates not in COORDINATES:
-        raise ValueError(f"coordinates: {coordinates!r} is not one of {', '.join(COORDINATES)}")
-    times = np.asarray(t, dtype=float).ravel()
+    times = _checked(result, t, coordinates)
     dense = result.dense
     bad = ~np.isfinite(times) | (times < 0) | (times > dense.t_max)
     if bad.any():
@@ -125,8 +123,21 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
 
 def sample_positions(result, t, coordinates="q", *, prepared=None) -> np.ndarray:
     """The model's coordinates at times ``t`` (shape (n, len(COORDINATES[coordinates]))), no derivatives."""
-    q = np.asarray(result.dense.state(np.asarray(t, dtype=float).ravel())[0], dtype=float).reshape(-1)
+    times = _checked(result, t, coordinates)
+    q = np.asarray(result.dense.state(times)[0], dtype=float).reshape(-1)
     return _coordinates(result, q, coordinates, prepared)[0]
+
+
+def _checked(result, t, coordinates) -> np.ndarray:
+    """The sample times as floats, once ``result`` and ``coordinates`` are what they should be."""
+    if not hasattr(result, "dense") or not hasattr(result, "scene"):
+        raise ValueError(f"result: a run of symvib.simulate, got {type(result).__name__}")
+    if not isinstance(coordinates, str) or coordinates not in COORDINATES:
+        raise ValueError(f"coordinates: {coordinates!r:.80} is not one of {', '.join(COORDINATES)}")
+    try:
+        return np.asarray(t, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(f"t: sample times in seconds (numbers), got {t!r:.80}") from None
 
 
 def _kernels(result, prepared):

@@ -46,8 +46,10 @@ __all__ = ["TIER_ENV", "TIER_CALLS", "TIER_SECONDS", "TierWarning", "tier_enable
 
 #: Environment variable that turns the tiered engine off (``off``, ``0``, ``no`` or ``false``).
 TIER_ENV = "SYMVIB_TIER"
-#: Values of :data:`TIER_ENV` that turn it off.
+#: Values of :data:`TIER_ENV` that turn it off, and that leave it on (any other value also turns it
+#: off, with a :class:`TierWarning` naming the variable: a misspelt "of" must not start compiles).
 TIER_OFF = ("off", "0", "no", "false")
+TIER_ON = ("", "on", "1", "yes", "true")
 #: Plain runs of one curve before a compile may start: a notebook's few runs, or a command's
 #: one, never start one (the compile takes a core for about 20 s); a loop passes it at once.
 TIER_CALLS = 50
@@ -66,9 +68,14 @@ class TierWarning(RuntimeWarning):
 
 
 def tier_enabled(environ=os.environ) -> bool:
-    """Whether background compiles may start: not with ``$SYMVIB_TIER=off`` nor a forced ``$SYMVIB_BACKEND``."""
-    return (environ.get(TIER_ENV, "").strip().lower() not in TIER_OFF
-            and not environ.get("SYMVIB_BACKEND"))
+    """Whether background compiles may start: not with ``$SYMVIB_TIER=off`` (or a value not in
+    :data:`TIER_ON`, with a warning) nor a forced ``$SYMVIB_BACKEND``."""
+    value = environ.get(TIER_ENV, "").strip().lower()
+    if value not in TIER_ON + TIER_OFF:
+        warnings.warn(f"symvib: ${TIER_ENV}={value!r:.40} is not one of {', '.join(v for v in TIER_ON if v)} or "
+                      f"{', '.join(TIER_OFF)}; the tiered engine stays off", TierWarning, stacklevel=2)
+        return False
+    return value not in TIER_OFF and not environ.get("SYMVIB_BACKEND")
 
 
 class _Tier:

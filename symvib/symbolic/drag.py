@@ -33,6 +33,7 @@ R*phi
 """
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import sympy as sp
@@ -49,7 +50,7 @@ from symvib.symbolic.symbols import C, g, mu
 gamma_drag = sp.Symbol("gamma_drag", nonnegative=True)
 
 __all__ = ["gamma_drag", "DragBranch", "DragDerivation", "derive_drag", "arc_length", "BRANCHES", "ARC_SECONDS",
-           "INTEGRAL_SECONDS"]
+           "INTEGRAL_SECONDS", "MAX_SECONDS"]
 
 #: The branches ``(sigma, n)``: sign of the velocity, sign of the normal force.
 BRANCHES = ((1, 1), (1, -1), (-1, 1), (-1, -1))
@@ -57,6 +58,8 @@ BRANCHES = ((1, 1), (1, -1), (-1, 1), (-1, -1))
 ARC_SECONDS = 5.0
 #: Budget (seconds, a child process) of one closed-form attempt at ``D`` (one branch).
 INTEGRAL_SECONDS = 5.0
+#: Largest budget a derivation takes (a day), as ``symvib derive --budget``.
+MAX_SECONDS = 86_400.0
 #: Ranges of the symbols a numeric identity check draws (``gamma`` in 1/length of the curve's scale).
 CHECK_RANGES = {C: (1.0, 20.0), g: (1.0, 20.0), mu: (0.01, 0.5), gamma_drag: (0.0, 2.0)}
 
@@ -210,7 +213,8 @@ def derive_drag(curve, *, seconds: float = INTEGRAL_SECONDS, arc_seconds: float 
     curve : Curve, Shape or str
         A curve, or the name of a catalogue shape.
     seconds : float
-        Budget of each branch's closed-form attempt at ``D`` (0: none, quadrature only).
+        Budget of each branch's closed-form attempt at ``D`` (0: none, quadrature only; at most
+        :data:`MAX_SECONDS`).
     arc_seconds : float
         Budget of the arc length's closed-form attempt.
     forms : {"simplest", "direct"}
@@ -220,6 +224,12 @@ def derive_drag(curve, *, seconds: float = INTEGRAL_SECONDS, arc_seconds: float 
     -------
     DragDerivation
 
+    Raises
+    ------
+    ValueError
+        Naming ``seconds`` or ``arc_seconds`` (not a number in ``[0, MAX_SECONDS]``), or a curve
+        parameter called ``gamma_drag``.
+
     Examples
     --------
     >>> d = derive_drag("parabola", seconds=0)
@@ -228,6 +238,10 @@ def derive_drag(curve, *, seconds: float = INTEGRAL_SECONDS, arc_seconds: float 
     >>> d.check()[(-1, 1)]
     'symbolic'
     """
+    for name, value in (("seconds", seconds), ("arc_seconds", arc_seconds)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value <= MAX_SECONDS:
+            raise ValueError(f"{name}: a number of seconds in [0, {MAX_SECONDS:g}] (0: no closed-form attempt), "
+                             f"got {value!r:.80}")
     c = _as_curve(curve)
     if any(p.name == gamma_drag.name for p in c.params):
         raise ValueError(f"curve parameter {gamma_drag.name!r} is the drag's own symbol: rename it")

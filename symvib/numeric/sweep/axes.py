@@ -204,6 +204,11 @@ def parse_axis(scene: Scene, key: str, spec, random: bool) -> Axis:
             raise SceneError(label, exc.reason) from None
 
     if isinstance(spec, dict):
+        keys = set(map(str, spec))
+        if not {"start", "stop"} <= keys <= {"start", "stop", "count"}:
+            wrong = sorted(keys - {"start", "stop", "count"}) or sorted({"start", "stop"} - keys)
+            raise SceneError(label, f"a table of start, stop (and count for a grid); {wrong[0]!r:.40} is "
+                                    f"{'unknown' if wrong[0] in keys else 'missing'}")
         spec = [spec.get("start"), spec.get("stop")] + ([spec["count"]] if "count" in spec else [])
         spec = ":".join(str(v) for v in spec)
     if isinstance(spec, str) and ":" in spec:

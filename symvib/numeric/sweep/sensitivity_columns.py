@@ -54,7 +54,8 @@ _KEYWORDS = ((2, "friction cone"), (3, "grazing"), (4, "zeno"), (5, "normal forc
              (7, "quadrature"), (9, "starts at rest"))
 #: Varied field -> the :class:`~symvib.numeric.scene.Scene` attribute it sets.
 SCENE_ATTRIBUTES = {"initial.q": "q0", "initial.qdot": "qdot0", "physics.mu": "mu", "physics.alpha0": "alpha0",
-                    "physics.restitution": "k", "physics.g": "g", "physics.m": "m", "limiters.left": "left",
+                    "physics.mu_s": "mu_s", "physics.alpha0_s": "alpha0_s", "physics.restitution": "k",
+                    "physics.g": "g", "physics.m": "m", "limiters.left": "left",
                     "limiters.right": "right", "run.t_max": "t_max", "run.max_events": "max_events"}
 #: Units of the parameters (``{q}``: the curve coordinate's).
 PARAMETER_UNITS = {"mu": "1", "k": "1", "qdot0": "{q}/s", "q0": "{q}", "left": "{q}", "right": "{q}"}
@@ -75,8 +76,11 @@ def check_wrt(scene, wrt, axes=()) -> tuple:
     """
     if isinstance(wrt, str):
         wrt = tuple(p.strip() for p in wrt.split(",") if p.strip())
-    wrt = tuple(wrt or ())
-    unknown = [p for p in wrt if p not in PARAMETERS]
+    try:
+        wrt = tuple(wrt or ())
+    except TypeError:
+        raise SceneError("sensitivities", f"give parameter names (a list, or 'mu,k'), got {wrt!r:.80}") from None
+    unknown = [p for p in wrt if not isinstance(p, str) or p not in PARAMETERS]
     if unknown or len(set(wrt)) != len(wrt):
         raise SceneError("sensitivities", f"{unknown[0] if unknown else wrt!r}: give distinct names from "
                                           f"{', '.join(PARAMETERS)}")
