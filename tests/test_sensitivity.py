@@ -183,6 +183,19 @@ def test_unknown_or_repeated_parameters_are_refused_naming_wrt(wrt, match):
         sensitivities(res, wrt=wrt)
 
 
+@pytest.mark.parametrize("wrt, match", [(5, "got int"), (None, "got NoneType"), ((5,), "5"), ("m", "'m'")])
+def test_parameters_that_are_not_names_are_refused_naming_wrt(wrt, match):
+    res = simulate("paper-parabola")
+    with pytest.raises(ValueError, match=f"wrt: .*{match}"):
+        sensitivities(res, wrt=wrt)
+
+
+def test_one_name_is_one_parameter_not_its_letters():
+    res = simulate("paper-parabola")
+    one, listed = sensitivities(res, wrt="mu"), sensitivities(res, wrt=("mu",))
+    assert one.wrt == ("mu",) and np.array_equal(one.t, listed.t, equal_nan=True)
+
+
 def test_a_missing_limiter_is_refused_naming_it():
     res = simulate(resolve_scene("paper-circle-3.8"))       # no left limiter
     with pytest.raises(ValueError, match="no left limiter"):

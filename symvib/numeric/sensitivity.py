@@ -354,8 +354,9 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
     ----------
     result : symvib.numeric.events.Result
         A run of :func:`symvib.simulate` (its scene and events are read; nothing runs again).
-    wrt : sequence of str
-        Names from :data:`PARAMETERS` (``left``/``right`` only where the scene has that limiter).
+    wrt : str or sequence of str
+        Names from :data:`PARAMETERS` (``left``/``right`` only where the scene has that limiter);
+        one name alone is one parameter.
     prepared : Prepared, optional
         The scene's prepared curve (default: :func:`symvib.numeric.prepared.prepared_of`).
 
@@ -372,7 +373,13 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
     from symvib.numeric.prepared import prepared_of
 
     scene = result.scene
-    wrt = tuple(wrt)
+    if isinstance(wrt, str):   # one name, not its letters
+        wrt = (wrt,)
+    try:
+        wrt = tuple(wrt)
+    except TypeError:
+        raise ValueError(f"wrt: expected names of parameters from {', '.join(PARAMETERS)}, "
+                         f"got {type(wrt).__name__}") from None
     unknown = [p for p in wrt if p not in PARAMETERS]
     if unknown or len(set(wrt)) != len(wrt) or not wrt:
         raise ValueError(f"wrt: {unknown[0] if unknown else wrt!r} is not a list of distinct parameters from "
