@@ -242,11 +242,11 @@ def derive_drag(curve, *, seconds: float = INTEGRAL_SECONDS, arc_seconds: float 
         if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value <= MAX_SECONDS:
             raise ValueError(f"{name}: a number of seconds in [0, {MAX_SECONDS:g}] (0: no closed-form attempt), "
                              f"got {value!r:.80}")
-    c = _as_curve(curve)
+    plain = derive(curve, routes=(), forms=forms)   # eq. 1 without drag (no routes: F_sigma is not needed)
+    c = plain.curve                                   # (derive resolves a shape name and refuses a non-curve)
     if any(p.name == gamma_drag.name for p in c.params):
         raise ValueError(f"curve parameter {gamma_drag.name!r} is the drag's own symbol: rename it")
     S = arc_length(c, seconds=arc_seconds)
-    plain = derive(c, routes=(), forms=forms)   # eq. 1 without drag (no F_sigma needed: no routes)
     branches = {}
     for sig, n in BRANCHES:
         s = sig * n
@@ -258,14 +258,3 @@ def derive_drag(curve, *, seconds: float = INTEGRAL_SECONDS, arc_seconds: float 
         branches[(sig, n)] = DragBranch(sigma=sig, n=n, s=s, A=A, B=B, Phi=Phi, integrand=f, D=D)
     return DragDerivation(curve=c, arc_length=S, branches=branches)
 
-
-def _as_curve(curve) -> Curve:
-    if isinstance(curve, str):
-        from symvib.shapes import shape
-
-        return shape(curve).curve()
-    if not isinstance(curve, Curve) and hasattr(curve, "curve"):
-        curve = curve.curve()
-    if not isinstance(curve, Curve):
-        raise TypeError(f"derive_drag() needs a Curve, a Shape or a shape name, not {type(curve).__name__}")
-    return curve
