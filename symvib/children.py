@@ -32,9 +32,10 @@ import os
 import signal
 import sys
 import threading
+import weakref
 
-__all__ = ["tether", "worker_pool", "Terminated", "terminate_as_exception", "WATCHDOG_SECONDS",
-           "CPU_MARGIN_SECONDS", "EXIT_INTERRUPTED", "EXIT_TERMINATED"]
+__all__ = ["tether", "worker_pool", "Terminated", "terminate_as_exception", "own", "disown", "WATCHDOG_SECONDS",
+           "CPU_MARGIN_SECONDS", "GRACE_SECONDS", "EXIT_INTERRUPTED", "EXIT_TERMINATED"]
 
 #: Seconds between two checks of the watchdog thread for a parent that died.
 WATCHDOG_SECONDS = 0.2
@@ -47,6 +48,10 @@ EXIT_INTERRUPTED = 128 + signal.SIGINT
 EXIT_TERMINATED = 128 + signal.SIGTERM
 #: Seconds to wait for a killed worker to exit.
 _JOIN_SECONDS = 5.0
+#: Seconds a process interrupted or terminated within :func:`terminate_as_exception` has to leave the
+#: block; past them the exception was swallowed on its way (raised inside a C extension's import it
+#: becomes an ``ImportError``; inside a finalizer it is ignored), and the process exits at once.
+GRACE_SECONDS = 3.0
 #: ``prctl`` option that sets the signal a process receives when its parent dies (linux/prctl.h).
 _PR_SET_PDEATHSIG = 1
 
@@ -100,8 +105,12 @@ def tether(parent: int, cpu_seconds: float | None = None) -> None:
     # A forked child inherits the parent's Python handlers: SIGTERM would raise Terminated here, in
     # whatever the child was doing (an import, a job), and print its traceback on the shared stderr
     # when the parent's pool shuts it down.  A child just ends on SIGTERM.
+    # Likewise SIGINT, and the parent's registry of children (a forked copy: its processes are not ours).
     with contextlib.suppress(ValueError):  # (not the main thread: nothing was inherited there)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        if signal.getsignal(signal.SIGINT) is _on_signal:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+    _OWNED.clear()
     _death_signal()
     if os.getppid() != parent:
         _die()
@@ -126,6 +135,29 @@ def _limit_cpu(seconds: float) -> None:
         resource.setrlimit(resource.RLIMIT_CPU, (soft, hard))
 
 
+#: Children this process kills at once when a signal ends it (:func:`terminate_as_exception`): objects
+#: with a ``kill()`` method (a pool's workers, a budgeted child); weakly held.
+_OWNED: "weakref.WeakSet" = weakref.WeakSet()
+
+
+def own(child):
+    """Register ``child`` (anything with ``kill()``) to be killed the moment SIGTERM or SIGINT arrives
+    within :func:`terminate_as_exception`, before any ``finally`` block runs; returns it."""
+    _OWNED.add(child)
+    return child
+
+
+def disown(child) -> None:
+    """Forget a child registered by :func:`own` (it ended, or was stopped)."""
+    _OWNED.discard(child)
+
+
+def _kill_owned() -> None:
+    for child in list(_OWNED):
+        with contextlib.suppress(Exception):
+            child.kill()
+
+
 def _stop(pool) -> None:
     """Cancel the jobs of a :class:`~concurrent.futures.ProcessPoolExecutor` and kill its workers now."""
     kill = getattr(pool, "kill_workers", None)  # Python 3.14
@@ -148,6 +180,7 @@ class _Pool:
 
     def __init__(self, pool):
         self._pool = pool
+        own(self)
 
     def __getattr__(self, name):
         return getattr(self._pool, name)
@@ -156,11 +189,20 @@ class _Pool:
         return self
 
     def __exit__(self, kind, value, trace):
-        if kind is None:
-            self._pool.shutdown(wait=True)
-        else:
-            _stop(self._pool)
+        try:
+            if kind is None:
+                self._pool.shutdown(wait=True)
+            else:
+                _stop(self._pool)
+        finally:
+            disown(self)
         return False
+
+    def kill(self) -> None:
+        """SIGKILL every worker now (nothing awaited: safe in a signal handler)."""
+        for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
+            with contextlib.suppress(Exception):
+                proc.kill()
 
 
 def worker_pool(workers: int, method: str | None = None):
@@ -194,23 +236,83 @@ class Terminated(BaseException):
     """SIGTERM, raised in the main thread so that ``finally`` blocks stop child processes."""
 
 
-def _raise_terminated(signum, frame):
+class _Signals:
+    """What :func:`terminate_as_exception` saw: ``signum`` of the first SIGTERM or SIGINT, else ``None``."""
+
+    def __init__(self, label):
+        self.label = label
+        self.signum = None
+        self.timer = None
+
+
+#: The state of the innermost :func:`terminate_as_exception` block (``None`` outside one).
+_ACTIVE: "_Signals | None" = None
+
+
+def exit_code(signum: int) -> int:
+    """The exit status after ``signum`` (:data:`EXIT_INTERRUPTED` or :data:`EXIT_TERMINATED`)."""
+    return EXIT_INTERRUPTED if signum == signal.SIGINT else EXIT_TERMINATED
+
+
+def _force_exit(state: _Signals) -> None:
+    what = "interrupted" if state.signum == signal.SIGINT else "terminated"
+    with contextlib.suppress(Exception):
+        _kill_owned()
+        print(f"{state.label}: {what}", file=sys.stderr, flush=True)
+    os._exit(exit_code(state.signum))
+
+
+def _on_signal(signum, frame):
+    state = _ACTIVE
+    if state is not None and state.signum is None:
+        state.signum = signum
+        # The children go first, here: the exception below may be swallowed on its way.
+        _kill_owned()
+        state.timer = threading.Timer(GRACE_SECONDS, _force_exit, (state,))
+        state.timer.daemon = True
+        state.timer.start()
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
     raise Terminated(f"terminated (signal {signum})")
 
 
 @contextlib.contextmanager
-def terminate_as_exception():
-    """Within the block, SIGTERM raises :class:`Terminated` in the main thread (elsewhere: no change).
+def terminate_as_exception(label: str = "symvib"):
+    """Within the block, SIGTERM raises :class:`Terminated` and SIGINT ``KeyboardInterrupt`` in the
+    main thread, after killing the children registered by :func:`own` (elsewhere: no change).
 
     The default action of SIGTERM ends the process without running ``finally`` blocks or
     context managers, so a pool would not be shut down; as an exception it unwinds the stack.
-    The previous handler is restored on leaving.
+    An exception raised by a signal handler can be lost on its way (inside a C extension's
+    import it becomes an ``ImportError``, inside a finalizer it is ignored), so the children
+    are killed in the handler itself, the block's state records the signal (``signum``; the
+    caller reports it even when the exception never arrived), and a process that has not
+    left the block :data:`GRACE_SECONDS` after the signal prints ``"<label>: interrupted"``
+    (or ``terminated``) and exits at once with :func:`exit_code`.  A SIGINT that is ignored
+    (a shell's background job) stays ignored.  The previous handlers are restored on leaving.
+
+    Yields
+    ------
+    state
+        Its ``signum`` is the first SIGTERM or SIGINT received in the block, else ``None``.
     """
+    global _ACTIVE
+    state = _Signals(label)
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield state
         return
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    outer = _ACTIVE
+    previous_term = signal.signal(signal.SIGTERM, _on_signal)
+    previous_int = signal.getsignal(signal.SIGINT)
+    if previous_int is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _on_signal)
+    _ACTIVE = state
     try:
-        yield
+        yield state
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        _ACTIVE = outer
+        if state.timer is not None:
+            state.timer.cancel()
+        signal.signal(signal.SIGTERM, previous_term)
+        if previous_int is signal.default_int_handler:
+            signal.signal(signal.SIGINT, previous_int)

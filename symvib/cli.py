@@ -694,20 +694,32 @@ def main(argv=None) -> int:
         args = build_parser().parse_args(argv)
         command = args.command
         run = lambda: args.func(args)  # noqa: E731
-    from symvib.children import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated, terminate_as_exception
+    import signal
+
+    from symvib.children import Terminated, exit_code, terminate_as_exception
+
+    def ended_by(signum):
+        # Child processes were killed when the signal arrived, and the finally blocks on the way
+        # here stopped the rest (symvib.children).
+        print(f"symvib {command}: {'interrupted' if signum == signal.SIGINT else 'terminated'}", file=sys.stderr)
+        return exit_code(signum)
 
     _progress_on_terminal(command)
+    state = None
     try:
-        with terminate_as_exception():
-            return run()
+        with terminate_as_exception(f"symvib {command}") as state:
+            outcome = run()
     except KeyboardInterrupt:
-        # Child processes were stopped by the finally blocks on the way here (symvib.children).
-        print(f"symvib {command}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return ended_by(signal.SIGINT)
     except Terminated:
-        print(f"symvib {command}: terminated", file=sys.stderr)
-        return EXIT_TERMINATED
-    except _user_errors() as exc:
+        return ended_by(signal.SIGTERM)
+    except BaseException as exc:
+        if state is not None and state.signum is not None:
+            # The signal's exception was lost on its way (raised inside a C extension's import it
+            # became an ImportError; killed workers broke a pool): the signal is what happened.
+            return ended_by(state.signum)
+        if not isinstance(exc, _user_errors()):
+            raise
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
         if isinstance(exc, (RecursionError, MemoryError)):
             message = f"input too large or too deeply nested ({type(exc).__name__})"
@@ -715,6 +727,9 @@ def main(argv=None) -> int:
             message = type(exc).__name__
         print(f"symvib {command}: error: {one_line(message)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if state.signum is not None:  # the signal's exception was swallowed: the command did not finish
+        return ended_by(state.signum)
+    return outcome
 
 
 def run() -> None:

@@ -273,3 +273,82 @@ def test_a_pool_worker_forked_under_terminate_as_exception_ends_quietly_on_sigte
     with children.terminate_as_exception():
         with children.worker_pool(1, "fork") as pool:
             assert pool.submit(_sigterm_handler_is_default).result(timeout=HANG_GUARD) is True
+
+
+#: A command whose signal exception is lost on its way, as an interrupted import of a C extension
+#: loses it (``ImportError: initialization failed``; seen under load in ``symvib paper``).
+LOST_SIGNAL = textwrap.dedent("""
+    import sys, time
+    import symvib.paper.report as report
+    from symvib.children import worker_pool
+
+    def run_paper(out_dir, **kwargs):
+        with worker_pool(1) as pool:
+            pool.submit(time.sleep, 600)
+            print("ready", flush=True)
+            while True:
+                try:
+                    time.sleep(0.05)
+                except BaseException:
+                    raise ImportError("initialization failed") from None
+    report.run_paper = run_paper
+    from symvib.cli import main
+    sys.exit(main(["paper", "--out", sys.argv[1], "--quiet"]))
+""")
+
+#: A process that swallows the signal's exception and works on inside the block.
+SWALLOWED_SIGNAL = textwrap.dedent("""
+    import time
+    from symvib.children import terminate_as_exception, worker_pool
+    with terminate_as_exception("swallower"), worker_pool(1) as pool:
+        pool.submit(time.sleep, 600)
+        print("ready", flush=True)
+        for _ in range(12000):
+            try:
+                time.sleep(0.05)
+            except BaseException:
+                pass
+""")
+
+
+@pytest.mark.parametrize("signum", (signal.SIGINT, signal.SIGTERM), ids=lambda s: signal.Signals(s).name)
+def test_a_signal_whose_exception_is_lost_still_ends_the_command(tmp_path, signum):
+    """The workers die at the signal, and the command reports the signal, not the ImportError it became."""
+    proc = _start([sys.executable, "-c", LOST_SIGNAL, str(tmp_path / "paper")], env=_cli_env(tmp_path))
+    assert proc.stdout.readline().strip() == "ready"
+    kids = _wait_for_children(proc)
+    os.kill(proc.pid, signum)
+    _assert_gone(kids, time.monotonic())
+    code, err = _finish(proc)
+    assert code == children.exit_code(signum)
+    what = "interrupted" if signum == signal.SIGINT else "terminated"
+    assert err.strip().splitlines() == [f"symvib paper: {what}"], err
+
+
+@pytest.mark.parametrize("signum", (signal.SIGINT, signal.SIGTERM), ids=lambda s: signal.Signals(s).name)
+def test_a_swallowed_signal_ends_the_process_after_its_grace(signum):
+    """Code that catches the signal's exception and works on: its children die at the signal, and
+    the process exits GRACE_SECONDS later with the signal's status and one line."""
+    proc = _start([sys.executable, "-c", SWALLOWED_SIGNAL])
+    assert proc.stdout.readline().strip() == "ready"
+    kids = _wait_for_children(proc)
+    os.kill(proc.pid, signum)
+    start = time.monotonic()
+    _assert_gone(kids, start)
+    code, err = _finish(proc)
+    waited = time.monotonic() - start
+    assert code == children.exit_code(signum)
+    what = "interrupted" if signum == signal.SIGINT else "terminated"
+    assert err.strip().splitlines() == [f"swallower: {what}"], err
+    assert children.GRACE_SECONDS <= waited < children.GRACE_SECONDS + HANG_GUARD / 4
+
+
+def test_a_forked_worker_owns_none_of_its_parents_children():
+    # The registry is copied by fork: a worker interrupted by a Ctrl-C to the group must not kill
+    # its parent's other children (it owns none of them).
+    with children.worker_pool(1, "fork") as pool:
+        assert pool.submit(_owned_count).result(timeout=HANG_GUARD) == 0
+
+
+def _owned_count():
+    return len(children._OWNED)

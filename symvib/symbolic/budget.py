@@ -110,6 +110,7 @@ def start(job, args: tuple, *, seconds: float) -> Running:
     parent, child = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_child, args=(child, job, args, os.getpid(), seconds), daemon=True)
     proc.start()
+    children.own(proc)  # killed at once if a signal ends this process (children.terminate_as_exception)
     child.close()
     return Running(proc, parent, started, seconds)
 
@@ -132,6 +133,7 @@ def finish(running: Running) -> Outcome:
         if proc.is_alive():
             proc.kill()
         proc.join(_JOIN_SECONDS)
+        children.disown(proc)
     elapsed = time.perf_counter() - running.started
     if status == "ok" and isinstance(payload, str):
         try:
