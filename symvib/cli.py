@@ -533,6 +533,20 @@ def _check_sweep_file(data: dict, path) -> None:
             raise SceneError(f"{path.name}:{key}", "must be a non-empty path")
 
 
+def _from_sweep_file(exc, conf: dict, args, given: set):
+    """``exc`` with the sweep file's name before its field when the value it names came from the file
+    (a ``[vary]`` key the command line did not give, or a key no option overrode), as
+    :func:`_check_sweep_file` names it; else ``exc`` itself."""
+    from symvib.numeric.scene import SceneError
+
+    if not conf:
+        return exc
+    root, _, rest = exc.field.partition(".")
+    from_file = (root == "vary" and rest in conf.get("vary", {}) and rest not in given) or (
+        not rest and root in conf and getattr(args, root, None) is None)
+    return SceneError(f"{args.file.name}:{exc.field}", exc.reason) if from_file else exc
+
+
 def build_sweep_parser() -> argparse.ArgumentParser:
     """The options of ``symvib sweep`` (its own parser: :func:`main` forwards the words after ``sweep``)."""
     from pathlib import Path
@@ -616,11 +630,14 @@ def _cmd_sweep(args) -> int:
 
     from symvib.prepare import prepare
 
-    res = sweep(scene, vary, prepared=prepare(scene), random=pick("random", None), seed=pick("seed", 0),
-                chunk=pick("chunk", DEFAULT_CHUNK), log_events=pick("log_events", 0),
-                nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite,
-                scheduler=args.scheduler, progress=not args.quiet, backend=args.backend,
-                storage=pick("format", "npz"), sensitivities=pick("sensitivities", ""))
+    try:
+        res = sweep(scene, vary, prepared=prepare(scene), random=pick("random", None), seed=pick("seed", 0),
+                    chunk=pick("chunk", DEFAULT_CHUNK), log_events=pick("log_events", 0),
+                    nodes=pick("nodes", DEFAULT_NODES), out=out, overwrite=args.overwrite,
+                    scheduler=args.scheduler, progress=not args.quiet, backend=args.backend,
+                    storage=pick("format", "npz"), sensitivities=pick("sensitivities", ""))
+    except SceneError as exc:
+        raise _from_sweep_file(exc, conf, args, given) from None
     names = res.status_names()
     status = ", ".join(f"{s}: {int(np.sum(names == s))}" for s in STATUSES if np.any(names == s))
     events = int(np.sum(res["events"]))

@@ -630,6 +630,21 @@ def test_hostile_sweep_files_are_one_line_errors(tmp_path, capsys, text, field):
     assert err.count("\n") == 1 and field in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("text, extra, prefix", [
+    ('scene = "paper-parabola"\n[vary]\nqdot = "abc"\n', [], "sweep.toml:vary.qdot: name 'abc'"),
+    ('scene = "paper-parabola"\nseed = -1\nrandom = 3\n[vary]\nqdot = "3:12"\n', [], "sweep.toml:seed: "),
+    # the command line's value is the command line's: no file name before it
+    ('scene = "paper-parabola"\n[vary]\nqdot = "3:12:2"\n', ["--vary", "qdot=abc"], "error: vary.qdot: name 'abc'"),
+    ('scene = "paper-parabola"\nseed = 1\nrandom = 3\n[vary]\nqdot = "3:12"\n', ["--seed", "-2"], "error: seed: "),
+])
+def test_a_bad_value_in_a_sweep_file_names_the_file(tmp_path, capsys, text, extra, prefix):
+    sw = tmp_path / "sweep.toml"
+    sw.write_text(text)
+    assert main(["--file", str(sw), "-o", str(tmp_path / "out"), "--quiet", *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and prefix in err, err
+
+
 def test_a_directory_as_sweep_file_is_a_one_line_error(tmp_path, capsys):
     assert main(["--file", str(tmp_path), "-o", str(tmp_path / "out"), "--quiet"]) == 2
     err = capsys.readouterr().err
