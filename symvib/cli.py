@@ -169,12 +169,18 @@ def _cmd_generate(args) -> int:
         return 0
     out = args.out or generated_dir()
     if args.check:
-        problems = codegen.stale(out)
+        from symvib.codegen.jets import stale_jets
+
+        problems = codegen.stale(out) + stale_jets(out, names=args.shapes or None)
         for line in problems:
             print(line)
         print("generated kernels are current" if not problems else f"{len(problems)} problem(s)")
         return 1 if problems else 0
+    from symvib.codegen.jets import generate_jets_catalogue
+
     for path in codegen.generate_catalogue(out, names=args.shapes or None):
+        print(f"wrote {path}")
+    for path in generate_jets_catalogue(out, names=args.shapes or None):   # the sensitivities' jets
         print(f"wrote {path}")
     return 0
 
