@@ -180,7 +180,8 @@ def test_a_hostile_curve_name_never_reaches_the_jets_source_or_its_file_name(tmp
 
 def test_a_plain_run_never_loads_the_jets():
     code = ("import sys, symvib\n"
-            "symvib.simulate('paper-circle-7')\n"
+            "r = symvib.simulate('paper-circle-7')\n"
+            "r.sensitivities(('mu', 'k'))\n"       # no sign change of N, no curve parameter: no jets either
             "print(sorted(m for m in sys.modules if 'jets' in m))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert out.returncode == 0, out.stderr
@@ -329,6 +330,19 @@ def test_a_tangential_zero_of_n_in_a_run_says_why_for_it_and_after(monkeypatch):
     first = [e.kind for e in res.events].index(EventKind.NORMAL_SIGN_CHANGE)
     assert not any(sens.reasons[:first]) and "tangential zero of the normal force" in sens.reasons[first]
     assert all(sens.reasons[first + 1:]) and np.all(np.isnan(sens.t[first:]))
+
+
+def test_a_user_curve_s_missing_jets_where_nothing_can_make_them_is_a_reason_not_a_crash(tmp_path, monkeypatch):
+    from symvib.prepare import prepare
+
+    scene = scene_from_dict(HUMP)
+    res, prepared = simulate(scene), prepare(scene)
+    monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))          # an empty cache, and no generator
+    monkeypatch.setattr(jet_kernels, "_GENERATOR", [])
+    monkeypatch.setattr(jet_kernels, "_LOADED", {})
+    sens = sensitivities(res, wrt=("mu",), prepared=prepared)
+    assert sens.reasons[0].startswith("the curve's jets (kappa') are not available here")
+    assert np.all(np.isnan(sens.t))
 
 
 AMBIGUOUS = {"curve": {"name": "jets-ambiguous", "z": "right*x**2"}, "parameters": {"right": 0.5},

@@ -52,6 +52,7 @@ import numpy as np
 
 # Kinds and statuses by their engine codes (symvib.numeric.layout, below the records of
 # symvib.numeric.events, whose Result.sensitivities calls up into this module).
+from symvib.kernelformat import KernelError
 from symvib.numeric.layout import EventCode, StatusCode
 from symvib.numeric.sensitivity_curve import PARAMETERS, CurveFunctions, resolve_wrt
 from symvib.numeric.sensitivity_normal import TANGENTIAL_N_REASON, normal_sign_change_tangent
@@ -412,9 +413,14 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
             if turning:
                 Dq_e = iv.dG_fixed_q_end() / (2 * c.g * iv.f_e)
             elif kind == EventCode.NORMAL_SIGN_CHANGE:
-                Dq_e = normal_sign_change_tangent(c, iv)
+                try:
+                    Dq_e = normal_sign_change_tangent(c, iv)
+                except KernelError as err:     # (a user curve's jets not generated where this runs)
+                    Dq_e, why = None, f"the curve's jets (kappa') are not available here: {err}"
+                else:
+                    why = TANGENTIAL_N_REASON
                 if Dq_e is None:
-                    broken, first_broken = TANGENTIAL_N_REASON, i
+                    broken, first_broken = why, i
                     reasons.append(broken)
                     continue
             else:
