@@ -437,7 +437,7 @@ def build_parser() -> argparse.ArgumentParser:
                                 "kind, then optional q) or a sampled trajectory (t with q, or x,z, or s: the arc "
                                 "length from the initial position, m; no kind column)")
     p.add_argument("--free", default="mu,k", help="parameters to fit, comma-separated (default mu,k; also "
-                   "qdot0, q0, left, right)")
+                   "qdot0, q0, left, right, and the curve's parameters: p, or parameters.p)")
     p.add_argument("--sigma", type=float, default=None, help="standard deviation of each observation (s for "
                    "times, the coordinate's unit for samples; default: estimated from the residuals)")
     p.add_argument("--plot", metavar="PATH", help="write the residual figure (PNG)")

@@ -90,11 +90,12 @@ def _load(curve: Shape, generate):
         path = _kernels.generated_dir() / JETS_FOLDER / f"{stem}.py"
         if not path.exists():
             raise KernelError(f"{path} is missing; run `symvib generate`")
+        text = path.read_text(encoding="utf-8")
         try:
-            check_text(path.read_text(encoding="utf-8"), path, want)
+            check_text(text, path, want)
         except KernelError as err:
             raise KernelError(f"{err}; run `symvib generate`") from None
-        return _kernels._exec(path.read_text(encoding="utf-8"), path, f"jets_{stem}")
+        return _kernels._exec(text, path, f"jets_{stem}")     # the text checked, not a second read
     name = f"{stem}_{want[:16]}{JETS_SUFFIX}"
     folder = _kernels.cache_dir()
     path = folder / f"{name}.py"
