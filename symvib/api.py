@@ -129,5 +129,7 @@ def fit(scene, observed, free=("mu", "k"), **options):
         observed = observed_events(times, kinds=["impact"] * len(times))   # what a microphone hears
     prepared = prepare(scene)
     samples = isinstance(observed, ObservedSamples)
-    return _fit(scene, observed, free, run=lambda s: _simulate(s, samples=samples, prepared=prepared), **options)
+    # (a free curve parameter changes the curve: each of its values is prepared, once)
+    return _fit(scene, observed, free, run=lambda s: _simulate(
+        s, samples=samples, prepared=prepared if s.params == scene.params else prepare(s)), **options)
 

@@ -169,12 +169,18 @@ def _cmd_generate(args) -> int:
         return 0
     out = args.out or generated_dir()
     if args.check:
-        problems = codegen.stale(out)
+        from symvib.codegen.jets import stale_jets
+
+        problems = codegen.stale(out) + stale_jets(out, names=args.shapes or None)
         for line in problems:
             print(line)
         print("generated kernels are current" if not problems else f"{len(problems)} problem(s)")
         return 1 if problems else 0
+    from symvib.codegen.jets import generate_jets_catalogue
+
     for path in codegen.generate_catalogue(out, names=args.shapes or None):
+        print(f"wrote {path}")
+    for path in generate_jets_catalogue(out, names=args.shapes or None):   # the sensitivities' jets
         print(f"wrote {path}")
     return 0
 
@@ -431,7 +437,7 @@ def build_parser() -> argparse.ArgumentParser:
                                 "kind, then optional q) or a sampled trajectory (t with q, or x,z, or s: the arc "
                                 "length from the initial position, m; no kind column)")
     p.add_argument("--free", default="mu,k", help="parameters to fit, comma-separated (default mu,k; also "
-                   "qdot0, q0, left, right)")
+                   "qdot0, q0, left, right, and the curve's parameters: p, or parameters.p)")
     p.add_argument("--sigma", type=float, default=None, help="standard deviation of each observation (s for "
                    "times, the coordinate's unit for samples; default: estimated from the residuals)")
     p.add_argument("--plot", metavar="PATH", help="write the residual figure (PNG)")

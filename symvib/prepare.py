@@ -32,10 +32,11 @@ from __future__ import annotations
 
 import logging
 
+from symvib.numeric import jet_kernels as _jet_kernels
 from symvib.numeric import prepared as _prepared
 from symvib.numeric.kernels import load
 
-__all__ = ["prepare", "load_kernels"]
+__all__ = ["prepare", "load_kernels", "load_jets"]
 
 #: Progress of slow steps: shown on a terminal by the command line.
 _log = logging.getLogger("symvib.prepare")
@@ -53,6 +54,24 @@ def load_kernels(shape):
     generated and cached on first use of a user curve (:func:`symvib.numeric.kernels.load`)."""
     return load(shape, generate=_module_text)
 
+
+def _jets_text(shape, source: dict, origin) -> str:
+    """The jets module's text for a user curve (the bridge: imports SymPy)."""
+    from symvib.codegen.jets import jets_text
+
+    return jets_text(shape, source=source)
+
+
+def load_jets(shape):
+    """The jets module of ``shape`` (:mod:`symvib.codegen.jets`), generated and cached on first use
+    of a user curve (:func:`symvib.numeric.jet_kernels.load_jets`); the numeric wing asks for it only
+    when it differentiates a run that needs it (physics.md, "Sensitivities" 8 and 9)."""
+    return _jet_kernels.load_jets(shape, generate=_jets_text)
+
+
+# The numeric wing loads a user curve's jets when a sensitivity needs them; it does not import this
+# module, so the generator is handed down here, once.
+_jet_kernels.register_generator(_jets_text)
 
 #: Symbolic curves already built, by shape source (the singular search of a second parameter set
 #: in the same process reuses it).

@@ -17,13 +17,17 @@ import json
 from functools import cache
 from pathlib import Path
 
-__all__ = ["GENERATOR_VERSION", "GENERATOR_SOURCES", "generator_digest", "input_hash"]
+__all__ = ["GENERATOR_VERSION", "GENERATOR_SOURCES", "generator_digest", "input_hash", "JETS_SOURCES",
+           "jets_hash"]
 
 #: Bumped by hand when the kernel format changes in a way the sources do not show.
 GENERATOR_VERSION = "2"
 #: Modules whose code decides what a generated kernel module contains.
 GENERATOR_SOURCES = ("symbolic/symbols.py", "expr.py", "symbolic/curve.py", "symbolic/integrals.py",
                      "symbolic/derive.py", "codegen/generate.py")
+#: Modules whose code decides what a curve's jets module contains besides :data:`GENERATOR_SOURCES`
+#: (kept apart so that the kernel modules' hash, and so ``generated/``, stay as they are).
+JETS_SOURCES = ("codegen/jets.py",)
 
 
 @cache
@@ -41,3 +45,19 @@ def input_hash(source: dict) -> str:
     """Hash of a curve's defining data together with :func:`generator_digest`."""
     canonical = json.dumps(source, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256((canonical + generator_digest()).encode()).hexdigest()
+
+
+@cache
+def _jets_digest() -> str:
+    here = Path(__file__).resolve().parent
+    digest = hashlib.sha256()
+    for name in JETS_SOURCES:
+        digest.update(name.encode())
+        digest.update((here / name).read_bytes().replace(b"\r\n", b"\n"))
+    return digest.hexdigest()
+
+
+def jets_hash(source: dict) -> str:
+    """Hash of a curve's jets module (:mod:`symvib.codegen.jets`): its kernel module's
+    :func:`input_hash` together with the jets generator's source."""
+    return hashlib.sha256(("jets:" + input_hash(source) + _jets_digest()).encode()).hexdigest()

@@ -154,7 +154,8 @@ def test_a_zeno_run_s_events_before_the_accumulation_match_and_the_accumulation_
 
 
 @pytest.mark.slow
-def test_a_run_with_a_sign_change_of_n_matches_before_it_and_says_why_after():
+def test_a_run_with_sign_changes_of_n_matches_before_and_after_them():
+    # (more of them, the curve's parameters and a tangential zero of N: tests/test_sensitivity_jets.py)
     scene = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
                              "physics": {"alpha0": 0.02, "restitution": 1.0}, "initial": {"q": 0.0, "qdot": 11.0},
                              "limiters": {"right": 2.5}})
@@ -162,9 +163,7 @@ def test_a_run_with_a_sign_change_of_n_matches_before_it_and_says_why_after():
     kinds = [e.kind for e in res.events]
     assert EventKind.NORMAL_SIGN_CHANGE in kinds
     sens = assert_matches_step_study(scene, wrt=("mu", "qdot0"))
-    first = kinds.index(EventKind.NORMAL_SIGN_CHANGE)
-    assert all("normal force" in why for why in sens.reasons[first:])
-    assert np.all(np.isnan(sens.t[first:]))
+    assert not any(sens.reasons) and np.all(np.isfinite(sens.t))
 
 
 def test_a_start_at_rest_has_no_derivative_in_qdot0_and_says_why():

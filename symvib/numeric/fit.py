@@ -64,6 +64,7 @@ from symvib.numeric.fit_data import (
 from symvib.numeric.sample_sensitivity import sample_positions, sample_sensitivities
 from symvib.numeric.scene import Scene
 from symvib.numeric.sensitivity import PARAMETERS, sensitivities
+from symvib.numeric.sensitivity_curve import parameter_value, resolve_wrt, with_parameters
 
 __all__ = ["fit", "observed_events", "observed_samples", "read_events", "read_samples", "read_observations",
            "FitResult", "Observed", "ObservedSamples", "STATUSES"]
@@ -172,7 +173,14 @@ class FitResult:
         return fig
 
 
-def _default_bounds(scene: Scene, name: str) -> tuple:
+def _at(scene: Scene, free) -> dict:
+    """The scene's values of the free parameters (scene or curve parameters), by their names."""
+    return {t[0]: parameter_value(scene, t) for t in resolve_wrt(scene, free, "free")}
+
+
+def _default_bounds(scene: Scene, name: str, kind: str = "scene") -> tuple:
+    if kind == "curve":     # (a value the curve does not allow is refused by the scene: the step fails)
+        return (-math.inf, math.inf)
     left = scene.left if scene.left is not None else -math.inf
     right = scene.right if scene.right is not None else math.inf
     mu_top = math.inf if scene.mu_s is None else scene.mu_s   # a given static friction bounds mu (mu <= mu_s)
@@ -186,7 +194,7 @@ def _model(scene, observed, free, run):
     Levenberg-Marquardt step asks for them only once a trial is accepted)."""
     result = run(scene)
     if result.status.is_error:
-        raise ValueError(f"scene: the run at {dict((k, getattr(scene, k)) for k in free)} failed "
+        raise ValueError(f"scene: the run at {_at(scene, free)} failed "
                          f"({result.status.value}): {result.message}")
     wanted = set(observed.kinds) if observed.kinds else None
     index = [i for i, e in enumerate(result.events) if wanted is None or e.kind.value in wanted]
@@ -227,12 +235,12 @@ def _sample_model(scene, observed, free, run):
     observed ones (column by column: ``x`` then ``z``), every sample matched."""
     result = run(scene)
     if result.status.is_error:
-        raise ValueError(f"scene: the run at {dict((k, getattr(scene, k)) for k in free)} failed "
+        raise ValueError(f"scene: the run at {_at(scene, free)} failed "
                          f"({result.status.value}): {result.message}")
     if observed.t[-1] > result.dense.t_max:
         raise ValueError(f"observed.t: the last sample ({float(observed.t[-1])!r} s) comes after the run's end "
                          f"({result.dense.t_max:g} s, status {result.status.value}) at "
-                         f"{dict((k, getattr(scene, k)) for k in free)}")
+                         f"{_at(scene, free)}")
     r = (sample_positions(result, observed.t, observed.coordinates) - observed.values).T.ravel()
 
     def jacobian():
@@ -257,7 +265,8 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
         Events (:func:`observed_events`, :func:`read_events`) or a sampled trajectory
         (:func:`observed_samples`, :func:`read_samples`); :func:`read_observations` reads either.
     free : sequence of str
-        Names from :data:`symvib.numeric.sensitivity.PARAMETERS`.
+        Names from :data:`symvib.numeric.sensitivity.PARAMETERS` or of the curve's parameters
+        (``p``, or ``parameters.p``: :func:`symvib.numeric.sensitivity_curve.resolve_wrt`).
     bounds : dict, optional
         Parameter -> ``(low, high)``; default: the physical ranges (``mu >= 0``, and ``mu <= mu_s``
         where the scene gives static friction, ``0 <= k <= 1``, ``q0`` between the limiters, a
@@ -295,11 +304,19 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
     if not isinstance(xtol, (int, float, np.number)) or not (0 < xtol < math.inf):
         raise ValueError(f"xtol: a positive finite number, got {xtol!r:.80}")
     free = tuple(free)
-    if not free or len(set(free)) != len(free) or any(p not in PARAMETERS for p in free):
-        raise ValueError(f"free: {free!r} must be distinct names from {', '.join(PARAMETERS)}")
+    curve_names = tuple(n for n, _ in scene.params)
+    names = bool(free) and all(isinstance(p, str) for p in free)
     for side in ("left", "right"):
-        if side in free and getattr(scene, side) is None:
+        if names and side in free and getattr(scene, side) is None and side not in curve_names:
             raise ValueError(f"free: the scene has no {side} limiter to fit")
+    try:
+        targets = resolve_wrt(scene, free, "free") if names else None
+    except ValueError as err:
+        if "ambiguous" in str(err):
+            raise
+        targets = None
+    if targets is None:
+        raise ValueError(f"free: {free!r} must be distinct names from {', '.join(PARAMETERS + curve_names)}")
     samples = isinstance(observed, ObservedSamples)
     m = observed.count
     if m < len(free):
@@ -314,17 +331,18 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
         raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {weights!r:.80}") from None
     if len(w) != m or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise ValueError(f"weights: one positive finite 1/sigma per observation ({m}), got {len(w)}")
-    given = _check_bounds(bounds)
+    given = _check_bounds(bounds, free)
+    defaults = {t[0]: _default_bounds(scene, t[2], t[1]) for t in targets}
     for name in set(given) & set(free):     # beyond them the scene is refused: steps there would just fail
-        (low, high), (d_low, d_high) = given[name], _default_bounds(scene, name)
+        (low, high), (d_low, d_high) = given[name], defaults[name]
         if low < d_low or high > d_high:
             raise ValueError(f"bounds.{name}: ({low:g}, {high:g}) reaches beyond the values the scene allows, "
                              f"[{d_low:g}, {d_high:g}] (mu <= mu_s, k <= 1, q0 between the limiters)")
-    bounds = {name: given.get(name, _default_bounds(scene, name)) for name in free}
-    problem = _Problem(scene, free, run or (lambda s: simulate(s, samples=samples)),
+    bounds = {name: given.get(name, defaults[name]) for name in free}
+    problem = _Problem(scene, free, targets, run or (lambda s: simulate(s, samples=samples)),
                        *(np.array([bounds[n][i] for n in free]) for i in (0, 1)), weights is not None,
                        _sample_model if samples else _model)
-    x = np.array([getattr(scene, name) for name in free], dtype=float)
+    x = np.array([parameter_value(scene, t) for t in targets], dtype=float)
     if np.any(x < problem.lo) or np.any(x > problem.hi):
         raise ValueError(f"scene: the start {dict(zip(free, x))} is outside the bounds {bounds}")
     n_obs = len(observed.t)
@@ -343,16 +361,17 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
                                data=observed.coordinates if samples else "events")
 
 
-def _check_bounds(bounds) -> dict:
-    """The given ``bounds`` as ``name -> (low, high)`` floats, or an error naming ``bounds``."""
+def _check_bounds(bounds, free=()) -> dict:
+    """The given ``bounds`` as ``name -> (low, high)`` floats, or an error naming ``bounds`` (a name
+    from :data:`PARAMETERS` or ``free``)."""
     if bounds is None:
         return {}
     if not isinstance(bounds, dict):
         raise ValueError(f"bounds: a dict of parameter -> (low, high), got {type(bounds).__name__}")
     checked = {}
     for name, pair in bounds.items():
-        if name not in PARAMETERS:
-            raise ValueError(f"bounds: {name!r} is not a parameter ({', '.join(PARAMETERS)})")
+        if name not in PARAMETERS and name not in free:
+            raise ValueError(f"bounds: {name!r} is not a parameter ({', '.join(dict.fromkeys(PARAMETERS + free))})")
         try:
             low, high = (float(v) for v in pair)
         except (TypeError, ValueError):
@@ -385,6 +404,7 @@ class _Problem:
 
     scene: Scene
     free: tuple
+    targets: tuple
     run: object
     lo: np.ndarray
     hi: np.ndarray
@@ -392,7 +412,7 @@ class _Problem:
     model: object
 
     def at(self, values) -> Scene:
-        return self.scene.replace(**{name: float(v) for name, v in zip(self.free, values)})
+        return with_parameters(self.scene, self.targets, values)
 
 
 def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: float, max_iterations: int) -> FitResult:

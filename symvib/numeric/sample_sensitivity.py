@@ -33,6 +33,7 @@ import numpy as np
 
 from symvib.numeric.quadrature import rule
 from symvib.numeric.sensitivity import interval_tangents
+from symvib.numeric.sensitivity_curve import resolve_wrt
 
 __all__ = ["sample_sensitivities", "sample_positions", "SampleSensitivities", "COORDINATES", "arc_length"]
 
@@ -116,8 +117,12 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
         Dq[:, sens.wrt.index(name)] = np.nan
     values, slopes = _coordinates(result, q, coordinates, prepared)
     derivatives = slopes[:, :, None] * Dq[:, None, :]
-    if coordinates == "s" and "q0" in sens.wrt:     # the arc length is measured from q0
-        derivatives[:, 0, sens.wrt.index("q0")] -= _h0(result, prepared)
+    targets = resolve_wrt(result.scene, wrt)
+    for j, (_, kind, name) in enumerate(targets):
+        if kind == "scene" and name == "q0" and coordinates == "s":     # the arc length is measured from q0
+            derivatives[:, 0, j] -= _h0(result, prepared)
+        elif kind == "curve" and coordinates != "q":    # the curve itself moves with its parameter
+            derivatives[:, :, j] += _curve_parameter_part(result, q, coordinates, name, prepared)
     return SampleSensitivities(sens.wrt, times, COORDINATES[coordinates], values, derivatives, tuple(reasons))
 
 
@@ -126,6 +131,22 @@ def sample_positions(result, t, coordinates="q", *, prepared=None) -> np.ndarray
     times = _checked(result, t, coordinates)
     q = np.asarray(result.dense.state(times)[0], dtype=float).reshape(-1)
     return _coordinates(result, q, coordinates, prepared)[0]
+
+
+def _curve_parameter_part(result, q, coordinates, name, prepared) -> np.ndarray:
+    """The derivative at fixed ``q`` of the coordinates with respect to the curve parameter ``name``
+    (shape (n, columns)): ``dx/da, dz/da``, or ``Integral_{q0}^{q} dh/da`` for the arc length
+    (physics.md, "Sensitivities" 9; the curve's jets, :mod:`symvib.numeric.jet_kernels`)."""
+    from symvib.numeric.jet_kernels import load_jets
+
+    jets = load_jets(result.scene.shape)
+    _, cp = _kernels(result, prepared)
+    fn = getattr(jets, f"param_jet_{jets.PARAM_JETS[name]}")
+    part = lambda what, u: np.asarray(fn(u, *cp)[jets.PARAM_JET.index(what)], float) * np.ones_like(u)  # noqa: E731
+    if coordinates == "xz":
+        return np.stack([part("x", q), part("z", q)], axis=1)
+    q0 = float(result.scene.q0)
+    return np.array([arc_length(lambda u: part("h", u), q0, float(qi)) for qi in q])[:, None]
 
 
 def _checked(result, t, coordinates) -> np.ndarray:

@@ -27,7 +27,10 @@ reversal changes with the parameters: the rest test's cone, ``|tan alpha| = mu_s
 turning point on the sliding cone's edge ``|tan alpha| = mu`` where static friction
 exceeds it (a double root of ``G``: its position has no derivative), a turning point on a limiter (grazing),
 a Zeno accumulation, a start at rest for ``qdot0`` (its sign chooses the
-direction), and (not yet derived) a sign change of the normal force.
+direction), and a tangential zero of the normal force.  A sign change of the normal force
+that crosses (:mod:`symvib.numeric.sensitivity_normal`) and the curve's own parameters
+(:mod:`symvib.numeric.sensitivity_curve`) are differentiated with the curve's jets
+(:mod:`symvib.numeric.jet_kernels`; physics.md, "Sensitivities" 8 and 9), read only then.
 
 Examples
 --------
@@ -49,13 +52,14 @@ import numpy as np
 
 # Kinds and statuses by their engine codes (symvib.numeric.layout, below the records of
 # symvib.numeric.events, whose Result.sensitivities calls up into this module).
+from symvib.kernelformat import KernelError
 from symvib.numeric.layout import EventCode, StatusCode
+from symvib.numeric.sensitivity_curve import PARAMETERS, CurveFunctions, resolve_wrt
+from symvib.numeric.sensitivity_normal import TANGENTIAL_N_REASON, normal_sign_change_tangent
 from symvib.numeric.sensitivity_table import Sensitivities
 
 __all__ = ["sensitivities", "interval_tangents", "Sensitivities", "Tangents", "Leg", "PARAMETERS"]
 
-#: Parameters a run's events can be differentiated with respect to.
-PARAMETERS = ("mu", "k", "qdot0", "q0", "left", "right")
 #: Relative distance of ``|sin alpha|`` from ``mu_s |cos alpha|`` (or ``mu |cos alpha|``) below which a
 #: turning point is on the edge of the static (or sliding) friction cone (the engine's rest test, with
 #: ``mu_s``, decides there within ``1e-9``).
@@ -78,42 +82,6 @@ INNER_NODES = 8
 INTEGRAL_RTOL = 1e-14
 #: Statuses whose final state has derivatives (the run ended on an event).
 FINAL_STATUSES = (StatusCode.ARRESTED, StatusCode.RESTING_ON_LIMITER)
-
-
-class _Curve:
-    """The kernels of a run's curve as functions of ``q`` (NumPy arrays), its parameters bound."""
-
-    def __init__(self, kernels, scene):
-        cp = tuple(scene.param_values)
-        self.g, self.mu, self.m = scene.g, scene.mu, scene.m
-        self.scale = float(kernels.q_scale_scalar(*cp))
-        for name in ("h", "dh", "alpha", "dalpha", "dx", "dz", "z"):
-            fn = getattr(kernels, name)
-            setattr(self, name, lambda q, fn=fn: np.asarray(fn(np.asarray(q, dtype=float), *cp), dtype=float))
-        self._F = {1: kernels.F_p, -1: kernels.F_m}
-        self._dF = {1: kernels.dF_p, -1: kernels.dF_m}
-        self._ddF = {1: kernels.ddF_p, -1: kernels.ddF_m}
-        self._N = kernels.N_w
-        self._cp = cp
-
-    def F(self, s, q):
-        return np.asarray(self._F[s](np.asarray(q, dtype=float), self.mu, *self._cp), dtype=float)
-
-    def f(self, s, q):
-        """``F_s' = exp(2 s mu alpha) (z' + s mu x')`` (the generated ``dF`` kernel)."""
-        return np.asarray(self._dF[s](np.asarray(q, dtype=float), self.mu, *self._cp), dtype=float)
-
-    def df(self, s, q):
-        """``F_s''`` (the generated ``ddF`` kernel)."""
-        return np.asarray(self._ddF[s](np.asarray(q, dtype=float), self.mu, *self._cp), dtype=float)
-
-    def df_dmu(self, s, q):
-        """``d F_s' / d mu`` at fixed ``q``."""
-        E = np.exp(2 * s * self.mu * self.alpha(q))
-        return E * (2 * s * self.alpha(q) * (self.dz(q) + s * self.mu * self.dx(q)) + s * self.dx(q))
-
-    def N(self, q, w):
-        return float(self._N(float(q), float(w), self.g, *self._cp))
 
 
 @cache
@@ -142,19 +110,21 @@ class _Interval:
         self.G_a = w_a * self.E_a
         alpha_a, dalpha_a = float(c.alpha(q_a)), float(c.dalpha(q_a))
         self.f_a = float(c.f(s, q_a))
-        # total derivative of G at the start: D(w_a E(q_a))
-        self.DG_a = Dw_a * self.E_a + self.G_a * 2 * s * (alpha_a * Dmu + c.mu * dalpha_a * Dq_a)
-        # dG/dp at fixed q, the part that does not depend on q: (dG/dp)(q) = A - 2 g Dmu I_mu(q)
+        # total derivative of G at the start: D(w_a E(q_a)), alpha's own derivative in a curve parameter too
+        self.DG_a = Dw_a * self.E_a + self.G_a * 2 * s * (alpha_a * Dmu + c.mu * dalpha_a * Dq_a
+                                                            + c.mu * c.geometry_dp("alpha", q_a)[0])
+        # dG/dp at fixed q, the part that does not depend on q: (dG/dp)(q) = A - 2 g I_p(q), with
+        # I_p(q) = Integral_{q_a}^{q} dF_s'/dp (mu and the curve's parameters)
         self.A = self.DG_a + 2 * c.g * self.f_a * Dq_a
         self.f_e = float(c.f(s, q_e))
-        self.I_mu_e = self.integral(lambda q: c.df_dmu(s, q), q_a, q_e - q_a) if np.any(Dmu) else 0.0
+        self.I_p_e = self.integral(lambda q: c.df_dp(s, q), q_a, q_e - q_a) if c.f_depends else 0.0
         if G_e is None:
             G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(c.F(s, q_e) - c.F(s, q_a))
         self.G_e = G_e
 
     def dG_fixed_q_end(self):
         """``dG/dp`` at fixed ``q = q_e``."""
-        return self.A - 2 * self.c.g * self.Dmu * self.I_mu_e
+        return self.A - 2 * self.c.g * self.I_p_e
 
     def set_end(self, Dq_e):
         """The end's tangent ``Dq_e``; the total derivative of ``G`` there (0 at a turning point)."""
@@ -172,19 +142,23 @@ class _Interval:
         a, b = ends[:-1], ends[1:]
         mid, half = (a + b) / 2, (b - a) / 2
         nodes = anchor + D * (mid[:, None] + half[:, None] * x[None, :])
-        vals = fn(nodes.ravel()).reshape(nodes.shape)
-        return D * np.cumsum(half * (vals @ w))
+        vals = np.asarray(fn(nodes.ravel()))
+        vals = vals.reshape(nodes.shape + vals.shape[1:])          # (pieces, nodes[, parameters])
+        sums = np.moveaxis(vals, 1, -1) @ w
+        return D * np.cumsum(half.reshape((-1,) + (1,) * (sums.ndim - 1)) * sums, axis=0)
 
     @classmethod
     def integral(cls, fn, anchor, D):
         """``Integral_{anchor}^{anchor + D} fn(q) dq``: :meth:`cumulative` over 8, 16, ... equal pieces
-        until two agree to rounding (``INTEGRAL_RTOL`` of the integral of ``|fn|``)."""
+        until two agree to rounding (``INTEGRAL_RTOL`` of the integral of ``|fn|``); ``fn`` may give
+        one column per parameter (then each column to its own magnitude)."""
         pieces, previous = 8, None
         while pieces <= MAX_PANELS * NODES:
             x = np.arange(1, pieces + 1) / pieces
             current = cls.cumulative(fn, anchor, D, x)[-1]
             magnitude = abs(cls.cumulative(lambda v: np.abs(fn(v)), anchor, D, x)[-1])
-            if previous is not None and abs(current - previous) <= INTEGRAL_RTOL * max(magnitude, 1e-300):
+            if previous is not None and np.all(np.abs(current - previous)
+                                               <= INTEGRAL_RTOL * np.maximum(magnitude, 1e-300)):
                 return current
             previous, pieces = current, 2 * pieces
         return previous
@@ -214,12 +188,13 @@ class _Interval:
             # Dq(u) - Dq(anchor): u (Dq_e - Dq_a) from the start, -(1 - u) (Dq_e - Dq_a) from the end
             step = np.outer(x if from_start else -x, self.Dq_e - self.Dq_a)
             dg = DG_c - 2 * c.g * (int_df[:, None] * Dq[order] + f_c * step)
-            if np.any(self.Dmu):
-                dg -= 2 * c.g * self.cumulative(lambda v: c.df_dmu(s, v), q_c, D, x)[:, None] * self.Dmu[None, :]
+            if c.f_depends:
+                dg -= 2 * c.g * self.cumulative(lambda v: c.df_dp(s, v), q_c, D, x)
             DG[order] = dg
         alpha, dalpha = c.alpha(q), c.dalpha(q)
         E = np.exp(2 * s * c.mu * alpha)
-        W = (DG - G[:, None] * 2 * s * (np.outer(alpha, self.Dmu) + c.mu * dalpha[:, None] * Dq)) / E[:, None]
+        W = (DG - G[:, None] * 2 * s * (np.outer(alpha, self.Dmu) + c.mu * dalpha[:, None] * Dq
+                                        + c.mu * c.geometry_dp("alpha", q))) / E[:, None]
         return G / E, W, q, Dq
 
     def dT(self):
@@ -240,7 +215,9 @@ class _Interval:
             w, W, q, Dq = self.along(u, d)
             h, dh = c.h(q), c.dh(q)
             root = np.sqrt(w)
-            J = ((dh[:, None] * Dq * length + (h * sigma)[:, None] * d_delta[None, :]) / root[:, None]
+            # h at fixed u moves with q(u) and, for a curve parameter, with the parameter itself
+            J = ((dh[:, None] * Dq * length + (h * sigma)[:, None] * d_delta[None, :]
+                  + c.geometry_dp("h", q) * length) / root[:, None]
                  - 0.5 * (h * length)[:, None] * W / (w * root)[:, None])
             return weights @ J, weights @ np.abs(J)
 
@@ -295,17 +272,17 @@ class _Interval:
     def point(self, q, Dq, from_start):
         """``G(q)`` and the total derivative of ``w`` at ``q`` moving with tangent ``Dq``, integrated from
         the start (``from_start``) or the end: ``G(q) = G_c - 2 g Integral_{q_c}^{q} f`` and
-        ``DG = DG_c - 2 g (f(q) Dq - f(q_c) Dq_c + Dmu Integral_{q_c}^{q} df/dmu)``."""
+        ``DG = DG_c - 2 g (f(q) Dq - f(q_c) Dq_c + Integral_{q_c}^{q} dF_s'/dp)``."""
         c, s = self.c, self.s
         q_c, G_c, DG_c, f_c, Dq_c = ((self.q_a, self.G_a, self.DG_a, self.f_a, self.Dq_a) if from_start
                                      else (self.q_e, self.G_e, self.DG_e, self.f_e, self.Dq_e))
         G = G_c - 2 * c.g * self.integral(lambda v: c.f(s, v), q_c, q - q_c)
         DG = DG_c - 2 * c.g * (float(c.f(s, q)) * Dq - f_c * Dq_c)
-        if np.any(self.Dmu):
-            DG = DG - 2 * c.g * self.Dmu * self.integral(lambda v: c.df_dmu(s, v), q_c, q - q_c)
+        if c.f_depends:
+            DG = DG - 2 * c.g * self.integral(lambda v: c.df_dp(s, v), q_c, q - q_c)
         alpha, dalpha = float(c.alpha(q)), float(c.dalpha(q))
         E = math.exp(2 * s * c.mu * alpha)
-        return G, (DG - G * 2 * s * (alpha * self.Dmu + c.mu * dalpha * Dq)) / E
+        return G, (DG - G * 2 * s * (alpha * self.Dmu + c.mu * dalpha * Dq + c.mu * c.geometry_dp("alpha", q)[0])) / E
 
 
 def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
@@ -347,7 +324,7 @@ class Tangents:
     legs: tuple
 
 
-def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
+def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Tangents:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``, and its intervals.
 
     Parameters
@@ -355,10 +332,14 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
     result : symvib.numeric.events.Result
         A run of :func:`symvib.simulate` (its scene and events are read; nothing runs again).
     wrt : str or sequence of str
-        Names from :data:`PARAMETERS` (``left``/``right`` only where the scene has that limiter);
-        one name alone is one parameter.
+        Names from :data:`PARAMETERS` (``left``/``right`` only where the scene has that limiter) or
+        of the curve's parameters (:func:`symvib.numeric.sensitivity_curve.resolve_wrt`: a name that is
+        both is refused, ``parameters.<name>`` is the curve's); one name alone is one parameter.
     prepared : Prepared, optional
         The scene's prepared curve (default: :func:`symvib.numeric.prepared.prepared_of`).
+    jets : module, optional
+        The curve's jets module (default: :func:`symvib.numeric.jet_kernels.load_jets`, read only when a
+        sign change of ``N`` or a curve parameter needs it).
 
     Returns
     -------
@@ -367,32 +348,27 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
     Raises
     ------
     ValueError
-        Naming ``wrt`` for an unknown or repeated parameter or a missing limiter, and
+        Naming ``wrt`` for an unknown, repeated or ambiguous parameter or a missing limiter, and
         ``result`` for a failed run (its numbers are not a result).
     """
     from symvib.numeric.prepared import prepared_of
 
     scene = result.scene
-    if isinstance(wrt, str):   # one name, not its letters
-        wrt = (wrt,)
-    try:
-        wrt = tuple(wrt)
-    except TypeError:
-        raise ValueError(f"wrt: expected names of parameters from {', '.join(PARAMETERS)}, "
-                         f"got {type(wrt).__name__}") from None
-    unknown = [p for p in wrt if p not in PARAMETERS]
-    if unknown or len(set(wrt)) != len(wrt) or not wrt:
-        raise ValueError(f"wrt: {unknown[0] if unknown else wrt!r} is not a list of distinct parameters from "
-                         f"{', '.join(PARAMETERS)}")
-    for side in ("left", "right"):
-        if side in wrt and getattr(scene, side) is None:
-            raise ValueError(f"wrt: the scene has no {side} limiter to differentiate with respect to")
+    targets = resolve_wrt(scene, wrt)
+    wrt = tuple(t[0] for t in targets)
     if result.status.is_error:
         raise ValueError(f"result: the run failed ({result.status.value}); its events have no derivatives")
     kernels = (prepared or prepared_of(scene)).kernels
-    c = _Curve(kernels, scene)
+    if jets is None:
+        from symvib.numeric.jet_kernels import load_jets
+
+        jets = lambda: load_jets(scene.shape)  # noqa: E731 - loaded only if needed
+    c = CurveFunctions(kernels, scene, targets, jets)
     P = len(wrt)
-    unit = {name: np.eye(P)[wrt.index(name)] if name in wrt else np.zeros(P) for name in PARAMETERS}
+    unit = {name: np.zeros(P) for name in PARAMETERS}
+    for j, (_, kind, p) in enumerate(targets):
+        if kind == "scene":
+            unit[p] = np.eye(P)[j]
     Dmu, Dk = unit["mu"], unit["k"]
     limiter_D = {scene.left: unit["left"], scene.right: unit["right"]}
 
@@ -400,13 +376,15 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
     h0, dh0 = float(c.h(q_a)), float(c.dh(q_a))
     w_a = h0 ** 2 * qdot0 ** 2
     Dq_a = unit["q0"].copy()
-    Dw_a = 2 * h0 ** 2 * qdot0 * unit["qdot0"] + 2 * h0 * dh0 * qdot0 ** 2 * unit["q0"]
+    Dw_a = (2 * h0 ** 2 * qdot0 * unit["qdot0"] + 2 * h0 * dh0 * qdot0 ** 2 * unit["q0"]
+            + 2 * h0 * qdot0 ** 2 * c.geometry_dp("h", q_a)[0])
     Dt_a = np.zeros(P)
     broken, first_broken = "", None
     notes = {}
-    if qdot0 == 0 and "qdot0" in wrt:
-        notes["qdot0"] = "the run starts at rest: the sign of qdot0 chooses the direction (no derivative)"
-    DE0 = c.m * (Dw_a / 2 + c.g * float(c.dz(q_a)) * Dq_a)
+    if qdot0 == 0 and "qdot0" in [t[2] for t in targets if t[1] == "scene"]:
+        notes[next(t[0] for t in targets if t[1:] == ("scene", "qdot0"))] = \
+            "the run starts at rest: the sign of qdot0 chooses the direction (no derivative)"
+    DE0 = c.m * (Dw_a / 2 + c.g * (float(c.dz(q_a)) * Dq_a + c.geometry_dp("z", q_a)[0]))
 
     n = len(result.events)
     T, Q, VB, VA = (np.full((n, P), np.nan) for _ in range(4))
@@ -434,6 +412,17 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
             iv = _Interval(c, q_a, w_a, q_e, s, turning, Dq_a, Dw_a, Dmu)
             if turning:
                 Dq_e = iv.dG_fixed_q_end() / (2 * c.g * iv.f_e)
+            elif kind == EventCode.NORMAL_SIGN_CHANGE:
+                try:
+                    Dq_e = normal_sign_change_tangent(c, iv)
+                except KernelError as err:     # (a user curve's jets not generated where this runs)
+                    Dq_e, why = None, f"the curve's jets (kappa') are not available here: {err}"
+                else:
+                    why = TANGENTIAL_N_REASON
+                if Dq_e is None:
+                    broken, first_broken = why, i
+                    reasons.append(broken)
+                    continue
             else:
                 Dq_e = limiter_D.get(q_e, np.zeros(P)) if kind in (EventCode.IMPACT, EventCode.REST_ON_LIMITER) \
                     else np.zeros(P)
@@ -453,7 +442,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
             w_plus, Dw_plus = k * k * w_minus, 2 * k * Dk * w_minus + k * k * Dw_minus
             Dv_plus = -(Dk * v_minus + k * Dv_minus)
             D_impact_loss += c.m / 2 * (-2 * k * Dk * w_minus + (1 - k * k) * Dw_minus)
-        else:
+        else:   # a turning point, or a sign change of N: w goes on (the branch flips with N)
             w_plus, Dw_plus, Dv_plus = w_minus, Dw_minus, Dv_minus
             if turning:
                 Dv_plus = np.zeros(P)
@@ -467,7 +456,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None) -> Tangents:
     final = {name: np.full(P, np.nan) for name in ("t_final", "q_final", "friction_work", "impact_loss")}
     if not broken and result.status.code in FINAL_STATUSES and n and Dq_last is not None:
         q_f = result.events[-1].q
-        DE_final = c.m * (Dw_last / 2 + c.g * float(c.dz(q_f)) * Dq_last)
+        DE_final = c.m * (Dw_last / 2 + c.g * (float(c.dz(q_f)) * Dq_last + c.geometry_dp("z", q_f)[0]))
         final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=D_impact_loss,
                      friction_work=DE0 - DE_final - D_impact_loss)
     for name in notes:
@@ -496,8 +485,6 @@ def _on_cone_edge(alpha: float, mu: float) -> bool:
 def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
     """Why event ``ev`` has no derivatives (empty when it has); ``moved``: the particle moved to it
     (a turning point of ``G``, not a rest test where it already was)."""
-    if kind == EventCode.NORMAL_SIGN_CHANGE:
-        return "a sign change of the normal force (not derived yet); this event and the ones after it"
     if kind == EventCode.LEFT_CURVE:
         return "the particle leaves the curve"
     if ev.detail and "zeno" in ev.detail.lower():

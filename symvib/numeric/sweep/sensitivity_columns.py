@@ -43,7 +43,7 @@ REASONS = (
     "a turning point on the edge of the friction cone",
     "a turning point on a limiter (grazing)",
     "a Zeno accumulation of impacts",
-    "a sign change of the normal force (not derived yet)",
+    "a tangential zero of the normal force (it touches 0 without crossing it)",
     "the particle leaves the curve",
     "the time derivative's quadrature did not converge",
     "the run failed",
