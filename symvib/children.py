@@ -137,7 +137,7 @@ def _limit_cpu(seconds: float) -> None:
 
 #: Children this process kills at once when a signal ends it (:func:`terminate_as_exception`): objects
 #: with a ``kill()`` method (a pool's workers, a budgeted child); weakly held.
-_OWNED: "weakref.WeakSet" = weakref.WeakSet()
+_OWNED: weakref.WeakSet = weakref.WeakSet()
 
 
 def own(child):
@@ -246,7 +246,7 @@ class _Signals:
 
 
 #: The state of the innermost :func:`terminate_as_exception` block (``None`` outside one).
-_ACTIVE: "_Signals | None" = None
+_ACTIVE: _Signals | None = None
 
 
 def exit_code(signum: int) -> int:
