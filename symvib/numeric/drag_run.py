@@ -42,6 +42,7 @@ import time
 from typing import NamedTuple
 
 from symvib.numeric.drag_phase import PANEL, DragCurve, span, walk
+from symvib.numeric.driver import BUDGET_RTOL
 from symvib.numeric.engine.bind import kernel_functions
 from symvib.numeric.engine.laws import (
     SLIDE,
@@ -59,7 +60,7 @@ from symvib.numeric.engine.state import Kernels
 from symvib.numeric.events import EnergyBudget, Event, Result, ZenoInfo, kind_of, status_of
 from symvib.numeric.layout import EventCode, StatusCode
 
-__all__ = ["simulate_drag", "WINDOW", "ZENO_DRAG", "TOLERANCE_FACTOR", "DragInterval"]
+__all__ = ["simulate_drag", "WINDOW", "ZENO_DRAG", "TOLERANCE_FACTOR", "DragInterval", "NO_SAMPLES"]
 
 #: Length of one search window, in run length scales (8 panels of :data:`~symvib.numeric.drag_phase.PANEL`).
 WINDOW = 8 * PANEL
@@ -109,7 +110,8 @@ def simulate_drag(scene, prepared=None, *, rtol: float = 1e-12, atol: float = 0.
     -------
     Result
         As :func:`symvib.numeric.driver.simulate`'s, with the drag work in the energy budget
-        (``EnergyBudget.drag_work``); no samples or dense output (``Result.error`` says so).
+        (``EnergyBudget.drag_work``); no samples or dense output yet (:data:`NO_SAMPLES`:
+        ``Result.samples`` is None and ``Result.error`` says why, ``Result.dense`` raises).
     """
     from symvib.numeric.prepared import prepared_of
 
@@ -136,8 +138,7 @@ def simulate_drag(scene, prepared=None, *, rtol: float = 1e-12, atol: float = 0.
             abs(budget.residual) > BUDGET_RTOL * max(abs(run.E0), abs(E), abs(x.Wf), abs(x.Wimp), abs(x.Wd)):
         status = StatusCode.ENERGY_BUDGET_MISMATCH
     stats = {"intervals": len(run.intervals) if samples else None, "backend": "python", "t_err": x.t_err,
-             "domain": (prep.domain.lo, prep.domain.hi), "drag": NOTE,
-             "error": "samples and dense output: not computed for a run with air drag yet"}
+             "domain": (prep.domain.lo, prep.domain.hi), "drag": NOTE}
     if status == StatusCode.TOLERANCE_NOT_MET:
         stats["accuracy"] = (f"error: the time of the motion interval from {scene.shape.q} = {x.q:.12g} to "
                              f"{run.q_bad:.12g} (starting at t = {x.t:.12g} s) could not be brought within its "
@@ -150,11 +151,23 @@ def simulate_drag(scene, prepared=None, *, rtol: float = 1e-12, atol: float = 0.
         ratio, simulated, remaining, side = run.zeno
         zinfo = ZenoInfo("right" if side > 0 else "left", ratio, simulated, remaining, x.t)
     return Result(scene=scene, status=status_of(status), events=tuple(run.events), energy_budget=budget,
-                  t_final=x.t, q_final=x.q, qdot_final=qdot, zeno=zinfo, stats=stats)
+                  t_final=x.t, q_final=x.q, qdot_final=qdot, zeno=zinfo, stats=stats,
+                  sampler=_no_samples if samples else None, interpolant=_no_dense if samples else None)
 
 
-#: Largest relative residual of the energy budget a trusted drag run may end with (as the driver's).
-BUDGET_RTOL = 1e-9
+#: Why a drag run has no samples, figures or dense output.
+NO_SAMPLES = ("samples, figures and dense output are not computed for a run with air drag yet "
+              "(its events and energy budget are; physics.md, \"Air drag\")")
+
+
+def _no_samples():
+    """The sampler of a drag run: ``(None, why)`` (:attr:`Result.error` then says why)."""
+    return None, NO_SAMPLES
+
+
+def _no_dense(result):
+    """The interpolant of a drag run: a ValueError that says why there is none."""
+    raise ValueError(f"dense output: {NO_SAMPLES}")
 
 
 def _num(v):

@@ -145,6 +145,12 @@ class EnergyBudget:
     impact_loss: float
     drag_work: float | None = None
 
+    def __repr__(self) -> str:
+        """The fields' repr, ``drag_work`` only where there is one (a run without drag: as before drag)."""
+        out = (f"EnergyBudget(initial={self.initial!r}, final={self.final!r}, friction_work={self.friction_work!r}, "
+               f"impact_loss={self.impact_loss!r}")
+        return out + (")" if self.drag_work is None else f", drag_work={self.drag_work!r})")
+
     @property
     def residual(self) -> float:
         out = self.initial - self.final - self.friction_work - self.impact_loss

@@ -1,0 +1,204 @@
+"""Air drag in the engine (physics.md, "Air drag"; symvib.numeric.drag_run, symvib.numeric.drag_phase).
+
+Event kinds, times and positions on the paper's scenes with a drag coefficient that matters
+(``gamma = c / m`` of 0.1 to 1 per metre) against an independent 30-digit time integration of
+eq. 1 with drag (tests/drag_reference.py, written from physics.md), the energy budget with its
+drag work, a drag of 0 that leaves every run as it was, and the field's checks.
+"""
+import json
+import math
+
+import pytest
+from drag_reference import reference_events
+
+import symvib
+from symvib.numeric.drag_run import NO_SAMPLES, ZENO_DRAG
+from symvib.numeric.scene import SceneError, load_scene, packaged_scene, scene_from_dict
+
+#: Agreement asked of event times (s) against the reference, and of positions (in q).
+T_AGREE, Q_AGREE = 1e-9, 1e-9
+#: Energy budget closure asked of a drag run, relative to E0.
+BUDGET_AGREE = 1e-12
+PAPER = ("paper-parabola", "paper-cycloid", "paper-circle-7")
+
+
+def _compare(result, reference):
+    assert [e.kind.value for e in result.events[:len(reference)]] == [k for k, _, _ in reference]
+    for e, (_, t, q) in zip(result.events, reference):
+        assert abs(e.t - float(t)) <= T_AGREE, (e, float(t))
+        assert abs(e.q - float(q)) <= Q_AGREE, (e, float(q))
+
+
+def test_first_events_of_the_circle_with_drag_against_a_30_digit_integration():
+    scene = packaged_scene("paper-circle-7").replace(drag=0.1)   # gamma = 0.5 / m
+    result = symvib.simulate(scene)
+    reference = reference_events(scene, 3)
+    _compare(result, reference)
+    # the comparison sees the drag: without it the second event is elsewhere
+    plain = symvib.simulate(packaged_scene("paper-circle-7"))
+    assert abs(plain.events[1].t - float(reference[1][1])) > 1e-3
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PAPER)
+@pytest.mark.parametrize("k", [1.0, 0.8])
+@pytest.mark.parametrize("drag", [0.02, 0.1])
+def test_paper_scenes_with_drag_against_a_30_digit_integration(name, k, drag):
+    scene = packaged_scene(name).replace(drag=drag, k=k)
+    result = symvib.simulate(scene)
+    assert result.success and result.zeno is None
+    reference = reference_events(scene, len(result.events))
+    assert len(reference) == len(result.events)
+    _compare(result, reference)
+    assert result.status.value == reference[-1][0] == "arrest" or result.status.value != "arrested"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("contact, kind", [("bilateral", "normal_sign_change"), ("unilateral", "left_curve")])
+def test_normal_force_zero_with_drag_against_a_30_digit_integration(contact, kind):
+    """The circle run fast over its top: N changes sign (the branch flips), or a particle on top
+    of it leaves it, with drag."""
+    scene = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+                             "physics": {"mu": 0.05, "restitution": 0.8, "drag": 0.05, "m": 0.2,
+                                         "contact": contact},
+                             "limiters": {"right": 2.5}, "initial": {"q": 0.0, "qdot": 9.0}})
+    if contact == "unilateral":   # on top of the circle: a start near its top, moving
+        scene = scene.replace(q0=math.pi - 0.2, qdot0=3.0, right=None, left=None)
+    result = symvib.simulate(scene)
+    assert kind in [e.kind.value for e in result.events]
+    n = [e.kind.value for e in result.events].index(kind) + 1
+    _compare(result, reference_events(scene, n))
+
+
+@pytest.mark.parametrize("name", PAPER)
+@pytest.mark.parametrize("k", [1.0, 0.8])
+def test_energy_budget_with_drag_closes(name, k):
+    scene = packaged_scene(name).replace(drag=0.1, k=k)
+    result = symvib.simulate(scene, samples=False)
+    b = result.energy_budget
+    assert result.success and b.drag_work > 0.01 * b.initial   # the drag takes a visible share
+    assert abs(b.initial - b.final - b.friction_work - b.impact_loss - b.drag_work) <= BUDGET_AGREE * b.initial
+    assert abs(b.residual) <= BUDGET_AGREE * b.initial
+    data = json.loads(result.to_json())
+    assert data["energy_budget"]["drag_work"] == b.drag_work and data["units"]["energy_budget"]["drag_work"] == "J"
+    assert "drag work" in result.event_table()
+
+
+def test_a_budget_that_misses_its_drag_work_does_not_close():
+    """The check can fail: the drag work is a term of its own, not absorbed elsewhere."""
+    result = symvib.simulate(packaged_scene("paper-cycloid").replace(drag=0.1), samples=False)
+    b = result.energy_budget
+    assert abs(b.initial - b.final - b.friction_work - b.impact_loss) > 1e3 * BUDGET_AGREE * b.initial
+
+
+@pytest.mark.parametrize("name", PAPER)
+def test_a_vanishing_drag_runs_as_the_engine(name):
+    """The drag path is code of its own: at c = 1e-13 kg/m its events are the engine's without drag."""
+    plain = symvib.simulate(packaged_scene(name), samples=False)
+    tiny = symvib.simulate(packaged_scene(name).replace(drag=1e-13), samples=False)
+    assert tiny.stats["drag"] and "drag" not in plain.stats
+    assert [e.kind for e in tiny.events] == [e.kind for e in plain.events]
+    for a, b in zip(tiny.events, plain.events):
+        assert abs(a.t - b.t) <= 1e-10 and abs(a.q - b.q) <= 1e-10
+    assert tiny.status == plain.status
+
+
+@pytest.mark.parametrize("backend", ["python", "auto"])
+def test_zero_drag_is_the_engine_bit_for_bit(backend):
+    scene = packaged_scene("paper-parabola")
+    given = scene_from_dict({**scene.to_dict(), "physics": {**scene.to_dict()["physics"], "drag": 0}})
+    assert given == scene and given.drag == 0.0 and "drag" not in scene.to_dict()["physics"]
+    a, b = symvib.simulate(scene, backend=backend), symvib.simulate(given.replace(drag=0.0), backend=backend)
+    assert a.events == b.events and a.energy_budget == b.energy_budget and a.energy_budget.drag_work is None
+    assert a.to_json() == b.to_json() and "drag" not in a.to_json()
+    assert repr(a.energy_budget).count("drag") == 0
+
+
+def test_drag_runs_on_every_backend_and_sweeps_refuse_it():
+    scene = packaged_scene("paper-cycloid").replace(drag=0.05)
+    a, b = symvib.simulate(scene, backend="python"), symvib.simulate(scene, backend="numba")
+    assert a.events == b.events and b.stats["backend"] == "python" and "drag" in b.stats["drag"]
+    with pytest.raises(SceneError, match="physics.drag: .*sweeps do not run scenes with air drag"):
+        symvib.sweep(scene, {"qdot": "3:12:2"}, backend="python")
+    with pytest.raises(ValueError, match="backend"):
+        symvib.simulate(scene, backend="fortran")
+
+
+def test_a_drag_run_says_it_has_no_samples_dense_output_or_sensitivities():
+    result = symvib.simulate(packaged_scene("paper-cycloid").replace(drag=0.05))
+    assert result.samples is None and result.error == NO_SAMPLES
+    with pytest.raises(ValueError, match="dense output: samples, figures and dense output are not computed"):
+        result.state(0.1)
+    with pytest.raises(ValueError, match="air drag"):
+        result.sensitivities(("mu",))
+
+
+def test_t_max_inside_an_interval_with_drag():
+    scene = packaged_scene("paper-circle-7").replace(drag=0.1)
+    full = symvib.simulate(scene, samples=False)
+    t_max = 0.5 * (full.events[1].t + full.events[2].t)
+    cut = symvib.simulate(scene.replace(t_max=t_max), samples=False)
+    assert cut.status.value == "t_max" and cut.t_final == t_max and cut.events == full.events[:2]
+    assert full.events[1].q < cut.q_final < full.events[2].q or full.events[2].q < cut.q_final < full.events[1].q
+    assert cut.energy_budget.relative_residual <= BUDGET_AGREE
+
+
+def test_zeno_accumulation_with_drag_is_summed_with_its_bound_stated():
+    """Bounces against a limiter that gravity pushes the particle into: summed once the drag's share
+    of a bounce is below ZENO_DRAG, with the drag-free local model (physics.md, "Air drag")."""
+    scene = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+                             "physics": {"mu": 0.05, "restitution": 0.5, "drag": 0.1, "m": 0.2},
+                             "limiters": {"left": 0.3}, "initial": {"q": 0.9, "qdot": 0.0}})
+    result = symvib.simulate(scene, samples=False)
+    assert result.status.value == "resting_on_limiter" and result.zeno is not None
+    assert "drag-free local model" in result.events[-1].detail
+    assert result.energy_budget.relative_residual <= BUDGET_AGREE
+    # the series: ratio and time of the drag-free local model at the limiter (circle: alpha = q, h = R)
+    g, mu, k, R, q = 9.81, 0.05, 0.5, 0.5, 0.3
+    a_up, a_down = g * (math.sin(q) + mu * math.cos(q)), g * (math.sin(q) - mu * math.cos(q))
+    ratio = k * math.sqrt(a_down / a_up)
+    assert result.zeno.ratio == pytest.approx(ratio, rel=1e-12)
+    last = [e for e in result.events if e.kind.value == "impact"][-1]
+    v = abs(last.qdot_after) * R
+    remaining = v * (1 / a_up + 1 / math.sqrt(a_up * a_down)) / (1 - ratio)
+    assert result.t_final - last.t == pytest.approx(remaining, rel=1e-9) == result.zeno.remaining_time
+    # summed only once the drag's share of a bounce (gamma times its length) is below the bound
+    assert (0.1 / 0.2) * v ** 2 / (2 * a_up) <= ZENO_DRAG
+
+
+@pytest.mark.parametrize("value, match", [
+    (float("nan"), "physics.drag: must be finite, got nan"),
+    (-0.1, "physics.drag: the drag coefficient c .* must be >= 0, got -0.1"),
+    (float("inf"), "physics.drag: must be finite"),
+    ("0.1", "physics.drag: must be a number"),
+    (True, "physics.drag: must be a number"),
+    (None, "physics.drag: must be a number"),
+])
+def test_replace_refuses_a_bad_drag_naming_the_field(value, match):
+    with pytest.raises(SceneError, match=match):
+        packaged_scene("paper-parabola").replace(drag=value)
+
+
+@pytest.mark.parametrize("text, match", [
+    ('"nan"', "physics.drag"), ("-0.5", "physics.drag: the drag coefficient"), ('"abc"', "physics.drag"),
+    ('"0.1 kg"', "physics.drag"), ("inf", "physics.drag"), ("[1, 2]", "physics.drag"), ("true", "physics.drag"),
+    ('"1e400"', "physics.drag"), ('"__import__(\'os\')"', "physics.drag"),
+])
+def test_a_hostile_drag_in_a_scene_file_names_the_field(tmp_path, text, match):
+    path = tmp_path / "scene.toml"
+    path.write_text('[curve]\nshape = "circle"\n[parameters]\nR = 0.5\n'
+                    f'[physics]\nmu = 0.05\nrestitution = 1\ndrag = {text}\n[initial]\nq = 0\nqdot = 3\n')
+    with pytest.raises(SceneError, match=match):
+        load_scene(path)
+
+
+def test_a_scene_file_reads_the_drag_and_the_scene_round_trips(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text('[curve]\nshape = "circle"\n[parameters]\nR = 0.5\n'
+                    '[physics]\nmu = 0.05\nrestitution = 1\nm = 0.2\ndrag = "0.02 kg/m"\n'
+                    '[initial]\nq = 0\nqdot = 3\n')
+    scene = load_scene(path)
+    assert scene.drag == 0.02 and scene.to_dict()["physics"]["drag"] == 0.02
+    assert scene_from_dict(scene.to_dict()) == scene and scene.replace(drag=0.0) != scene
+    result = symvib.simulate(scene, samples=False)
+    assert result.to_dict()["units"]["scene"]["physics.drag"] == "kg/m"
