@@ -143,6 +143,9 @@ def _events(scene, n_events, t_end):
             qd = -k * qd
             sigma = -sigma
         elif name == "nsign":
+            if scene.contact == "unilateral":   # the particle leaves the curve: the run ends
+                events.append(("left_curve", t, q))
+                return events
             events.append(("normal_sign_change", t, q))
             n = -n
         else:

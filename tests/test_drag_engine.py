@@ -50,20 +50,18 @@ def test_paper_scenes_with_drag_against_a_30_digit_integration(name, k, drag):
     reference = reference_events(scene, len(result.events))
     assert len(reference) == len(result.events)
     _compare(result, reference)
-    assert result.status.value == reference[-1][0] == "arrest" or result.status.value != "arrested"
+    assert (result.status.value == "arrested") == (reference[-1][0] == "arrest")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("contact, kind", [("bilateral", "normal_sign_change"), ("unilateral", "left_curve")])
 def test_normal_force_zero_with_drag_against_a_30_digit_integration(contact, kind):
-    """The circle run fast over its top: N changes sign (the branch flips), or a particle on top
-    of it leaves it, with drag."""
+    """The circle run fast above its horizontal diameter: N changes sign (a bead: the branch flips),
+    or a particle inside the loop leaves it, with drag."""
     scene = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
                              "physics": {"mu": 0.05, "restitution": 0.8, "drag": 0.05, "m": 0.2,
                                          "contact": contact},
                              "limiters": {"right": 2.5}, "initial": {"q": 0.0, "qdot": 9.0}})
-    if contact == "unilateral":   # on top of the circle: a start near its top, moving
-        scene = scene.replace(q0=math.pi - 0.2, qdot0=3.0, right=None, left=None)
     result = symvib.simulate(scene)
     assert kind in [e.kind.value for e in result.events]
     n = [e.kind.value for e in result.events].index(kind) + 1

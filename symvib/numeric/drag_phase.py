@@ -42,7 +42,7 @@ import numpy as np
 
 from symvib.numeric.quadrature import rule
 
-__all__ = ["DragCurve", "Walk", "walk", "span", "NODES", "PANEL", "MAX_PANELS"]
+__all__ = ["DragCurve", "Walk", "walk", "span", "converged", "panels", "NODES", "PANEL", "MAX_PANELS", "DRAG_FOLD"]
 
 #: Gauss-Legendre nodes per panel of a walk.
 NODES = 16
@@ -50,6 +50,14 @@ NODES = 16
 PANEL = 0.125
 #: Most panels :func:`span` doubles up to on one stretch; beyond, the time is not within its tolerance.
 MAX_PANELS = 1 << 14
+#: Most that ``2 gamma S`` grows over one panel (:meth:`DragCurve.panel`): half an e-fold of ``exp(Phi)``'s
+#: drag factor per panel.
+DRAG_FOLD = 0.5
+#: How far (``2 gamma S``, e-folds of the drag factor) a walk back from a turning point that ends an
+#: interval may go (:func:`span`): its ``G`` loses about ``exp(2 gamma S)`` of its relative accuracy.
+END_FOLD = 1.0
+#: E-folds of the drag factor after which a forward walk is anchored anew (:func:`span`).
+CHUNK_FOLD = 64.0
 #: Smallest relative tolerance :func:`span` asks of two panel counts' times (a few roundings of a sum).
 FLOOR_RTOL = 1e-14
 
@@ -71,6 +79,17 @@ class DragCurve:
     def of(cls, mod, cp, *, g, mu, gamma, scale=1.0):
         return cls(mod, tuple(float(v) for v in cp), float(g), float(mu), float(gamma), float(scale),
                    bool(getattr(mod, "ALPHA_CUT", False)))
+
+    def panel(self, q0: float) -> float:
+        """The widest panel (in ``q``) of a walk from ``q0``: :data:`PANEL` of the length scale, and
+        no more than the drag's e-folding share :data:`DRAG_FOLD` / (``gamma h``) (``exp(Phi)``
+        then changes by at most ``e`` over a panel, which 16 nodes integrate to rounding)."""
+        width = PANEL * self.scale
+        if self.gamma > 0.0:
+            h0 = abs(float(np.asarray(self.mod.h(q0, *self.cp), dtype=float)))
+            if h0 > 0.0 and math.isfinite(h0):
+                width = min(width, DRAG_FOLD / (self.gamma * h0))
+        return width
 
     def local(self, q):
         """``(h, x', z', alpha, kappa)`` at the points ``q`` (arrays of ``q``'s shape)."""
@@ -159,9 +178,9 @@ def _cumulative(R, values, jac, m, root, length):
     return np.concatenate((before[:, None] + inner, ends[:, None]), axis=1)
 
 
-def _panels(c: DragCurve, length: float) -> int:
-    """Panels of width at most :data:`PANEL` of the length scale over ``length``."""
-    return max(1, int(math.ceil(length / (PANEL * c.scale))))
+def panels(c: DragCurve, q0: float, length: float) -> int:
+    """Panels of width at most :meth:`DragCurve.panel` over ``length`` from ``q0``."""
+    return max(1, int(math.ceil(length / c.panel(q0))))
 
 
 def converged(c, q0, d, length, sigma, s, G0, root, rtol):
@@ -171,7 +190,7 @@ def converged(c, q0, d, length, sigma, s, G0, root, rtol):
     Returns ``(walk, error, ok)``: the finer walk, the difference of the two times, and
     whether they agreed before :data:`MAX_PANELS`.
     """
-    m = _panels(c, length)
+    m = panels(c, q0, length)
     coarse = walk(c, q0, d, length, sigma, s, G0, m, root)
     tol = max(rtol, FLOOR_RTOL)
     while True:
@@ -195,6 +214,9 @@ def span(c: DragCurve, qa: float, qe: float, sigma: int, s: int, wa: float, end_
     A turning point at either end (``wa == 0``, or ``end_root``) takes that half of the
     stretch walked in ``r`` from the root (anchored there: ``G = 0``), so the time's
     inverse square root is integrated without loss; the two halves meet at the midpoint.
+    Walked back from a root at the end, ``G`` is a difference of terms that grow like
+    ``exp(2 gamma S)``, so that walk is at most :data:`END_FOLD` e-folds of the drag
+    long; the walk from the start (forward, where nothing cancels) takes the rest.
 
     Returns ``(T, W_friction, W_drag, w_end, T_err, ok)``.
     """
@@ -202,16 +224,46 @@ def span(c: DragCurve, qa: float, qe: float, sigma: int, s: int, wa: float, end_
     if length == 0.0:
         return 0.0, 0.0, 0.0, (0.0 if end_root else wa), 0.0, True
     start_root = wa == 0.0
-    if not (start_root or end_root):
-        wk, err, ok = converged(c, qa, sigma, length, sigma, s, wa, False, rtol)
-        return wk.T, wk.Wf, wk.Wd, float(wk.w[-1]), err, ok
-    half = 0.5 * length
-    qm = qa + sigma * half
-    first, e1, ok1 = converged(c, qa, sigma, half, sigma, s, wa, start_root, rtol)
+    end_len = 0.0
     if end_root:
-        second, e2, ok2 = converged(c, qe, -sigma, abs(qe - qm), sigma, s, 0.0, True, rtol)
-        w_end = 0.0
-    else:
-        second, e2, ok2 = converged(c, qm, sigma, abs(qe - qm), sigma, s, float(first.w[-1]), False, rtol)
-        w_end = float(second.w[-1])
-    return (first.T + second.T, first.Wf + second.Wf, first.Wd + second.Wd, w_end, e1 + e2, ok1 and ok2)
+        # Walked back from the root, G is a difference of terms exp(2 gamma S) as large as itself:
+        # that walk stays within END_FOLD e-folds of the root (forward walks do not cancel).
+        end_len = 0.5 * length
+        h_end = abs(float(np.asarray(c.mod.h(qe, *c.cp), dtype=float)))
+        if c.gamma > 0.0 and h_end > 0.0:
+            end_len = min(end_len, END_FOLD / (2.0 * c.gamma * h_end))
+    qm = qe - sigma * end_len
+    T = Wf = Wd = err = 0.0
+    ok = True
+    q, w = qa, wa
+    if start_root:
+        first_len = min(0.5 * length, abs(qm - qa))
+        if c.gamma > 0.0:
+            first_len = min(first_len, CHUNK_FOLD * c.panel(qa) / DRAG_FOLD)
+        wk, err, ok = converged(c, qa, sigma, first_len, sigma, s, 0.0, True, rtol)
+        T, Wf, Wd = wk.T, wk.Wf, wk.Wd
+        q, w = qa + sigma * first_len, float(wk.w[-1])
+    if (qm - q) * sigma > 0.0:
+        T1, Wf1, Wd1, w, e1, ok1 = _forward(c, q, qm, sigma, s, w, rtol)
+        T, Wf, Wd, err, ok = T + T1, Wf + Wf1, Wd + Wd1, err + e1, ok and ok1
+    if not end_root:
+        return T, Wf, Wd, w, err, ok
+    wk, e2, ok2 = converged(c, qe, -sigma, end_len, sigma, s, 0.0, True, rtol)
+    return T + wk.T, Wf + wk.Wf, Wd + wk.Wd, 0.0, err + e2, ok and ok2
+
+
+def _forward(c, qa, qe, sigma, s, wa, rtol):
+    """:func:`span` from ``qa`` (``wa > 0``) to ``qe`` walked forward, anchored anew every
+    :data:`CHUNK_FOLD` e-folds of the drag factor (``exp(Phi)`` stays far from overflow)."""
+    T = Wf = Wd = err = 0.0
+    ok = True
+    q, w = qa, wa
+    while True:
+        room = abs(qe - q)
+        length = min(room, CHUNK_FOLD * c.panel(q) / DRAG_FOLD) if c.gamma > 0.0 else room
+        last = length >= room
+        wk, e, good = converged(c, q, sigma, room if last else length, sigma, s, w, False, rtol)
+        T, Wf, Wd, err, ok = T + wk.T, Wf + wk.Wf, Wd + wk.Wd, err + e, ok and good
+        if last or not good:
+            return T, Wf, Wd, float(wk.w[-1]), err, ok
+        q, w = q + sigma * length, float(wk.w[-1])

@@ -41,7 +41,7 @@ import math
 import time
 from typing import NamedTuple
 
-from symvib.numeric.drag_phase import PANEL, DragCurve, span, walk
+from symvib.numeric.drag_phase import PANEL, DragCurve, panels, span, walk
 from symvib.numeric.driver import BUDGET_RTOL
 from symvib.numeric.engine.bind import kernel_functions
 from symvib.numeric.engine.laws import (
@@ -64,6 +64,8 @@ __all__ = ["simulate_drag", "WINDOW", "ZENO_DRAG", "TOLERANCE_FACTOR", "DragInte
 
 #: Length of one search window, in run length scales (8 panels of :data:`~symvib.numeric.drag_phase.PANEL`).
 WINDOW = 8 * PANEL
+#: Most panels of a search window (where the drag narrows them: 32 e-folds of its factor at most).
+WINDOW_PANELS = 64
 #: A Zeno series at a limiter is summed (drag-free local model) once the drag's share of the
 #: next bounce, ``gamma`` times its length up the slope, is below this.
 ZENO_DRAG = 1e-12
@@ -376,12 +378,12 @@ class _Run:
         q0, w0 = x.q, x.w
         while True:
             room = abs(stop - q0)
-            length = min(WINDOW * self.scale, room)
+            length = min(WINDOW * self.scale, room, WINDOW_PANELS * c.panel(q0))
             if not length > 0.0:
                 return kind, q0
             last = length == room
             root = w0 == 0.0
-            wk = walk(c, q0, sigma, length, sigma, branch, w0, max(1, round(length / (PANEL * self.scale))), root)
+            wk = walk(c, q0, sigma, length, sigma, branch, w0, panels(c, q0, length), root)
             found = self.first_end(wk, q0, w0, branch)
             if found is not None:
                 return found
