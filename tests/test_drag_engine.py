@@ -8,11 +8,12 @@ drag work, a drag of 0 that leaves every run as it was, and the field's checks.
 import json
 import math
 
+import numpy as np
 import pytest
 from drag_reference import reference_events
 
 import symvib
-from symvib.numeric.drag_run import NO_SAMPLES, ZENO_DRAG
+from symvib.numeric.drag_run import NO_DENSE, ZENO_DRAG
 from symvib.numeric.scene import SceneError, load_scene, packaged_scene, scene_from_dict
 
 #: Agreement asked of event times (s) against the reference, and of positions (in q).
@@ -122,13 +123,43 @@ def test_drag_runs_on_every_backend_and_sweeps_refuse_it():
         symvib.simulate(scene, backend="fortran")
 
 
-def test_a_drag_run_says_it_has_no_samples_dense_output_or_sensitivities():
+def test_a_drag_run_says_it_has_no_dense_output_or_sensitivities():
     result = symvib.simulate(packaged_scene("paper-cycloid").replace(drag=0.05))
-    assert result.samples is None and result.error == NO_SAMPLES
-    with pytest.raises(ValueError, match="dense output: samples, figures and dense output are not computed"):
+    with pytest.raises(ValueError, match="dense output: the dense output .* is not computed for a run with air drag"):
         result.state(0.1)
+    assert NO_DENSE in str(pytest.raises(ValueError, result.at, 0.0).value)
     with pytest.raises(ValueError, match="air drag"):
         result.sensitivities(("mu",))
+
+
+@pytest.mark.parametrize("name", PAPER)
+def test_samples_of_a_drag_run_carry_the_drag_work_and_close_the_budget(name):
+    result = symvib.simulate(packaged_scene(name).replace(drag=0.1, k=0.8))
+    S, b = result.samples, result.energy_budget
+    assert result.error is None and len(S.t) > 100 and bool(np.all(np.diff(S.t) >= 0))
+    assert np.abs(S.E + S.W_mu + S.W_impacts + S.W_drag - b.initial).max() <= BUDGET_AGREE * b.initial
+    assert S.W_drag[-1] == pytest.approx(b.drag_work, rel=1e-13) and S.W_mu[-1] == pytest.approx(b.friction_work,
+                                                                                                   rel=1e-13)
+    # each interval ends at its event, and passes it to the next at the same time
+    for i, e in enumerate(e for e in result.events if e.kind.value != "arrest"):
+        assert S.t[S.interval == i][-1] == pytest.approx(e.t, abs=1e-15) and S.q[S.interval == i][-1] == e.q
+    # the speed's sign is the direction of motion, and the arc length follows q (here h > 0)
+    assert np.all(np.sign(S.v[S.qdot != 0]) == np.sign(S.qdot[S.qdot != 0]))
+    assert bool(np.all(np.diff(S.s)[np.diff(S.q) > 0] >= 0)) and bool(np.all(np.diff(S.s)[np.diff(S.q) < 0] <= 0))
+    frame = result.samples_frame()
+    assert frame.attrs["units"]["W_drag"] == "J" and "W_drag" in json.loads(result.to_json(samples=True))["samples"]
+
+
+def test_the_energy_figure_of_a_drag_run_stacks_the_drag_work():
+    from symvib.numeric.figures import run_figures
+
+    result = symvib.simulate(packaged_scene("paper-cycloid").replace(drag=0.1))
+    [(name, fig, text)] = run_figures(result, only=("energy-time",))
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "drag work $W_d$" in labels and "drag work W_d" in text
+    [(_, plain, plain_text)] = run_figures(symvib.simulate(packaged_scene("paper-cycloid")), only=("energy-time",))
+    assert not any("drag" in t.get_text() for t in plain.axes[0].get_legend().get_texts())
+    assert "drag" not in plain_text
 
 
 def test_t_max_inside_an_interval_with_drag():

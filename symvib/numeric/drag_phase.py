@@ -42,7 +42,8 @@ import numpy as np
 
 from symvib.numeric.quadrature import rule
 
-__all__ = ["DragCurve", "Walk", "walk", "span", "converged", "panels", "NODES", "PANEL", "MAX_PANELS", "DRAG_FOLD"]
+__all__ = ["DragCurve", "Walk", "walk", "span", "pieces", "converged", "panels", "NODES", "PANEL", "MAX_PANELS",
+           "DRAG_FOLD", "END_FOLD", "CHUNK_FOLD"]
 
 #: Gauss-Legendre nodes per panel of a walk.
 NODES = 16
@@ -115,10 +116,13 @@ class Walk:
     T: float
     Wf: float
     Wd: float
+    #: With ``profile``: the time, friction work, drag work (per unit mass) and arc length from
+    #: the anchor at every point (the samples of a run, :mod:`symvib.numeric.drag_samples`).
+    profile: tuple | None = None
 
 
 def walk(c: DragCurve, q0: float, d: int, length: float, sigma: int, s: int, G0: float, m: int,
-         root: bool, nodes: int = NODES) -> Walk:
+         root: bool, nodes: int = NODES, profile: bool = False) -> Walk:
     """Walk ``length`` from ``q0`` in direction ``d`` in ``m`` panels (physics.md, "Air drag").
 
     ``sigma`` is the direction of motion and ``s`` the branch; ``d = sigma`` walks with the
@@ -160,7 +164,13 @@ def walk(c: DragCurve, q0: float, d: int, length: float, sigma: int, s: int, G0:
         T = float(np.sum(R.weights * (hn / np.sqrt(wn)) * jn))
     Wf = float(np.sum(R.weights * c.mu * np.abs(Nn) * hn * jn))
     Wd = float(np.sum(R.weights * c.gamma * wn * hn * jn))
-    return Walk(q.ravel(), G.ravel(), Phi.ravel(), w.ravel(), N.ravel(), f.ravel(), T, Wf, Wd)
+    cum = None
+    if profile:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tc = _cumulative(R, hn / np.sqrt(wn), jac, m, root, length)
+        cum = tuple(a.ravel() for a in (tc, _cumulative(R, c.mu * np.abs(Nn) * hn, jac, m, root, length),
+                                        _cumulative(R, c.gamma * wn * hn, jac, m, root, length), arc))
+    return Walk(q.ravel(), G.ravel(), Phi.ravel(), w.ravel(), N.ravel(), f.ravel(), T, Wf, Wd, cum)
 
 
 def _cumulative(R, values, jac, m, root, length):
@@ -183,7 +193,7 @@ def panels(c: DragCurve, q0: float, length: float) -> int:
     return max(1, int(math.ceil(length / c.panel(q0))))
 
 
-def converged(c, q0, d, length, sigma, s, G0, root, rtol):
+def converged(c, q0, d, length, sigma, s, G0, root, rtol, profile=False):
     """The walk of :func:`walk` with panels doubled until two counts agree on the time within
     ``rtol`` (and on the friction and drag work and the end's ``G`` to their rounding).
 
@@ -194,7 +204,7 @@ def converged(c, q0, d, length, sigma, s, G0, root, rtol):
     coarse = walk(c, q0, d, length, sigma, s, G0, m, root)
     tol = max(rtol, FLOOR_RTOL)
     while True:
-        fine = walk(c, q0, d, length, sigma, s, G0, 2 * m, root)
+        fine = walk(c, q0, d, length, sigma, s, G0, 2 * m, root, profile=profile)
         err = abs(fine.T - coarse.T)
         scale_w = abs(fine.Wf) + abs(fine.Wd) + abs(G0) + abs(fine.G[-1])
         if (err <= tol * fine.T and abs(fine.Wf - coarse.Wf) + abs(fine.Wd - coarse.Wd) <= tol * scale_w
@@ -223,7 +233,26 @@ def span(c: DragCurve, qa: float, qe: float, sigma: int, s: int, wa: float, end_
     length = abs(qe - qa)
     if length == 0.0:
         return 0.0, 0.0, 0.0, (0.0 if end_root else wa), 0.0, True
-    start_root = wa == 0.0
+    T = Wf = Wd = err = 0.0
+    ok = True
+    w_end = wa
+    for wk, back, e, good in pieces(c, qa, qe, sigma, s, wa, end_root, rtol):
+        T, Wf, Wd, err, ok = T + wk.T, Wf + wk.Wf, Wd + wk.Wd, err + e, ok and good
+        w_end = 0.0 if back else float(wk.w[-1])
+    return T, Wf, Wd, w_end, err, ok
+
+
+def pieces(c: DragCurve, qa: float, qe: float, sigma: int, s: int, wa: float, end_root: bool,
+           rtol: float = 1e-12, profile: bool = False) -> list:
+    """The walks :func:`span` sums, in the order of motion: ``[(walk, back, error, ok)]``, ``back``
+    for the last one when it is walked back from a turning point at ``qe`` (its points then run
+    from ``qe`` against the motion).  A first walk from a turning point at ``qa`` is in ``r``; the
+    forward ones are anchored anew every :data:`CHUNK_FOLD` e-folds of the drag factor.
+    """
+    length = abs(qe - qa)
+    out = []
+    if length == 0.0:
+        return out
     end_len = 0.0
     if end_root:
         # Walked back from the root, G is a difference of terms exp(2 gamma S) as large as itself:
@@ -233,37 +262,24 @@ def span(c: DragCurve, qa: float, qe: float, sigma: int, s: int, wa: float, end_
         if c.gamma > 0.0 and h_end > 0.0:
             end_len = min(end_len, END_FOLD / (2.0 * c.gamma * h_end))
     qm = qe - sigma * end_len
-    T = Wf = Wd = err = 0.0
-    ok = True
     q, w = qa, wa
-    if start_root:
+    if wa == 0.0:
         first_len = min(0.5 * length, abs(qm - qa))
         if c.gamma > 0.0:
             first_len = min(first_len, CHUNK_FOLD * c.panel(qa) / DRAG_FOLD)
-        wk, err, ok = converged(c, qa, sigma, first_len, sigma, s, 0.0, True, rtol)
-        T, Wf, Wd = wk.T, wk.Wf, wk.Wd
+        wk, err, ok = converged(c, qa, sigma, first_len, sigma, s, 0.0, True, rtol, profile)
+        out.append((wk, False, err, ok))
         q, w = qa + sigma * first_len, float(wk.w[-1])
-    if (qm - q) * sigma > 0.0:
-        T1, Wf1, Wd1, w, e1, ok1 = _forward(c, q, qm, sigma, s, w, rtol)
-        T, Wf, Wd, err, ok = T + T1, Wf + Wf1, Wd + Wd1, err + e1, ok and ok1
-    if not end_root:
-        return T, Wf, Wd, w, err, ok
-    wk, e2, ok2 = converged(c, qe, -sigma, end_len, sigma, s, 0.0, True, rtol)
-    return T + wk.T, Wf + wk.Wf, Wd + wk.Wd, 0.0, err + e2, ok and ok2
-
-
-def _forward(c, qa, qe, sigma, s, wa, rtol):
-    """:func:`span` from ``qa`` (``wa > 0``) to ``qe`` walked forward, anchored anew every
-    :data:`CHUNK_FOLD` e-folds of the drag factor (``exp(Phi)`` stays far from overflow)."""
-    T = Wf = Wd = err = 0.0
-    ok = True
-    q, w = qa, wa
-    while True:
-        room = abs(qe - q)
-        length = min(room, CHUNK_FOLD * c.panel(q) / DRAG_FOLD) if c.gamma > 0.0 else room
-        last = length >= room
-        wk, e, good = converged(c, q, sigma, room if last else length, sigma, s, w, False, rtol)
-        T, Wf, Wd, err, ok = T + wk.T, Wf + wk.Wf, Wd + wk.Wd, err + e, ok and good
-        if last or not good:
-            return T, Wf, Wd, float(wk.w[-1]), err, ok
-        q, w = q + sigma * length, float(wk.w[-1])
+    while (qm - q) * sigma > 0.0:
+        room = abs(qm - q)
+        step = min(room, CHUNK_FOLD * c.panel(q) / DRAG_FOLD) if c.gamma > 0.0 else room
+        last = step >= room
+        wk, err, ok = converged(c, q, sigma, room if last else step, sigma, s, w, False, rtol, profile)
+        out.append((wk, False, err, ok))
+        if last or not ok:
+            break
+        q, w = q + sigma * step, float(wk.w[-1])
+    if end_root:
+        wk, err, ok = converged(c, qe, -sigma, end_len, sigma, s, 0.0, True, rtol, profile)
+        out.append((wk, True, err, ok))
+    return out

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 import time
+from functools import partial
 from typing import NamedTuple
 
 from symvib.numeric.drag_phase import PANEL, DragCurve, panels, span, walk
@@ -60,7 +61,7 @@ from symvib.numeric.engine.state import Kernels
 from symvib.numeric.events import EnergyBudget, Event, Result, ZenoInfo, kind_of, status_of
 from symvib.numeric.layout import EventCode, StatusCode
 
-__all__ = ["simulate_drag", "WINDOW", "ZENO_DRAG", "TOLERANCE_FACTOR", "DragInterval", "NO_SAMPLES"]
+__all__ = ["simulate_drag", "WINDOW", "ZENO_DRAG", "TOLERANCE_FACTOR", "DragInterval", "NO_DENSE"]
 
 #: Length of one search window, in run length scales (8 panels of :data:`~symvib.numeric.drag_phase.PANEL`).
 WINDOW = 8 * PANEL
@@ -81,7 +82,8 @@ NOTE = ("air drag: run on the NumPy drag path (symvib.numeric.drag_run) whatever
 
 class DragInterval(NamedTuple):
     """One motion interval of a drag run: from ``qa`` (squared speed ``wa``) to ``qb`` moving
-    ``sigma`` on branch ``s``, ending at a turning point or not, from ``t0`` for ``T``."""
+    ``sigma`` on branch ``s``, ending at a turning point or not, from ``t0`` for ``T``; the
+    friction and drag work per unit mass and the impact losses (J) before it."""
 
     qa: float
     qb: float
@@ -91,6 +93,9 @@ class DragInterval(NamedTuple):
     end_root: bool
     t0: float
     T: float
+    Wf0: float
+    Wd0: float
+    Wimp0: float
 
 
 class _State:
@@ -112,8 +117,9 @@ def simulate_drag(scene, prepared=None, *, rtol: float = 1e-12, atol: float = 0.
     -------
     Result
         As :func:`symvib.numeric.driver.simulate`'s, with the drag work in the energy budget
-        (``EnergyBudget.drag_work``); no samples or dense output yet (:data:`NO_SAMPLES`:
-        ``Result.samples`` is None and ``Result.error`` says why, ``Result.dense`` raises).
+        (``EnergyBudget.drag_work``) and its samples
+        (:class:`symvib.numeric.drag_samples.DragSamples`, with ``W_drag``); no dense output yet
+        (``Result.dense`` raises :data:`NO_DENSE`; the animation interpolates the samples).
     """
     from symvib.numeric.prepared import prepared_of
 
@@ -154,22 +160,25 @@ def simulate_drag(scene, prepared=None, *, rtol: float = 1e-12, atol: float = 0.
         zinfo = ZenoInfo("right" if side > 0 else "left", ratio, simulated, remaining, x.t)
     return Result(scene=scene, status=status_of(status), events=tuple(run.events), energy_budget=budget,
                   t_final=x.t, q_final=x.q, qdot_final=qdot, zeno=zinfo, stats=stats,
-                  sampler=_no_samples if samples else None, interpolant=_no_dense if samples else None)
+                  sampler=partial(_samples, run, scene, mod, cp) if samples else None,
+                  interpolant=_no_dense if samples else None)
 
 
-#: Why a drag run has no samples, figures or dense output.
-NO_SAMPLES = ("samples, figures and dense output are not computed for a run with air drag yet "
-              "(its events and energy budget are; physics.md, \"Air drag\")")
+#: Why a drag run has no dense output.
+NO_DENSE = ("the dense output (state at any time) is not computed for a run with air drag yet (its "
+            "events, samples and energy budget are; physics.md, \"Air drag\")")
 
 
-def _no_samples():
-    """The sampler of a drag run: ``(None, why)`` (:attr:`Result.error` then says why)."""
-    return None, NO_SAMPLES
+def _samples(run, scene, mod, cp):
+    """The sampler of a drag run: ``(samples, None)`` (:func:`symvib.numeric.drag_samples.samples`)."""
+    from symvib.numeric.drag_samples import samples
+
+    return samples(run, scene, mod, cp), None
 
 
 def _no_dense(result):
     """The interpolant of a drag run: a ValueError that says why there is none."""
-    raise ValueError(f"dense output: {NO_SAMPLES}")
+    raise ValueError(f"dense output: {NO_DENSE}")
 
 
 def _num(v):
@@ -260,7 +269,8 @@ class _Run:
         if x.t + T > s.t_max:
             self.stop_at_t_max(branch, qe, end == TURN, T)
             return
-        self.intervals.append(DragInterval(x.q, qe, x.w, x.sigma, branch, end == TURN, x.t, T))
+        self.intervals.append(DragInterval(x.q, qe, x.w, x.sigma, branch, end == TURN, x.t, T, x.Wf / s.m,
+                                           x.Wd / s.m, x.Wimp))
         x.t += T
         x.t_err += err
         x.Wf += s.m * Wf
@@ -349,7 +359,8 @@ class _Run:
             else:
                 b = mid
         Tq, Wf, Wd, w_end, err, _ = span(self.c, x.q, a, x.sigma, branch, x.w, False, self.rtol)
-        self.intervals.append(DragInterval(x.q, a, x.w, x.sigma, branch, False, x.t, Tq))
+        self.intervals.append(DragInterval(x.q, a, x.w, x.sigma, branch, False, x.t, Tq, x.Wf / s.m, x.Wd / s.m,
+                                           x.Wimp))
         x.t = s.t_max
         x.t_err += err
         x.Wf += s.m * Wf

@@ -63,6 +63,7 @@ QUANTITY_UNITS = {
     "P_mu": "W",
     "W_mu": "J",
     "W_impacts": "J",
+    "W_drag": "J",
     "Ek": "J",
     "Ep": "J",
     "E": "J",
