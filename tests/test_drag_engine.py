@@ -231,3 +231,18 @@ def test_a_scene_file_reads_the_drag_and_the_scene_round_trips(tmp_path):
     assert scene_from_dict(scene.to_dict()) == scene and scene.replace(drag=0.0) != scene
     result = symvib.simulate(scene, samples=False)
     assert result.to_dict()["units"]["scene"]["physics.drag"] == "kg/m"
+
+
+@pytest.mark.parametrize("qdot", [1e200, 1e160])
+def test_an_overflowing_drag_run_ends_non_finite(qdot):
+    result = symvib.simulate(packaged_scene("paper-circle-7").replace(drag=0.1, qdot0=qdot))
+    assert result.status.value == "non_finite" and not result.success
+
+
+def test_a_user_curve_runs_with_drag_and_closes_its_budget():
+    scene = scene_from_dict({"curve": {"name": "bowl", "z": "R - sqrt(R**2 - x**2)", "domain": ["-R", "R"]},
+                             "parameters": {"R": 0.5}, "physics": {"alpha0": 0.05, "restitution": 0.8, "drag": 0.05},
+                             "limiters": {"left": -0.2, "right": 0.35}, "initial": {"q": 0.1, "qdot": 3.0}})
+    result = symvib.simulate(scene)
+    assert result.success and result.status.value == "arrested"
+    assert result.energy_budget.relative_residual <= BUDGET_AGREE and result.energy_budget.drag_work > 0

@@ -404,10 +404,14 @@ class _Run:
 
     def first_end(self, wk, q0, w0, branch):
         """The first end inside a window (a turning point or a sign change of ``N``), or None."""
-        x = self.x
+        x, K, cp, mu = self.x, self.K, self.cp, self.scene.mu
         qs = wk.q
         G, N, f = wk.G, wk.N, wk.f
         prev_q, prev_w = q0, w0
+        if w0 > 0.0 and f[0] < 0.0 < x.sigma * (K.dz(q0, *cp) + branch * mu * K.dx(q0, *cp)):
+            qc = self.edge(q0, qs[0], branch)   # a minimum of G before the window's first node
+            if self.w_at(q0, w0, qc, branch) <= 0.0:
+                return TURN, self.root(q0, w0, qc, branch, "G")
         for i in range(len(qs)):
             if G[i] <= 0.0:
                 return TURN, self.root(prev_q, prev_w, qs[i], branch, "G")

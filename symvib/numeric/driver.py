@@ -336,7 +336,13 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         from symvib.numeric.drag_run import simulate_drag
 
         resolve_backend(backend)   # (an unknown backend is refused as for any scene)
-        return simulate_drag(scene, prep, rtol=rtol, atol=atol, wall_time=wall_time, samples=samples)
+        try:
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):   # the status says it
+                return simulate_drag(scene, prep, rtol=rtol, atol=atol, wall_time=wall_time, samples=samples)
+        except (ArithmeticError, ValueError) as exc:
+            if not _math_error(exc):
+                raise
+            return _non_finite(scene, exc)
     requested, backend = backend, run_backend(prep.kernels, backend)
     mod, eng = bound_engine(prep.kernels, backend)
     R = rules(nodes, rtol, atol)
