@@ -9,6 +9,7 @@ import pytest
 from symvib import simulate
 from symvib.numeric import scene as scene_mod
 from symvib.numeric.scene import (
+    DRAG_FIELDS,
     FIELD_UNITS,
     STATIC_FRICTION_FIELDS,
     TEXT_FIELDS,
@@ -130,13 +131,18 @@ def test_result_json_carries_the_units_of_the_table():
     assert units["scene"]["physics.g"] == FIELD_UNITS["physics.g"]
     assert units["scene"]["parameters.R"] == "m"
     for name in FIELD_UNITS:  # every scene quantity (the curve's expressions of a catalogue shape aside)
-        if not name.startswith(("curve.", "parameters.")) and name not in STATIC_FRICTION_FIELDS:
+        if not name.startswith(("curve.", "parameters.")) and name not in STATIC_FRICTION_FIELDS + DRAG_FIELDS:
             assert units["scene"][name] == field_unit(name, scene.shape)
     # static friction's units only where the scene gives it (a scene without it: its JSON as before)
     assert not set(STATIC_FRICTION_FIELDS) & set(units["scene"])
     static = simulate(scene.replace(mu_s=scene.mu + 0.1), backend="python", samples=False).to_dict()["units"]
     assert {name: static["scene"][name] for name in STATIC_FRICTION_FIELDS} == {"physics.mu_s": "1",
                                                                                 "physics.alpha0_s": "rad"}
+    # the drag's likewise, and the budget's drag work (physics.md, "Air drag")
+    assert not set(DRAG_FIELDS) & set(units["scene"]) and "drag_work" not in units["energy_budget"]
+    dragged = simulate(scene.replace(drag=0.05), samples=False).to_dict()
+    assert dragged["units"]["scene"]["physics.drag"] == "kg/m" == FIELD_UNITS["physics.drag"]
+    assert set(dragged["units"]["energy_budget"]) == set(dragged["energy_budget"]) >= {"drag_work"}
     # every number of the JSON has a unit: the events' columns, the samples' columns, the budget's entries
     assert set(units["events"]) == {k for e in data["events"] for k in e if k not in ("kind", "detail")}
     assert set(units["samples"]) == set(data["samples"])

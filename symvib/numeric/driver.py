@@ -286,7 +286,9 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         Keep what the samples need (the motion intervals); :attr:`Result.samples`
         computes them on first use, so a run costs its events only.
     backend : {"auto", "numba", "python"}
-        ``"auto"``: the compiled engine where it is on disk already, else the plain one
+        (A scene with air drag, ``scene.drag > 0``, runs on the NumPy drag path whatever the
+        backend: :mod:`symvib.numeric.drag_run`.)  ``"auto"``: the compiled engine where it is
+        on disk already, else the plain one
         (:func:`run_backend`; a loop of runs compiles it in the background and then takes
         it, :mod:`symvib.numeric.tiered`; ``stats["backend"]`` says which ran); ``"numba"``
         compiles it on first use (once per curve; its time: docs/benchmarks.md, "The driver
@@ -330,6 +332,17 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     rtol, atol = check_tolerances(rtol, atol)
     wall_time = check_wall_time(wall_time)
     prep = prepared_of(scene) if prepared is None else prepared
+    if getattr(scene, "drag", 0.0):   # air drag: its own path, on every backend (physics.md, "Air drag")
+        from symvib.numeric.drag_run import simulate_drag
+
+        resolve_backend(backend)   # (an unknown backend is refused as for any scene)
+        try:
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):   # the status says it
+                return simulate_drag(scene, prep, rtol=rtol, atol=atol, wall_time=wall_time, samples=samples)
+        except (ArithmeticError, ValueError) as exc:
+            if not _math_error(exc):
+                raise
+            return _non_finite(scene, exc)
     requested, backend = backend, run_backend(prep.kernels, backend)
     mod, eng = bound_engine(prep.kernels, backend)
     R = rules(nodes, rtol, atol)
@@ -579,6 +592,12 @@ def sweep_function(scene, backend: str = "auto", *, rtol: float = RTOL, atol: fl
     are checked as :func:`simulate` checks them (:func:`checked_status`).
     """
     rtol, atol = check_tolerances(rtol, atol)
+    if getattr(scene, "drag", 0.0):
+        from symvib.numeric.scene import SceneError
+
+        raise SceneError("physics.drag", f"{scene.drag!r}: sweeps do not run scenes with air drag yet (the "
+                                         "compiled engine has no drag); run them one by one with symvib.simulate, "
+                                         "or sweep the scene with drag = 0")
     _, eng = bound_engine(scene.shape, backend)
     fn = guarded_sweep(eng.sweep)
 

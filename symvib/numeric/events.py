@@ -128,31 +128,47 @@ assert set(tables.EVENT_FRAME_COLUMNS) == set(Event._fields), "every field of an
 
 @dataclass(frozen=True)
 class EnergyBudget:
-    """``E0 - E_final = W_friction + W_impacts``, with the residual of that balance.
+    """``E0 - E_final = W_friction + W_impacts (+ W_drag)``, with the residual of that balance
+    (physics.md, "Energies").
 
     ``friction_work`` is the integral of ``mu |F_N|`` along the path (a
     quadrature independent of the closed-form ``w(q)``), ``impact_loss`` the
-    sum of ``(1 - k^2) m w / 2`` over impacts.
+    sum of ``(1 - k^2) m w / 2`` over impacts, ``drag_work`` the integral of the
+    drag force ``c w`` along the path (the drag path's own quadrature of ``gamma w
+    h dq`` times ``m``); None for a scene without drag, whose budget, JSON and
+    tables are as they were before drag existed.
     """
 
     initial: float
     final: float
     friction_work: float
     impact_loss: float
+    drag_work: float | None = None
+
+    def __repr__(self) -> str:
+        """The fields' repr, ``drag_work`` only where there is one (a run without drag: as before drag)."""
+        out = (f"EnergyBudget(initial={self.initial!r}, final={self.final!r}, friction_work={self.friction_work!r}, "
+               f"impact_loss={self.impact_loss!r}")
+        return out + (")" if self.drag_work is None else f", drag_work={self.drag_work!r})")
 
     @property
     def residual(self) -> float:
-        return self.initial - self.final - self.friction_work - self.impact_loss
+        out = self.initial - self.final - self.friction_work - self.impact_loss
+        return out if self.drag_work is None else out - self.drag_work
 
     @property
     def relative_residual(self) -> float:
         """Residual relative to the initial energy (or to the dissipated energy if E0 is 0)."""
-        scale = max(abs(self.initial), abs(self.friction_work) + abs(self.impact_loss), math.ulp(1.0))
+        lost = abs(self.friction_work) + abs(self.impact_loss) + abs(self.drag_work or 0.0)
+        scale = max(abs(self.initial), lost, math.ulp(1.0))
         return abs(self.residual) / scale
 
     def to_dict(self) -> dict:
-        return {"initial": self.initial, "final": self.final, "friction_work": self.friction_work,
-                "impact_loss": self.impact_loss, "residual": self.residual}
+        out = {"initial": self.initial, "final": self.final, "friction_work": self.friction_work,
+               "impact_loss": self.impact_loss, "residual": self.residual}
+        if self.drag_work is not None:
+            out["drag_work"] = self.drag_work
+        return out
 
 
 @dataclass(frozen=True)
@@ -422,7 +438,9 @@ class Result:
             f"events: {len(self.events)} ({self.count(EventKind.IMPACT)} impacts, "
             f"{self.count(EventKind.REVERSAL)} reversals)",
             f"energy: initial {b.initial:.12g} J, final {b.final:.12g} J, friction work {b.friction_work:.12g} J, "
-            f"impact loss {b.impact_loss:.12g} J, residual {b.residual:.3g} J ({b.relative_residual:.2g} relative)",
+            f"impact loss {b.impact_loss:.12g} J, "
+            + ("" if b.drag_work is None else f"drag work {b.drag_work:.12g} J, ")
+            + f"residual {b.residual:.3g} J ({b.relative_residual:.2g} relative)",
         ]
         if self.zeno is not None:
             z = self.zeno

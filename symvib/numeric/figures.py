@@ -355,17 +355,20 @@ def energy_vs_q(result, quantity: str, ax=None, *, paper=None):
 
 
 def energy_vs_t(result, ax=None, *, paper=None):
-    """``E(t)`` with the friction work and impact losses stacked on it: they sum to ``E0``
-    at every sample (the samples' ``W_mu`` and ``W_impacts``, the energy budget's own terms;
-    at an impact the state after it carries its loss)."""
+    """``E(t)`` with the friction work and impact losses (and, with air drag, the drag work)
+    stacked on it: they sum to ``E0`` at every sample (the samples' ``W_mu``, ``W_impacts`` and
+    ``W_drag``, the energy budget's own terms; at an impact the state after it carries its loss)."""
     ax = _new_axes(ax)
     S = result.samples
     if not _moved(result):
         ax.plot([0.0], [_start_values(result)["E"]], ">", color="k", ms=7, ls="none", label=STILL_LABEL)
-    polys = ax.stackplot(S.t, S.E, S.W_mu, S.W_impacts,
-                         labels=["mechanical energy $E$", r"friction work $W_\mu$", "impact losses $W_k$"],
-                         colors=["tab:blue", "tab:orange", "0.6"], alpha=0.75)
-    for poly, hatch in zip(polys, ("", "//", "..")):
+    layers, labels = [S.E, S.W_mu, S.W_impacts], ["mechanical energy $E$", r"friction work $W_\mu$",
+                                                   "impact losses $W_k$"]
+    colors = ["tab:blue", "tab:orange", "0.6"]
+    if getattr(S, "W_drag", None) is not None:   # a run with air drag (physics.md, "Air drag")
+        layers, labels, colors = layers + [S.W_drag], labels + ["drag work $W_d$"], colors + ["tab:green"]
+    polys = ax.stackplot(S.t, *layers, labels=labels, colors=colors, alpha=0.75)
+    for poly, hatch in zip(polys, ("", "//", "..", "\\\\")):
         poly.set_hatch(hatch)
     ax.axhline(result.energy_budget.initial, color="k", lw=0.8, ls="--", label="$E_0$")
     ax.set_xlabel("$t$ [s]")
@@ -566,6 +569,9 @@ def run_figures(result, *, only=None, paper=None) -> list:
         text = caption(name, paper.get(name))
         if _static_above_kinetic(result):   # the band is static friction's, wider than the sliding cone
             text = text.replace("|tan alpha| <= mu ", "|tan alpha| <= mu_s (static friction) ")
+        if name == "energy-time" and result.energy_budget.drag_work is not None:   # air drag's own layer
+            text = text.replace("W_mu and impact losses", "W_mu, impact losses and drag work W_d").replace(
+                "of the friction work", "of the friction and drag work")
         lines = textwrap.fill(text, CAPTION_WIDTH)
         fig.text(0.01, 0.01, lines, fontsize=CAPTION_POINTS, va="bottom", ha="left")
         height = (lines.count("\n") + 1) * CAPTION_POINTS * 1.35 / 72 / FIGSIZE[1] + 0.02

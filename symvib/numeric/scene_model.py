@@ -107,6 +107,10 @@ class Scene:
     alpha0_s : float or None
         The static friction angle, ``mu_s = tan(alpha0_s)``, kept when the scene was
         given one (a scene given both must have them agree).
+    drag : float
+        The air drag coefficient ``c`` of the force ``-c v |v|`` (kg/m, ``>= 0``; physics.md,
+        "Air drag"); ``gamma = c / m`` enters the equations.  Default 0: no drag, and the
+        scene runs, writes and reads as before drag existed.
     """
 
     name: str
@@ -126,6 +130,7 @@ class Scene:
     contact: str = "bilateral"
     mu_s: float | None = None
     alpha0_s: float | None = field(default=None, compare=False)
+    drag: float = 0.0
 
     def __post_init__(self):
         if self.alpha0_s is not None:
@@ -194,6 +199,8 @@ class Scene:
                "initial": {"q": self.q0, "qdot": self.qdot0},
                "run": {"t_max": self.t_max, "max_events": self.max_events}}
         out["physics"]["contact"] = self.contact
+        if self.drag != 0.0:   # (a scene without drag writes what it wrote before drag existed)
+            out["physics"]["drag"] = self.drag
         limiters = {k: v for k, v in (("left", self.left), ("right", self.right)) if v is not None}
         if limiters:
             out["limiters"] = limiters
@@ -214,3 +221,10 @@ def _validate(s: Scene) -> None:
         if n not in given:
             raise SceneError(f"parameters.{n}", f"missing: curve '{s.shape.name}' needs a value for {n}")
     check_numbers(SceneNumbers.of(s))
+    _check_drag(s.drag)
+
+
+def _check_drag(value) -> None:
+    """``physics.drag``: a finite number ``>= 0`` (kg/m), else a :class:`SceneError` naming it."""
+    if not finite(value, "physics.drag") >= 0.0:
+        raise SceneError("physics.drag", f"the drag coefficient c (F = -c v|v|, kg/m) must be >= 0, got {value!r}")

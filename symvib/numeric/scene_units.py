@@ -36,7 +36,7 @@ from symvib import expr as _expr
 from symvib.numeric.scene_checks import SceneError, finite, show_value
 from symvib.shapes import Shape
 
-__all__ = ["FIELD_UNITS", "STATIC_FRICTION_FIELDS",
+__all__ = ["FIELD_UNITS", "STATIC_FRICTION_FIELDS", "DRAG_FIELDS",
            "TEXT_FIELDS", "VALUE_UNITS", "ANGLE_UNIT", "TRIGONOMETRIC", "field_unit",
            "angle_parameters", "units_table", "friction_coefficient", "read_number"]
 
@@ -62,6 +62,7 @@ FIELD_UNITS = {
     "physics.mu_s": "1",
     "physics.alpha0_s": "rad",
     "physics.restitution": "1",
+    "physics.drag": "kg/m",
     "limiters.left": "[q]",
     "limiters.right": "[q]",
     "initial.q": "[q]",
@@ -73,6 +74,9 @@ FIELD_UNITS = {
 #: ``alpha0_s``): the JSON of a result of a scene without them lists no unit for them, so that its
 #: outputs are what they were before static friction existed.
 STATIC_FRICTION_FIELDS = ("physics.mu_s", "physics.alpha0_s")
+#: Fields of :data:`FIELD_UNITS` a scene has only when it has air drag (``drag > 0``): as
+#: :data:`STATIC_FRICTION_FIELDS`, the JSON of a result without drag lists no unit for them.
+DRAG_FIELDS = ("physics.drag",)
 #: Scene fields that are text or names, not quantities (they have no unit).
 TEXT_FIELDS = ("name", "description", "curve.shape", "curve.name", "curve.q", "curve.params", "curve.closed_form",
                "physics.contact")

@@ -358,6 +358,9 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
     wrt = tuple(t[0] for t in targets)
     if result.status.is_error:
         raise ValueError(f"result: the run failed ({result.status.value}); its events have no derivatives")
+    if getattr(scene, "drag", 0.0):
+        raise ValueError("result: a run with air drag (physics.drag) has no sensitivities yet: the derivatives of "
+                         "physics.md, \"Sensitivities\" are those of the drag-free phase trajectory")
     kernels = (prepared or prepared_of(scene)).kernels
     if jets is None:
         from symvib.numeric.jet_kernels import load_jets

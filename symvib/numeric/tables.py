@@ -36,7 +36,7 @@ import dataclasses
 import numpy as np
 
 from symvib.numeric.layout import EVENT_KINDS
-from symvib.numeric.scene import FIELD_UNITS, STATIC_FRICTION_FIELDS, field_unit
+from symvib.numeric.scene import DRAG_FIELDS, FIELD_UNITS, STATIC_FRICTION_FIELDS, field_unit
 
 __all__ = ["events_frame", "samples_frame", "to_pandas", "quantity_units", "result_units", "require_pandas",
            "QUANTITY_UNITS"]
@@ -63,6 +63,7 @@ QUANTITY_UNITS = {
     "P_mu": "W",
     "W_mu": "J",
     "W_impacts": "J",
+    "W_drag": "J",
     "Ek": "J",
     "Ep": "J",
     "E": "J",
@@ -91,12 +92,15 @@ def quantity_units(shape) -> dict:
 def result_units(result, *, samples: bool = False) -> dict:
     """The ``"units"`` entry of :meth:`symvib.numeric.events.Result.to_dict`: the unit of
     every number of the JSON, nested as the JSON is, and of every scene field (the static
-    friction's only where the scene gives it: :data:`~symvib.numeric.scene.STATIC_FRICTION_FIELDS`)."""
+    friction's only where the scene gives it: :data:`~symvib.numeric.scene.STATIC_FRICTION_FIELDS`; the
+    drag's only where the scene has drag: :data:`~symvib.numeric.scene.DRAG_FIELDS`)."""
     shape = result.scene.shape
     units = quantity_units(shape)
     out = {"t_final": units["t"], "q_final": units["q"], "qdot_final": units["qdot"],
            "events": {k: units[k] for k in ("t", "t_err", "q", "qdot_before", "qdot_after", "energy")},
            "energy_budget": dict(BUDGET_UNITS)}
+    if result.energy_budget.drag_work is not None:   # (a run with air drag: physics.md, "Air drag")
+        out["energy_budget"]["drag_work"] = "J"
     if samples and result.samples is not None:
         out["samples"] = {name: units.get(name) for name in _sample_fields(result.samples)}
     scene_units = {}
@@ -105,6 +109,8 @@ def result_units(result, *, samples: bool = False) -> dict:
             for p in shape.params:
                 scene_units[f"parameters.{p}"] = field_unit(f"parameters.{p}", shape)
         elif name in STATIC_FRICTION_FIELDS and result.scene.mu_s is None:
+            continue
+        elif name in DRAG_FIELDS and not getattr(result.scene, "drag", 0.0):
             continue
         elif not name.startswith("curve.") or not shape.in_catalogue:
             scene_units[name] = field_unit(name, shape)
