@@ -12,8 +12,21 @@ import symvib
 PACKAGE = Path(symvib.__file__).resolve().parent
 #: Every module of the package (the generated kernel modules included: they are imported, not scanned).
 MODULES = sorted(m.name for m in pkgutil.walk_packages(symvib.__path__, "symvib."))
-#: Private imports allowed across modules: ``(importing file, imported module, name)``; none.
-PENDING_PRIVATE_IMPORTS: set = set()
+#: Private imports allowed across modules: ``(importing file, imported module, name)``.
+#: Private imports waiting to be made public.  codegen/jets.py reuses the kernel generator's printer and
+#: checks; making them public means editing codegen/generate.py, whose bytes are in the generator's
+#: hash (symvib.provenance.GENERATOR_SOURCES): that waits for the next change that regenerates
+#: generated/ anyway.
+PENDING_PRIVATE_IMPORTS: set = {
+    ("codegen/jets.py", "symvib.codegen.generate", "_BROADCAST"),
+    ("codegen/jets.py", "symvib.codegen.generate", "_doc_text"),
+    ("codegen/jets.py", "symvib.codegen.generate", "_function"),
+    ("codegen/jets.py", "symvib.codegen.generate", "_generic"),
+    ("codegen/jets.py", "symvib.codegen.generate", "_NumPy"),
+    ("codegen/jets.py", "symvib.codegen.generate", "_py_literal"),
+    ("codegen/jets.py", "symvib.codegen.generate", "_resolved"),
+    ("codegen/jets.py", "symvib.codegen.generate", "_file_problems"),
+}
 
 
 @pytest.mark.parametrize("name", MODULES)
