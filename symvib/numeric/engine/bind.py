@@ -194,13 +194,26 @@ def _compiled_functions(modules, keep, *, names=None, options=None, default=None
     """
     import numba
 
+    from symvib.numeric.engine import lazylink
+
     options, qualnames = options or {}, qualnames or {}
+    linked_only = lazylink.install()
 
     def make(name, fn):
         fn.__qualname__ = qualnames.get(name, fn.__qualname__)
-        return numba.njit(**options.get(name, default or {}))(fn)
+        opts = options.get(name, default or {})
+        if linked_only and _inner(opts):
+            # only compiled code calls it: its code is optimized and emitted inside its entry point
+            lazylink.lazy(fn)
+        return numba.njit(**opts)(fn)
 
     return rebound_functions(modules, keep, make, names)
+
+
+def _inner(options: dict) -> bool:
+    """Whether numba options make an inner function (no Python or C wrapper, not cached): its code
+    library is linked into its callers only (:mod:`~symvib.numeric.engine.lazylink`)."""
+    return bool(options.get("no_cpython_wrapper") and options.get("no_cfunc_wrapper") and not options.get("cache"))
 
 
 def _cacheable(module) -> bool:
@@ -241,8 +254,8 @@ def engine_digest() -> str:
     # (the layout too: its codes and columns are compile-time constants of the engine; and the
     # kernel interface, declared in kernelformat).  Found, not imported: the compiled binding
     # imports numba, which a plain run asking "is it compiled?" does not need.
-    names = ("symvib.numeric.engine.state", "symvib.numeric.engine.compiled", "symvib.numeric.layout",
-             "symvib.kernelformat")
+    names = ("symvib.numeric.engine.state", "symvib.numeric.engine.compiled", "symvib.numeric.engine.lazylink",
+             "symvib.numeric.layout", "symvib.kernelformat")
     for origin in (*(mod.__file__ for mod in ENGINE_MODULES), *(importlib.util.find_spec(n).origin for n in names)):
         digest.update(Path(origin).read_bytes())
     # (and the compile options, which numba's cache does not key on either)
@@ -257,9 +270,13 @@ def _params_of(ncp: int):
     import numba
     from numba.np.unsafe.ndarray import to_fixed_tuple
 
+    from symvib.numeric.engine import lazylink
+
     def params_of(row, n):
         return to_fixed_tuple(row, ncp)
 
+    if lazylink.install():
+        lazylink.lazy(params_of)
     return numba.njit(**INNER)(params_of)
 
 
