@@ -1,26 +1,28 @@
-"""Inner engine functions compiled to LLVM IR only: optimized and turned into machine code once,
+"""Inner engine functions compiled to optimized LLVM IR only: turned into machine code once,
 inside the entry point that calls them (imports numba).
 
 numba finalizes the code library of every function it compiles: it links in the libraries of
 the functions it calls, runs the full module optimization (``-O3``) over the lot and emits
 machine code for it.  For the engine's call tree (about 90 functions, ``simulate_bound`` ->
-``run`` -> ``run_on`` -> ``interval`` -> ``quad`` -> ``panel`` ...) every caller thus optimizes
-and compiles again the code of all its callees: the optimizer and the machine-code emitter saw
-about six times the code of the entry point, about 7 s of a 23 s compile of the parabola's
-``simulate`` entry (docs/benchmarks.md, "The engine's compile").
+``run`` -> ``run_on`` -> ``interval`` -> ``quad`` -> ``panel`` ...) every caller thus compiles
+again the code of all its callees: the machine-code emitter saw about six times the code of the
+entry point, 3-4 s of a 23 s compile of the parabola's ``simulate`` entry (docs/benchmarks.md,
+"The engine's compile").
 
 An inner function (compiled without Python and C wrappers: only compiled code calls it, never
-Python) needs neither: its library serves only to be linked into its callers.  :func:`lazy`
-marks such a function; its library is then finalized by linking alone (its IR after numba's
-per-function passes), and the entry point that calls it optimizes and compiles the whole tree
-once, as it did anyway.  The entry points, the kernels, and every function numba compiles for
-anyone else in the process are finalized as before.  Where numba's internals are not what this
-module expects, :func:`install` does nothing (the compile is then as slow as before, not wrong).
+Python) needs no machine code of its own: its library serves only to be linked into its callers.
+:func:`lazy` marks such a function; its library is then finalized without it (linked and
+optimized as before, not added to numba's execution engine), and the entry point that calls it
+emits the whole tree once, as it did anyway.  The entry points, the kernels, and every function
+numba compiles for anyone else in the process are finalized as before.  Where numba's internals
+are not what this module expects, :func:`install` does nothing (the compile is then as slow as
+before, not wrong).
 
-The compiled code is the same program (the same events, bit for bit:
-``benchmarks/event_snapshot.py``); a function inlined by LLVM is now optimized inside its caller
-from its IR, not from its code optimized on its own, which may change the code's speed slightly
-(``benchmarks/sweep_duel.py`` measures it).
+The optimization is kept: skipping it too (the entry point optimizing the whole tree once) saved
+about 3 s more of the compile, but LLVM then inlined and optimized differently and the sweep ran
+6 % slower (``benchmarks/sweep_duel.py``: 0.939).  With it, the entry point's module is the one
+numba built before, and so is its code (the same events, bit for bit:
+``benchmarks/event_snapshot.py``).
 
 Examples
 --------
@@ -98,7 +100,7 @@ def _install() -> bool:
     def lazy_finalize(self):
         if not getattr(self, LIBRARY_MARK, False):
             return finalize(self)
-        # numba's finalize without the module optimization and the machine code: link only
+        # numba's finalize without the execution engine: link and optimize, emit no machine code
         require_global_compiler_lock()
         self._raise_if_finalized()
         seen = set()
@@ -107,6 +109,7 @@ def _install() -> bool:
                 self._reload_init.update(library._reload_init)
                 seen.add(library)
                 self._final_module.link_in(library._get_module_for_linking(), preserve=True)
+        self._optimize_final_module()
         self._finalize_dynamic_globals()
         self._verify_declare_only_symbols()
         self._finalized = True
