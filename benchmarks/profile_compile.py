@@ -84,7 +84,7 @@ def main(which: str) -> None:
           f"specializations {sum(COUNT.values())}")
     for phase, seconds in PHASES.items():
         print(f"  LLVM {phase}: {seconds:.2f} s")
-    print("  numba front end and the rest: {:.2f} s".format(total - sum(PHASES.values())))
+    print(f"  numba front end and the rest: {total - sum(PHASES.values()):.2f} s")
     print("most exclusive time (s, specializations):")
     for name, seconds in EXCLUSIVE.most_common(20):
         print(f"  {name:24s} {seconds:6.2f}  {COUNT[name]}")
