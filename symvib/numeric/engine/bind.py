@@ -162,6 +162,13 @@ NO_REFCOUNT = ("panel", "quad", "interval", "turning_point", "stop_at_t_max", "i
                "root_anchored", "tail_time", "turn_departure", "time_excess", "root_time", "locate", "walk",
                "map_extend", "extend_side", "crossing", "branch_cut", "add_root", "room", "map_start", "put_event",
                "put_interval")
+#: Arguments of engine functions that some call sites pass as a constant (``0``, ``False``) and
+#: others as a variable: numba compiles a specialization for each literal constant (``panel`` twice,
+#: ``add_root`` three times ...).  These are typed as variables at every call (they choose no code
+#: path by their type; ``mode`` and the sweep's ``keep_intervals`` stay literal: those prune code).
+NOT_LITERAL = {"panel": ("o",), "tail_error": ("cautious",), "grown": ("n",), "put_event": ("ne",),
+               "put_interval": ("ni",), "add_root": ("b",), "crossing": ("row",), "scratch": ("rows", "n"),
+               "run_arrays": ("event_rows", "interval_rows")}
 #: numba's error model of the compiled engine and kernels: a division by zero gives inf or NaN (as
 #: numpy does; the run then ends ``non_finite``), not a Python exception, so no division carries a
 #: test and a branch to raise it (a few per cent of a sweep's time; docs/benchmarks.md).
@@ -194,13 +201,45 @@ def _compiled_functions(modules, keep, *, names=None, options=None, default=None
     """
     import numba
 
+    from symvib.numeric.engine import lazylink
+
     options, qualnames = options or {}, qualnames or {}
+    linked_only = lazylink.install()
 
     def make(name, fn):
         fn.__qualname__ = qualnames.get(name, fn.__qualname__)
-        return numba.njit(**options.get(name, default or {}))(fn)
+        opts = options.get(name, default or {})
+        if linked_only and _inner(opts):
+            # only compiled code calls it: its code is optimized and emitted inside its entry point
+            lazylink.lazy(fn)
+        dispatcher = numba.njit(**opts)(fn)
+        if name in NOT_LITERAL:
+            _typed_as_variables(dispatcher, NOT_LITERAL[name])
+        return dispatcher
 
     return rebound_functions(modules, keep, make, names)
+
+
+def _typed_as_variables(dispatcher, names) -> None:
+    """Let ``dispatcher``'s compiled callers pass its arguments ``names`` as variables of their type
+    (``int64``, ``bool``), never as the literal constant a call site may give them: one compiled
+    specialization for every call, not one per constant (:data:`NOT_LITERAL`)."""
+    from numba.core import types
+
+    params = list(inspect.signature(dispatcher.py_func).parameters)
+    which = frozenset(params.index(name) for name in names)
+    get_call_template = dispatcher.get_call_template
+
+    def unliteral_call_template(args, kws):
+        return get_call_template(tuple(types.unliteral(a) if i in which else a for i, a in enumerate(args)), kws)
+
+    dispatcher.get_call_template = unliteral_call_template
+
+
+def _inner(options: dict) -> bool:
+    """Whether numba options make an inner function (no Python or C wrapper, not cached): its code
+    library is linked into its callers only (:mod:`~symvib.numeric.engine.lazylink`)."""
+    return bool(options.get("no_cpython_wrapper") and options.get("no_cfunc_wrapper") and not options.get("cache"))
 
 
 def _cacheable(module) -> bool:
@@ -241,12 +280,12 @@ def engine_digest() -> str:
     # (the layout too: its codes and columns are compile-time constants of the engine; and the
     # kernel interface, declared in kernelformat).  Found, not imported: the compiled binding
     # imports numba, which a plain run asking "is it compiled?" does not need.
-    names = ("symvib.numeric.engine.state", "symvib.numeric.engine.compiled", "symvib.numeric.layout",
-             "symvib.kernelformat")
+    names = ("symvib.numeric.engine.state", "symvib.numeric.engine.compiled", "symvib.numeric.engine.lazylink",
+             "symvib.numeric.layout", "symvib.kernelformat")
     for origin in (*(mod.__file__ for mod in ENGINE_MODULES), *(importlib.util.find_spec(n).origin for n in names)):
         digest.update(Path(origin).read_bytes())
     # (and the compile options, which numba's cache does not key on either)
-    digest.update(repr((INNER, HOT_INLINE, loop.RUN_STEPS, timing.QUAD_STEPS, NO_REFCOUNT)).encode())
+    digest.update(repr((INNER, HOT_INLINE, loop.RUN_STEPS, timing.QUAD_STEPS, NO_REFCOUNT, NOT_LITERAL)).encode())
     return digest.hexdigest()[:20]
 
 
@@ -257,9 +296,13 @@ def _params_of(ncp: int):
     import numba
     from numba.np.unsafe.ndarray import to_fixed_tuple
 
+    from symvib.numeric.engine import lazylink
+
     def params_of(row, n):
         return to_fixed_tuple(row, ncp)
 
+    if lazylink.install():
+        lazylink.lazy(params_of)
     return numba.njit(**INNER)(params_of)
 
 
