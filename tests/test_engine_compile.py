@@ -55,7 +55,27 @@ def probe():
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def _tested_numba() -> bool:
+    import numba
+
+    from symvib.numeric.engine import lazylink
+
+    return lazylink._release(numba.__version__) in lazylink.TESTED_NUMBA
+
+
+def test_the_patches_stay_out_of_an_untested_numba(monkeypatch):
+    import numba
+
+    from symvib.numeric.engine import lazylink
+
+    monkeypatch.setattr(numba, "__version__", "99.1.0")
+    assert lazylink._install() is False
+    assert lazylink._release("0.68.1") == (0, 68) and lazylink._release("dev") == ()
+
+
 def test_inner_functions_are_linked_only_and_entries_compiled(probe):
+    if not _tested_numba():
+        pytest.skip("lazylink is not installed on a numba release it was not tested with")
     assert probe["installed"], "lazylink did not install on this numba"
     assert probe["events"] > 0
     assert probe["entries"] == {"simulate_bound": [False]}

@@ -15,8 +15,9 @@ Python) needs no machine code of its own: its library serves only to be linked i
 optimized as before, not added to numba's execution engine), and the entry point that calls it
 emits the whole tree once, as it did anyway.  The entry points, the kernels, and every function
 numba compiles for anyone else in the process are finalized as before.  Where numba's internals
-are not what this module expects, :func:`install` does nothing (the compile is then as slow as
-before, not wrong).
+are not what this module expects, or the numba release is not one it was tested with
+(:data:`TESTED_NUMBA`), :func:`install` does nothing (the compile is then as slow as before, not
+wrong).
 
 The optimization is kept: skipping it too (the entry point optimizing the whole tree once) saved
 about 3 s more of the compile, but LLVM then inlined and optimized differently and the sweep ran
@@ -35,12 +36,17 @@ from __future__ import annotations
 
 import threading
 
-__all__ = ["lazy", "install", "installed"]
+__all__ = ["lazy", "install", "installed", "TESTED_NUMBA"]
 
 #: Attribute of a Python function whose numba library is finalized by linking alone.
 MARK = "_symvib_lazy_library"
 #: Attribute of such a numba code library.
 LIBRARY_MARK = "_symvib_lazy"
+
+#: numba releases (major, minor) whose internals these patches were written against and tested with
+#: (``tests/test_engine_compile.py``, ``benchmarks/event_snapshot.py``); with any other release
+#: :func:`install` leaves numba alone: a private method may keep its name and change its meaning.
+TESTED_NUMBA = ((0, 68),)
 
 _LOCK = threading.Lock()
 _STATE = {"installed": None}
@@ -70,7 +76,19 @@ def install() -> bool:
         return _STATE["installed"]
 
 
+def _release(version: str) -> tuple:
+    """``(major, minor)`` of a version string (``"0.68.1"`` -> ``(0, 68)``); ``()`` when unreadable."""
+    try:
+        return tuple(int(part) for part in version.split(".")[:2])
+    except ValueError:
+        return ()
+
+
 def _install() -> bool:
+    import numba
+
+    if _release(numba.__version__) not in TESTED_NUMBA:
+        return False
     from numba.core import codegen, typed_passes
     from numba.core.compiler_lock import require_global_compiler_lock
 
