@@ -55,13 +55,16 @@ MESSAGES = {
     Status.T_MAX: "the time bound t_max was reached",
     Status.MAX_EVENTS: "the event bound max_events was reached",
     Status.LEFT_DOMAIN: "the particle reached an end of the curve's regular domain (a singular point)",
-    Status.LEFT_CURVE: "the normal force reached 0 and the particle left the curve (unilateral contact)",
+    Status.LEFT_CURVE: "the normal force reached 0 and the particle left the curve (unilateral contact; a sweep "
+                       "does not follow its flight, simulate() does)",
     Status.NON_FINITE: "error: the state stopped being finite (overflow); the numbers are not a result",
     Status.ENERGY_BUDGET_MISMATCH: "error: the energy budget does not close; the numbers are not a result",
     Status.TOLERANCE_NOT_MET: "error: the time of a motion interval could not be brought within its tolerance "
                               "(rtol, atol); the run stopped at the start of that interval",
     Status.WALL_TIME_LIMIT: "the plain engine's wall-clock limit (wall_time) was reached; the events before it "
                             "are right, the run is unfinished",
+    Status.CROSSED_LIMITER: "a flying particle crossed the normal line of a limiter before landing (unilateral "
+                            "contact); the model has no impact of a flying particle on a limiter",
     Status.REACHED_SINGULAR_POINT: "error: the particle reached a singular point of the curve (a pole, a cusp or a "
                                    "corner), where the model ends; the events before it are right",
 }
@@ -139,20 +142,27 @@ class EnergyBudget:
     final: float
     friction_work: float
     impact_loss: float
+    #: ``W_landing``: the energy lost at landings (physics.md, "Flight and landing"); None for a run
+    #: that never left the curve (its budget and JSON are what they were).
+    landing_loss: float | None = None
 
     @property
     def residual(self) -> float:
-        return self.initial - self.final - self.friction_work - self.impact_loss
+        return self.initial - self.final - self.friction_work - self.impact_loss - (self.landing_loss or 0.0)
 
     @property
     def relative_residual(self) -> float:
         """Residual relative to the initial energy (or to the dissipated energy if E0 is 0)."""
-        scale = max(abs(self.initial), abs(self.friction_work) + abs(self.impact_loss), math.ulp(1.0))
+        scale = max(abs(self.initial), abs(self.friction_work) + abs(self.impact_loss) + abs(self.landing_loss or 0.0),
+                    math.ulp(1.0))
         return abs(self.residual) / scale
 
     def to_dict(self) -> dict:
-        return {"initial": self.initial, "final": self.final, "friction_work": self.friction_work,
-                "impact_loss": self.impact_loss, "residual": self.residual}
+        out = {"initial": self.initial, "final": self.final, "friction_work": self.friction_work,
+               "impact_loss": self.impact_loss, "residual": self.residual}
+        if self.landing_loss is not None:
+            out["landing_loss"] = self.landing_loss
+        return out
 
 
 @dataclass(frozen=True)
@@ -422,7 +432,9 @@ class Result:
             f"events: {len(self.events)} ({self.count(EventKind.IMPACT)} impacts, "
             f"{self.count(EventKind.REVERSAL)} reversals)",
             f"energy: initial {b.initial:.12g} J, final {b.final:.12g} J, friction work {b.friction_work:.12g} J, "
-            f"impact loss {b.impact_loss:.12g} J, residual {b.residual:.3g} J ({b.relative_residual:.2g} relative)",
+            f"impact loss {b.impact_loss:.12g} J, "
+            + (f"landing loss {b.landing_loss:.12g} J, " if b.landing_loss is not None else "")
+            + f"residual {b.residual:.3g} J ({b.relative_residual:.2g} relative)",
         ]
         if self.zeno is not None:
             z = self.zeno

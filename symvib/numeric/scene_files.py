@@ -88,7 +88,7 @@ MAX_DESCRIPTION_LENGTH = 10_000
 SECTIONS = {
     "curve": {"shape", "x", "z", "q", "name", "domain", "h", "alpha", "q_scale", "params", "closed_form"},
     "parameters": None,  # free names: the curve's symbols
-    "physics": {"g", "m", "mu", "alpha0", "mu_s", "alpha0_s", "restitution", "contact"},
+    "physics": {"g", "m", "mu", "alpha0", "mu_s", "alpha0_s", "restitution", "contact", "restitution_curve"},
     "limiters": {"left", "right"},
     "initial": {"q", "qdot"},
     "run": {"t_max", "max_events"},
@@ -274,6 +274,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         contact=phys.get("contact", "bilateral"),
         mu_s=mu_s,
         alpha0_s=alpha0_s,
+        restitution_curve=read_number(phys, "restitution_curve", "physics", default=0.0, shape=shape),
     )
 
 

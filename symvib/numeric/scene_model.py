@@ -107,6 +107,10 @@ class Scene:
     alpha0_s : float or None
         The static friction angle, ``mu_s = tan(alpha0_s)``, kept when the scene was
         given one (a scene given both must have them agree).
+    restitution_curve : float
+        Newton's restitution of the normal velocity when a flying particle lands on the
+        curve (unilateral contact; physics.md, "Flight and landing" 4), in ``[0, 1]``;
+        default 0 (no bounce).
     """
 
     name: str
@@ -126,8 +130,10 @@ class Scene:
     contact: str = "bilateral"
     mu_s: float | None = None
     alpha0_s: float | None = field(default=None, compare=False)
+    restitution_curve: float = 0.0
 
     def __post_init__(self):
+        object.__setattr__(self, "restitution_curve", check_restitution_curve(self.restitution_curve))
         if self.alpha0_s is not None:
             mu_s = friction_coefficient(self.alpha0_s, "physics.alpha0_s")
             if self.mu_s is None:
@@ -194,10 +200,33 @@ class Scene:
                "initial": {"q": self.q0, "qdot": self.qdot0},
                "run": {"t_max": self.t_max, "max_events": self.max_events}}
         out["physics"]["contact"] = self.contact
+        if self.restitution_curve != 0.0:
+            out["physics"]["restitution_curve"] = self.restitution_curve
         limiters = {k: v for k, v in (("left", self.left), ("right", self.right)) if v is not None}
         if limiters:
             out["limiters"] = limiters
         return out
+
+
+def check_restitution_curve(value) -> float:
+    """``physics.restitution_curve`` as a float in ``[0, 1]`` (physics.md, "Flight and landing" 4),
+    else a :class:`SceneError` naming the field.
+
+    Examples
+    --------
+    >>> check_restitution_curve(0.5)
+    0.5
+    >>> check_restitution_curve(2)
+    Traceback (most recent call last):
+    ...
+    symvib.numeric.scene_checks.SceneError: physics.restitution_curve: must be in [0, 1] (the restitution of \
+a landing on the curve; 0: no bounce), got 2.0
+    """
+    v = finite(value, "physics.restitution_curve")
+    if not 0.0 <= v <= 1.0:
+        raise SceneError("physics.restitution_curve",
+                         f"must be in [0, 1] (the restitution of a landing on the curve; 0: no bounce), got {v!r}")
+    return v
 
 
 def _validate(s: Scene) -> None:

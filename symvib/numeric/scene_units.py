@@ -62,6 +62,7 @@ FIELD_UNITS = {
     "physics.mu_s": "1",
     "physics.alpha0_s": "rad",
     "physics.restitution": "1",
+    "physics.restitution_curve": "1",
     "limiters.left": "[q]",
     "limiters.right": "[q]",
     "initial.q": "[q]",
@@ -73,6 +74,9 @@ FIELD_UNITS = {
 #: ``alpha0_s``): the JSON of a result of a scene without them lists no unit for them, so that its
 #: outputs are what they were before static friction existed.
 STATIC_FRICTION_FIELDS = ("physics.mu_s", "physics.alpha0_s")
+#: Fields of :data:`FIELD_UNITS` only a unilateral scene lists in its result's JSON (physics.md, "Flight
+#: and landing"): a bilateral scene's outputs are what they were before flights existed.
+FLIGHT_FIELDS = ("physics.restitution_curve",)
 #: Scene fields that are text or names, not quantities (they have no unit).
 TEXT_FIELDS = ("name", "description", "curve.shape", "curve.name", "curve.q", "curve.params", "curve.closed_form",
                "physics.contact")
