@@ -10,7 +10,7 @@ and the bouncing-ball accumulation on the tangent line (:func:`accumulation`).
 Examples
 --------
 >>> path(0.5, 0.0, 1.0, 2.0, 3.0, 10.0)      # x0, z0, vx, vz at t = 0.5 with g = 10
-(2.0, 0.25, 2.0, -2.0)
+(1.0, 1.25, 2.0, -2.0)
 >>> law = landing_law(1.0, -2.0, 1.0, 0.0, 0.5, 0.2)   # flat floor: V = (1, -2), e = 0.5, mu = 0.2
 >>> law.u_after, round(law.v_after, 12), law.stick
 (1.0, 0.4, False)
