@@ -297,7 +297,7 @@ def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend):
                          f.t)
         events[-1] = events[-1]._replace(detail=f"Zeno accumulation: geometric series of bounces, ratio {z.ratio:.9g}")
     stats = {"intervals": None, "backend": backend, "t_err": f.t_err, "domain": (prep.domain.lo, prep.domain.hi),
-             "flights": f.flights, "landings": f.landings}
+             "flights": f.flights, "landings": f.landings, "scale": float(first.scale)}
     if f.stopped:
         stats["stopped"] = f.stopped
     return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=partial(_no_samples, NO_SAMPLES),

@@ -17,6 +17,7 @@ A scene loads from TOML (:mod:`tomllib`) with this schema::
     alpha0 = 0.05               # friction angle (mu = tan alpha0), or mu = ...: one of them, not both
     # mu_s = 0.08               # static friction (rest test), or alpha0_s = ...; >= mu; default: mu
     restitution = 0.8
+    # contact = "unilateral"    # on top of the curve; restitution_curve = 0.5: of a landing (default 0)
     [limiters]                  # positions in the coordinate q; either may be absent
     left = "-pi/6"
     right = "pi/4"
