@@ -82,7 +82,7 @@ class Run:
 def reference_run(scene, curve: Curve, scale: float | None) -> Run:
     """The events (kind, time) and the status of ``scene`` (unilateral, no limiters) by this integrator;
     ``scale`` is the run's length scale in ``q`` (the accumulation's threshold, physics.md)."""
-    p, g, m, mu, e = scene.param_dict, scene.g, scene.m, scene.mu, scene.restitution_curve
+    p, g, mu, e = scene.param_dict, scene.g, scene.mu, scene.restitution_curve
     mu_s = scene.mu_static
     run = Run()
 

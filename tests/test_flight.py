@@ -12,8 +12,8 @@ import math
 import random
 
 import pytest
-
 from flight_reference import CURVES, reference_run
+
 from symvib import simulate
 from symvib.numeric.events import EventKind, Status
 from symvib.numeric.flight import (
