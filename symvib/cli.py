@@ -269,6 +269,8 @@ def _cmd_run(args) -> int:
         with safeio.replacing_file(args.json, what="--json file") as fh:   # whole, never through a link
             fh.write((result.to_json(samples=args.samples) + "\n").encode("utf-8"))
         print(f"wrote {args.json}")
+    if (args.plot or args.animate) and result.samples is None and result.error:   # a run with flights, say
+        print(f"symvib run: no figures: {result.error}", file=sys.stderr)
     if args.plot and result.samples is not None:  # a non_finite run has no samples to draw
         from symvib.numeric.figures import save_run_figures
 

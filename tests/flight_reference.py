@@ -167,7 +167,7 @@ def reference_run(scene, curve: Curve, scale: float | None) -> Run:
                     seen = True
                 elif seen and v < 0:
                     a = ts[k - 1] if k else lo
-                    return brentq(F, a, ts[k], xtol=1e-16, rtol=4.5e-16, maxiter=200)
+                    return brentq(F, a, ts[k], xtol=1e-16, rtol=1e-15, maxiter=200)
             lo, width = lo + width, 2 * width
             if lo > scene.t_max + 10:
                 raise RuntimeError("no landing")

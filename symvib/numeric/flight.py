@@ -115,38 +115,42 @@ class Stretch:
         """``(q*, d)``: the nearest point of the stretch to ``(X, Z)`` and the signed distance, ``> 0`` on
         the side of ``n = (-z', x') / h`` (the particle's)."""
         d2 = (self.x - X) ** 2 + (self.z - Z) ** 2
-        # Samples about as near as the nearest (within two samples' length): the one nearest in q to
-        # q_near, then downhill to its local minimum (a curve over several turns has one per turn).
+        # The local minima of the samples' distance about as near as the nearest (within two samples'
+        # length): the one nearest in q to q_near (a curve over several turns has one per turn).
         reach = (math.sqrt(float(d2.min())) + 2.0 * self.step) ** 2
-        near = np.flatnonzero(d2 <= reach)
-        i = int(near[np.argmin(np.abs(self.q[near] - self.q_near))])
         last = len(self.q) - 1
-        while True:
-            j = i - 1 if i > 0 and d2[i - 1] < d2[i] else (i + 1 if i < last and d2[i + 1] < d2[i] else i)
-            if j == i:
-                break
-            i = j
+        pad = np.concatenate(([np.inf], d2, [np.inf]))
+        minima = np.flatnonzero((d2 <= reach) & (d2 <= pad[:-2]) & (d2 <= pad[2:]))
+        i = int(minima[np.argmin(np.abs(self.q[minima] - self.q_near))])
         best = float(d2[i])
         a, b = self.q[max(i - 1, 0)], self.q[min(i + 1, len(self.q) - 1)]
         fa, fb = self._foot(X, Z, a), self._foot(X, Z, b)
         q = self.q[i]
-        if fa > 0.0 > fb:   # the foot lies between: safeguarded Newton (bisection where it leaves [a, b])
-            for _ in range(60):
+        if fa > 0.0 > fb:   # the foot lies between: Newton, else false position (Illinois), kept in [a, b]
+            side = 0
+            for _ in range(100):
                 x, z, dx, dz = self.point(q)
                 f = dx * (X - x) + dz * (Z - z)
                 if f == 0.0:
                     break
                 if f > 0.0:
-                    a = q
+                    a, fa = q, f
+                    if side > 0:
+                        fb *= 0.5
+                    side = 1
                 else:
-                    b = q
+                    b, fb = q, f
+                    if side < 0:
+                        fa *= 0.5
+                    side = -1
                 ddx, ddz = self.second(q, dx, dz)
                 slope = ddx * (X - x) + ddz * (Z - z) - (dx * dx + dz * dz)
-                step = -f / slope if slope < 0.0 else math.nan
-                nxt = q + step
+                nxt = q - f / slope if slope < 0.0 else math.nan
                 if not a < nxt < b:
-                    nxt = 0.5 * (a + b)
-                if nxt == q or b - a <= 4.0 * EPS * max(abs(a), abs(b)):
+                    nxt = a - fa * (b - a) / (fb - fa)
+                    if not a < nxt < b:
+                        nxt = 0.5 * (a + b)
+                if abs(nxt - q) <= 4.0 * EPS * abs(q) + 1e-300 or b - a <= 4.0 * EPS * max(abs(a), abs(b)):
                     q = nxt
                     break
                 q = nxt
