@@ -309,3 +309,15 @@ def test_random_unilateral_scenes_agree_with_an_independent_integrator():
                        if e.kind is EventKind.LANDING and scene.restitution_curve > 0)
     assert all(n >= 10 for n in lifted.values()), lifted
     assert bounced >= 10
+
+
+@pytest.mark.slow
+def test_the_compiled_engine_flies_as_the_plain_one():
+    # backend="numba": the compiled engine slides, the flights run between its runs as on the plain one.
+    scene = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+                             "physics": {"g": G, "mu": 0.05, "restitution": 1.0, "contact": "unilateral",
+                                         "restitution_curve": 0.5}, "initial": {"q": 0.0, "qdot": 8.0}})
+    a, b = simulate(scene, backend="python"), simulate(scene, backend="numba")
+    assert b.stats["backend"] == "numba" and a.status is b.status is Status.ARRESTED
+    assert [e.kind for e in a.events] == [e.kind for e in b.events]
+    assert max(abs(x.t - y.t) for x, y in zip(a.events, b.events)) < 1e-12
