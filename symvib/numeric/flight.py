@@ -88,7 +88,8 @@ class Stretch:
         self.x = np.asarray(np.broadcast_to(mod.x(self.q, *cp), self.q.shape), dtype=float)
         self.z = np.asarray(np.broadcast_to(mod.z(self.q, *cp), self.q.shape), dtype=float)
         kappa = np.asarray(np.broadcast_to(mod.kappa(self.q, *cp), self.q.shape), dtype=float)
-        self.kappa_max = KAPPA_SAFETY * float(np.max(np.abs(kappa)))
+        finite = np.isfinite(kappa)   # (no bound where the curvature is not finite: the Lipschitz test alone)
+        self.kappa_max = KAPPA_SAFETY * float(np.max(np.abs(kappa[finite]))) if finite.all() else math.inf
         # Between samples the curve may bulge out of their box by about a sample's length.
         step = self.step = float(np.max(np.hypot(np.diff(self.x), np.diff(self.z))))
         self.box = (float(self.x.min()) - step, float(self.x.max()) + step, float(self.z.min()) - step,
@@ -217,10 +218,10 @@ def landing(stretch, x0, z0, vx, vz, g, u, length):
 
     v0 = speed(0.0)
     kmax = stretch.kappa_max
-    if u > 0.0:
+    if u > 0.0 and math.isfinite(kmax):
         t0 = u / (g + 2.0 * kmax * v0 * v0)   # d >= u t - A t^2 / 2 > 0 before 2 u / A
         d0 = dist(t0) if t0 < t_end else math.nan
-    else:   # a lift-off: from where the separation is past the graze threshold
+    else:   # a lift-off (or no curvature bound): from where the separation is past the graze threshold
         t0 = LIFT_START * max(v0 / g, math.sqrt(length / g))
         d0 = dist(t0) if t0 < t_end else math.nan
         while t0 < t_end and abs(d0) <= GRAZE * length:
@@ -247,7 +248,7 @@ def landing(stretch, x0, z0, vx, vz, g, u, length):
             if da + db > vmax * dt:
                 continue   # 1-Lipschitz: root-free
             A = g + 2.0 * kmax * vmax * vmax
-            if kmax * (max(da, db) + 0.5 * vmax * dt) <= 0.5 and min(da, db) > A * dt * dt / 8.0:
+            if kmax * (max(da, db) + 0.5 * vmax * dt) <= 0.5 and min(da, db) > A * dt * dt / 8.0:   # (inf: never)
                 continue   # |d''| <= A within half the radius of curvature: root-free
             if dt <= TOUCH_RTOL * tb or not ta < tm < tb:
                 t = ta if da <= db else tb
