@@ -8,6 +8,7 @@ on three curves against an independent integrator written from physics.md
 (tests/flight_reference.py: solve_ivp on the sliding equations, the flight in closed form,
 its landing by a dense scan of an explicit signed function and brentq).
 """
+import json
 import math
 import random
 
@@ -209,8 +210,14 @@ def test_a_bouncing_ball_run_end_to_end_closes_its_budget_and_arrests():
     assert r.status is Status.ARRESTED and r.success
     b = r.energy_budget
     assert b.landing_loss > 0 and b.relative_residual < BUDGET_TOL
-    assert r.to_dict()["energy_budget"]["landing_loss"] == b.landing_loss
-    assert r.samples is None and "flights" in r.error if r.error else r.samples is None
+    data = json.loads(r.to_json())
+    assert data["energy_budget"]["landing_loss"] == b.landing_loss and data["units"]["energy_budget"]["landing_loss"]
+    assert {"lift_off", "landing"} <= {e["kind"] for e in data["events"]}
+    assert "landing loss" in r.event_table()
+    assert r.samples is None and "flights" in r.error   # (none yet: it says so)
+    # a bilateral run's budget and JSON are as they were: no landing column
+    plain = simulate(scene.replace(contact="bilateral"), backend="python", samples=False)
+    assert plain.energy_budget.landing_loss is None and "landing_loss" not in plain.to_dict()["energy_budget"]
 
 
 # --- the scene field ------------------------------------------------------------------------------
