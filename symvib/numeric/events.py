@@ -146,6 +146,13 @@ class EnergyBudget:
     #: that never left the curve (its budget and JSON are what they were).
     landing_loss: float | None = None
 
+    def __repr__(self) -> str:
+        """As the dataclass writes it; ``landing_loss`` only where there is one (a run without flights
+        reads as it did before flights existed: ``benchmarks/event_snapshot.py`` records this)."""
+        names = ("initial", "final", "friction_work", "impact_loss") + (("landing_loss",) if self.landing_loss
+                                                                         is not None else ())
+        return f"EnergyBudget({', '.join(f'{n}={getattr(self, n)!r}' for n in names)})"
+
     @property
     def residual(self) -> float:
         return self.initial - self.final - self.friction_work - self.impact_loss - (self.landing_loss or 0.0)
