@@ -357,7 +357,12 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     if status == StatusCode.LEFT_CURVE and scene.contact == "unilateral":   # physics.md, "Flight and landing"
         from symvib.numeric.flights import result_with_flights
 
-        return result_with_flights(scene, prep, mod, eng, cp, row, R, out, backend)
+        try:
+            return result_with_flights(scene, prep, mod, eng, cp, row, R, out, backend)
+        except (ArithmeticError, ValueError) as exc:
+            if not _math_error(exc):
+                raise
+            return _non_finite(scene, exc)
     # A run into a singular point (the end of a narrowed domain) ends left_domain there, or, where the
     # steps into a pole lose the budget or the interval into it cannot be timed, with those errors.
     singular, reached = None, {StatusCode.LEFT_DOMAIN: out.q, StatusCode.ENERGY_BUDGET_MISMATCH: out.q,

@@ -28,7 +28,8 @@ from symvib.numeric.flight import (
 )
 from symvib.numeric.layout import StatusCode
 
-__all__ = ["Followed", "Flown", "follow", "fly", "searched_stretch", "events_of", "result_with_flights", "NO_SAMPLES"]
+__all__ = ["Followed", "Flown", "follow", "fly", "searched_stretch", "events_of", "result_with_flights",
+           "NO_SAMPLES", "no_samples"]
 
 
 class Followed(NamedTuple):
@@ -244,6 +245,11 @@ NO_SAMPLES = ("samples: a run with flights has none yet (the flight arcs are not
               "landing\"); its events and energy budget are complete")
 
 
+def no_samples():
+    """``(None, message)``: a run with flights has no samples yet (:data:`NO_SAMPLES`)."""
+    return None, NO_SAMPLES
+
+
 def events_of(out, t0, t_err0, plastic):
     """The events of an engine outcome as :class:`~symvib.numeric.events.Event`, shifted by ``t0`` and
     ``t_err0``; a ``left_curve`` is the ``lift_off`` it is in a run with flights."""
@@ -264,11 +270,9 @@ def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend):
     ``first`` (an engine outcome) ended ``left_curve``: :func:`follow` on the engine ``eng`` of the
     curve's kernels ``mod`` (``row``, ``R``: the run's scene row and rules).  Called by
     :func:`symvib.numeric.driver.simulate`."""
-    from functools import partial
-
     import numpy as np
 
-    from symvib.numeric.driver import _math_error, _no_samples, _non_finite, checked_status
+    from symvib.numeric.driver import checked_status
     from symvib.numeric.events import EnergyBudget, Result, ZenoInfo, status_of
     from symvib.numeric.layout import SceneRow
 
@@ -279,14 +283,9 @@ def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend):
         return eng.simulate(cp, r, R, False)
 
     plastic = scene.k == 0.0
-    try:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            f = follow(scene, mod, cp, prep.domain.lo, prep.domain.hi, first, run_segment,
-                       lambda out, t0, te0: events_of(out, t0, te0, plastic))
-    except (ArithmeticError, ValueError) as exc:
-        if not _math_error(exc):
-            raise
-        return _non_finite(scene, exc)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):   # (the driver catches an overflow)
+        f = follow(scene, mod, cp, prep.domain.lo, prep.domain.hi, first, run_segment,
+                   lambda out, t0, te0: events_of(out, t0, te0, plastic))
     E0 = float(first.E0)
     status = checked_status(f.status, f.t, f.q, f.qdot, E0, f.E_final, f.W_friction, f.W_impacts + f.W_landing)
     events = list(f.events)
@@ -300,6 +299,6 @@ def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend):
              "flights": f.flights, "landings": f.landings, "scale": float(first.scale)}
     if f.stopped:
         stats["stopped"] = f.stopped
-    return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=partial(_no_samples, NO_SAMPLES),
+    return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=no_samples,
                   interpolant=None, energy_budget=EnergyBudget(E0, f.E_final, f.W_friction, f.W_impacts, f.W_landing),
                   t_final=f.t, q_final=f.q, qdot_final=f.qdot, zeno=zinfo, stats=stats)
