@@ -68,9 +68,9 @@ def test_a_new_event_kind_needs_only_the_vocabulary(tmp_path):
                         ignore=shutil.ignore_patterns("__pycache__"))
     layout_py = copy / "numeric" / "layout.py"
     text = layout_py.read_text(encoding="utf-8")
-    marker = "    LEFT_CURVE = 5\n"
+    marker = "    LANDING = 7\n"   # the last member
     assert marker in text
-    layout_py.write_text(text.replace(marker, marker + "    GRAZING_CONTACT = 6\n", 1), encoding="utf-8")
+    layout_py.write_text(text.replace(marker, marker + "    GRAZING_CONTACT = 8\n", 1), encoding="utf-8")
     script = textwrap.dedent(f"""
         import sys, json
         sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f).lower()]
@@ -86,12 +86,12 @@ def test_a_new_event_kind_needs_only_the_vocabulary(tmp_path):
         from symvib.numeric.figures import phase_portrait
         from symvib.numeric.scene import resolve_scene
         from symvib.numeric.sweep.result import SweepResult
-        kind = kind_of(6)
+        kind = kind_of(8)
         base = simulate(resolve_scene("paper-parabola"), backend="python", samples=True)
         r = dataclasses.replace(base, events=(Event(kind, 0.1, 0.2, 1.0, 1.0, 2.0),))
         legend = [t.get_text() for t in phase_portrait(r).get_legend().get_texts()]
         log = np.zeros((1, 1, len(layout.EVENT_COLUMNS)))
-        log[0, 0, 0] = 6
+        log[0, 0, 0] = 8
         from types import SimpleNamespace
         fake = type("R", (), {{"columns": {{"events": np.array([1]), "event_log": log}},
                                "spec": SimpleNamespace(log_events=1)}})()

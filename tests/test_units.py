@@ -11,6 +11,7 @@ from symvib.numeric import scene as scene_mod
 from symvib.numeric.scene import (
     DRAG_FIELDS,
     FIELD_UNITS,
+    FLIGHT_FIELDS,
     STATIC_FRICTION_FIELDS,
     TEXT_FIELDS,
     SceneError,
@@ -131,8 +132,12 @@ def test_result_json_carries_the_units_of_the_table():
     assert units["scene"]["physics.g"] == FIELD_UNITS["physics.g"]
     assert units["scene"]["parameters.R"] == "m"
     for name in FIELD_UNITS:  # every scene quantity (the curve's expressions of a catalogue shape aside)
-        if not name.startswith(("curve.", "parameters.")) and name not in STATIC_FRICTION_FIELDS + DRAG_FIELDS:
+        if not name.startswith(("curve.", "parameters.")) and name not in STATIC_FRICTION_FIELDS + DRAG_FIELDS + FLIGHT_FIELDS:
             assert units["scene"][name] == field_unit(name, scene.shape)
+    # the flights' fields only for a unilateral scene (a bilateral one: its JSON as before)
+    assert not set(FLIGHT_FIELDS) & set(units["scene"])
+    flying = simulate(scene.replace(contact="unilateral"), backend="python", samples=False).to_dict()["units"]
+    assert {name: flying["scene"][name] for name in FLIGHT_FIELDS} == {"physics.restitution_curve": "1"}
     # static friction's units only where the scene gives it (a scene without it: its JSON as before)
     assert not set(STATIC_FRICTION_FIELDS) & set(units["scene"])
     static = simulate(scene.replace(mu_s=scene.mu + 0.1), backend="python", samples=False).to_dict()["units"]

@@ -12,8 +12,8 @@ Hard cases the engine handles: grazing, a turning point on the cone edge
 summed as a geometric series once below ``laws.ZENO_W``), plastic impacts,
 ``mu = 0`` with ``k = 1`` (bounded by ``t_max``/``max_events``), the normal
 force changing sign (bilateral contact: the branch flips; ``physics.contact =
-"unilateral"``: the run ends ``left_curve``), and the ends of the curve's
-regular domain.
+"unilateral"``: the particle lifts off, flies and lands, :mod:`symvib.numeric.flights`;
+a sweep ends ``left_curve`` there), and the ends of the curve's regular domain.
 
 Every result is checked (:func:`checked_status`): a state that stops being
 finite ends the run at once with status ``non_finite`` (on the plain-Python
@@ -367,6 +367,15 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         tiered.ran(mod, time.perf_counter() - started, scene.shape.name,
                    partial(compile_by_running, mod, cp, row, R, samples))
     status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
+    if status == StatusCode.LEFT_CURVE and scene.contact == "unilateral":   # physics.md, "Flight and landing"
+        from symvib.numeric.flights import result_with_flights
+
+        try:
+            return result_with_flights(scene, prep, mod, eng, cp, row, R, out, backend)
+        except (ArithmeticError, ValueError) as exc:
+            if not _math_error(exc):
+                raise
+            return _non_finite(scene, exc)
     # A run into a singular point (the end of a narrowed domain) ends left_domain there, or, where the
     # steps into a pole lose the budget or the interval into it cannot be timed, with those errors.
     singular, reached = None, {StatusCode.LEFT_DOMAIN: out.q, StatusCode.ENERGY_BUDGET_MISMATCH: out.q,

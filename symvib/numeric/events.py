@@ -55,13 +55,16 @@ MESSAGES = {
     Status.T_MAX: "the time bound t_max was reached",
     Status.MAX_EVENTS: "the event bound max_events was reached",
     Status.LEFT_DOMAIN: "the particle reached an end of the curve's regular domain (a singular point)",
-    Status.LEFT_CURVE: "the normal force reached 0 and the particle left the curve (unilateral contact)",
+    Status.LEFT_CURVE: "the normal force reached 0 and the particle left the curve (unilateral contact; simulate() "
+                       "follows its flight, but not with air drag, and a sweep does not)",
     Status.NON_FINITE: "error: the state stopped being finite (overflow); the numbers are not a result",
     Status.ENERGY_BUDGET_MISMATCH: "error: the energy budget does not close; the numbers are not a result",
     Status.TOLERANCE_NOT_MET: "error: the time of a motion interval could not be brought within its tolerance "
                               "(rtol, atol); the run stopped at the start of that interval",
     Status.WALL_TIME_LIMIT: "the plain engine's wall-clock limit (wall_time) was reached; the events before it "
                             "are right, the run is unfinished",
+    Status.CROSSED_LIMITER: "a flying particle crossed the normal line of a limiter before landing (unilateral "
+                            "contact); the model has no impact of a flying particle on a limiter",
     Status.REACHED_SINGULAR_POINT: "error: the particle reached a singular point of the curve (a pole, a cusp or a "
                                    "corner), where the model ends; the events before it are right",
 }
@@ -144,22 +147,30 @@ class EnergyBudget:
     friction_work: float
     impact_loss: float
     drag_work: float | None = None
+    #: ``W_landing``: the energy lost at landings (physics.md, "Flight and landing"); None for a run
+    #: that never left the curve (its budget and JSON are what they were).
+    landing_loss: float | None = None
 
     def __repr__(self) -> str:
-        """The fields' repr, ``drag_work`` only where there is one (a run without drag: as before drag)."""
-        out = (f"EnergyBudget(initial={self.initial!r}, final={self.final!r}, friction_work={self.friction_work!r}, "
-               f"impact_loss={self.impact_loss!r}")
-        return out + (")" if self.drag_work is None else f", drag_work={self.drag_work!r})")
+        """As the dataclass writes it; ``drag_work`` and ``landing_loss`` only where there is one (a run
+        without drag or flights reads as it did before they existed: ``benchmarks/event_snapshot.py``
+        records this)."""
+        names = ("initial", "final", "friction_work", "impact_loss") + tuple(
+            name for name in ("drag_work", "landing_loss") if getattr(self, name) is not None)
+        return f"EnergyBudget({', '.join(f'{n}={getattr(self, n)!r}' for n in names)})"
 
     @property
     def residual(self) -> float:
         out = self.initial - self.final - self.friction_work - self.impact_loss
-        return out if self.drag_work is None else out - self.drag_work
+        for extra in (self.drag_work, self.landing_loss):
+            if extra is not None:
+                out -= extra
+        return out
 
     @property
     def relative_residual(self) -> float:
         """Residual relative to the initial energy (or to the dissipated energy if E0 is 0)."""
-        lost = abs(self.friction_work) + abs(self.impact_loss) + abs(self.drag_work or 0.0)
+        lost = abs(self.friction_work) + abs(self.impact_loss) + abs(self.drag_work or 0.0) + abs(self.landing_loss or 0.0)
         scale = max(abs(self.initial), lost, math.ulp(1.0))
         return abs(self.residual) / scale
 
@@ -168,6 +179,8 @@ class EnergyBudget:
                "impact_loss": self.impact_loss, "residual": self.residual}
         if self.drag_work is not None:
             out["drag_work"] = self.drag_work
+        if self.landing_loss is not None:
+            out["landing_loss"] = self.landing_loss
         return out
 
 
@@ -440,6 +453,7 @@ class Result:
             f"energy: initial {b.initial:.12g} J, final {b.final:.12g} J, friction work {b.friction_work:.12g} J, "
             f"impact loss {b.impact_loss:.12g} J, "
             + ("" if b.drag_work is None else f"drag work {b.drag_work:.12g} J, ")
+            + (f"landing loss {b.landing_loss:.12g} J, " if b.landing_loss is not None else "")
             + f"residual {b.residual:.3g} J ({b.relative_residual:.2g} relative)",
         ]
         if self.zeno is not None:

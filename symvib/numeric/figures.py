@@ -182,6 +182,8 @@ EVENT_STYLES = {
     EventKind.REST_ON_LIMITER: ("tab:red", "s", "rest on limiter"),
     EventKind.NORMAL_SIGN_CHANGE: ("tab:purple", "x", "$N$ changes sign"),
     EventKind.LEFT_CURVE: ("tab:brown", "v", "leaves the curve"),
+    EventKind.LIFT_OFF: ("tab:brown", "^", "lift-off"),
+    EventKind.LANDING: ("tab:orange", "v", "landing"),
 }
 #: Colour and marker of an event kind without a style of its own (labelled with its name).
 DEFAULT_EVENT_STYLE = ("0.3", "D")

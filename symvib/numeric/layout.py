@@ -38,6 +38,10 @@ class EventCode(enum.IntEnum):
     REST_ON_LIMITER = 3
     NORMAL_SIGN_CHANGE = 4
     LEFT_CURVE = 5
+    #: Unilateral contact: the particle leaves the curve and flies (physics.md, "Flight and landing" 1).
+    LIFT_OFF = 6
+    #: The flying particle lands on the curve (physics.md, "Flight and landing" 4).
+    LANDING = 7
 
 
 class StatusCode(enum.IntEnum):
@@ -59,6 +63,9 @@ class StatusCode(enum.IntEnum):
     #: The particle reached a singular point of the curve (a pole, a cusp, a corner) that ends the
     #: regular interval it runs on; set by the driver where the engine reports ``LEFT_DOMAIN`` there.
     REACHED_SINGULAR_POINT = 11
+    #: A flying particle crossed the normal line of a limiter before landing (physics.md, "Flight and
+    #: landing" 6); set by :mod:`symvib.numeric.flights`, never by the engine.
+    CROSSED_LIMITER = 12
 
 
 class EventColumn(enum.IntEnum):

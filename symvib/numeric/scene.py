@@ -77,6 +77,7 @@ from symvib.numeric.scene_units import (
     ANGLE_UNIT,
     DRAG_FIELDS,
     FIELD_UNITS,
+    FLIGHT_FIELDS,
     STATIC_FRICTION_FIELDS,
     TEXT_FIELDS,
     TRIGONOMETRIC,
@@ -89,7 +90,7 @@ from symvib.numeric.scene_units import (
 
 __all__ = ["Scene", "SceneError", "SceneNumbers", "Check", "CHECKS", "load_scene", "resolve_scene", "scene_from_dict",
            "declared_domain", "friction_coefficient", "check_numbers", "DEFAULT_T_MAX", "DEFAULT_MAX_EVENTS",
-           "FIELD_UNITS", "STATIC_FRICTION_FIELDS", "DRAG_FIELDS",
+           "FIELD_UNITS", "STATIC_FRICTION_FIELDS", "DRAG_FIELDS", "FLIGHT_FIELDS",
            "TEXT_FIELDS", "VALUE_UNITS", "field_unit", "units_table", "packaged_scene",
            # handed on as well (callers and tests import them from here):
            "checks", "MAX_EVENTS", "CONTACTS", "MAX_NAME_LENGTH", "angle_parameters", "ANGLE_UNIT", "TRIGONOMETRIC",

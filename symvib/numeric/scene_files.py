@@ -18,6 +18,7 @@ A scene loads from TOML (:mod:`tomllib`) with this schema::
     # mu_s = 0.08               # static friction (rest test), or alpha0_s = ...; >= mu; default: mu
     restitution = 0.8
     # drag = 0.02               # air drag c in F = -c v|v| (kg/m), >= 0; default: 0 (no drag)
+    # contact = "unilateral"    # on top of the curve; restitution_curve = 0.5: of a landing (default 0)
     [limiters]                  # positions in the coordinate q; either may be absent
     left = "-pi/6"
     right = "pi/4"
@@ -89,7 +90,8 @@ MAX_DESCRIPTION_LENGTH = 10_000
 SECTIONS = {
     "curve": {"shape", "x", "z", "q", "name", "domain", "h", "alpha", "q_scale", "params", "closed_form"},
     "parameters": None,  # free names: the curve's symbols
-    "physics": {"g", "m", "mu", "alpha0", "mu_s", "alpha0_s", "restitution", "contact", "drag"},
+    "physics": {"g", "m", "mu", "alpha0", "mu_s", "alpha0_s", "restitution", "contact", "drag",
+                "restitution_curve"},
     "limiters": {"left", "right"},
     "initial": {"q", "qdot"},
     "run": {"t_max", "max_events"},
@@ -276,6 +278,7 @@ def scene_from_dict(data: dict, *, name: str | None = None) -> Scene:
         mu_s=mu_s,
         alpha0_s=alpha0_s,
         drag=read_number(phys, "drag", "physics", default=0.0, shape=shape),
+        restitution_curve=read_number(phys, "restitution_curve", "physics", default=0.0, shape=shape),
     )
 
 

@@ -111,6 +111,10 @@ class Scene:
         The air drag coefficient ``c`` of the force ``-c v |v|`` (kg/m, ``>= 0``; physics.md,
         "Air drag"); ``gamma = c / m`` enters the equations.  Default 0: no drag, and the
         scene runs, writes and reads as before drag existed.
+    restitution_curve : float
+        Newton's restitution of the normal velocity when a flying particle lands on the
+        curve (unilateral contact; physics.md, "Flight and landing" 4), in ``[0, 1]``;
+        default 0 (no bounce).
     """
 
     name: str
@@ -131,8 +135,10 @@ class Scene:
     mu_s: float | None = None
     alpha0_s: float | None = field(default=None, compare=False)
     drag: float = 0.0
+    restitution_curve: float = 0.0
 
     def __post_init__(self):
+        object.__setattr__(self, "restitution_curve", check_restitution_curve(self.restitution_curve))
         if self.alpha0_s is not None:
             mu_s = friction_coefficient(self.alpha0_s, "physics.alpha0_s")
             if self.mu_s is None:
@@ -201,10 +207,33 @@ class Scene:
         out["physics"]["contact"] = self.contact
         if self.drag != 0.0:   # (a scene without drag writes what it wrote before drag existed)
             out["physics"]["drag"] = self.drag
+        if self.restitution_curve != 0.0:
+            out["physics"]["restitution_curve"] = self.restitution_curve
         limiters = {k: v for k, v in (("left", self.left), ("right", self.right)) if v is not None}
         if limiters:
             out["limiters"] = limiters
         return out
+
+
+def check_restitution_curve(value) -> float:
+    """``physics.restitution_curve`` as a float in ``[0, 1]`` (physics.md, "Flight and landing" 4),
+    else a :class:`SceneError` naming the field.
+
+    Examples
+    --------
+    >>> check_restitution_curve(0.5)
+    0.5
+    >>> try:
+    ...     check_restitution_curve(2)
+    ... except SceneError as exc:
+    ...     print(exc.field)
+    physics.restitution_curve
+    """
+    v = finite(value, "physics.restitution_curve")
+    if not 0.0 <= v <= 1.0:
+        raise SceneError("physics.restitution_curve",
+                         f"must be in [0, 1] (the restitution of a landing on the curve; 0: no bounce), got {v!r}")
+    return v
 
 
 def _validate(s: Scene) -> None:

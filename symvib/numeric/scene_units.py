@@ -63,6 +63,7 @@ FIELD_UNITS = {
     "physics.alpha0_s": "rad",
     "physics.restitution": "1",
     "physics.drag": "kg/m",
+    "physics.restitution_curve": "1",
     "limiters.left": "[q]",
     "limiters.right": "[q]",
     "initial.q": "[q]",
@@ -77,6 +78,10 @@ STATIC_FRICTION_FIELDS = ("physics.mu_s", "physics.alpha0_s")
 #: Fields of :data:`FIELD_UNITS` a scene has only when it has air drag (``drag > 0``): as
 #: :data:`STATIC_FRICTION_FIELDS`, the JSON of a result without drag lists no unit for them.
 DRAG_FIELDS = ("physics.drag",)
+
+#: Fields of :data:`FIELD_UNITS` only a unilateral scene lists in its result's JSON (physics.md, "Flight
+#: and landing"): a bilateral scene's outputs are what they were before flights existed.
+FLIGHT_FIELDS = ("physics.restitution_curve",)
 #: Scene fields that are text or names, not quantities (they have no unit).
 TEXT_FIELDS = ("name", "description", "curve.shape", "curve.name", "curve.q", "curve.params", "curve.closed_form",
                "physics.contact")

@@ -490,6 +490,8 @@ def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
     (a turning point of ``G``, not a rest test where it already was)."""
     if kind == EventCode.LEFT_CURVE:
         return "the particle leaves the curve"
+    if kind in (EventCode.LIFT_OFF, EventCode.LANDING):
+        return "a flight (physics.md, \"Flight and landing\"; not derived yet); this event and the ones after it"
     if ev.detail and "zeno" in ev.detail.lower():
         return "a Zeno accumulation of impacts (infinitely many events); this event and the ones after it"
     if kind in (EventCode.REVERSAL, EventCode.ARREST):

@@ -36,7 +36,7 @@ import dataclasses
 import numpy as np
 
 from symvib.numeric.layout import EVENT_KINDS
-from symvib.numeric.scene import DRAG_FIELDS, FIELD_UNITS, STATIC_FRICTION_FIELDS, field_unit
+from symvib.numeric.scene import DRAG_FIELDS, FIELD_UNITS, FLIGHT_FIELDS, STATIC_FRICTION_FIELDS, field_unit
 
 __all__ = ["events_frame", "samples_frame", "to_pandas", "quantity_units", "result_units", "require_pandas",
            "QUANTITY_UNITS"]
@@ -101,6 +101,8 @@ def result_units(result, *, samples: bool = False) -> dict:
            "energy_budget": dict(BUDGET_UNITS)}
     if result.energy_budget.drag_work is not None:   # (a run with air drag: physics.md, "Air drag")
         out["energy_budget"]["drag_work"] = "J"
+    if result.energy_budget.landing_loss is not None:
+        out["energy_budget"]["landing_loss"] = "J"
     if samples and result.samples is not None:
         out["samples"] = {name: units.get(name) for name in _sample_fields(result.samples)}
     scene_units = {}
@@ -111,6 +113,8 @@ def result_units(result, *, samples: bool = False) -> dict:
         elif name in STATIC_FRICTION_FIELDS and result.scene.mu_s is None:
             continue
         elif name in DRAG_FIELDS and not getattr(result.scene, "drag", 0.0):
+            continue
+        elif name in FLIGHT_FIELDS and result.scene.contact != "unilateral":
             continue
         elif not name.startswith("curve.") or not shape.in_catalogue:
             scene_units[name] = field_unit(name, shape)
