@@ -132,7 +132,8 @@ def test_result_json_carries_the_units_of_the_table():
     assert units["scene"]["physics.g"] == FIELD_UNITS["physics.g"]
     assert units["scene"]["parameters.R"] == "m"
     for name in FIELD_UNITS:  # every scene quantity (the curve's expressions of a catalogue shape aside)
-        if not name.startswith(("curve.", "parameters.")) and name not in STATIC_FRICTION_FIELDS + DRAG_FIELDS + FLIGHT_FIELDS:
+        optional = STATIC_FRICTION_FIELDS + DRAG_FIELDS + FLIGHT_FIELDS
+        if not name.startswith(("curve.", "parameters.")) and name not in optional:
             assert units["scene"][name] == field_unit(name, scene.shape)
     # the flights' fields only for a unilateral scene (a bilateral one: its JSON as before)
     assert not set(FLIGHT_FIELDS) & set(units["scene"])

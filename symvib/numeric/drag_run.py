@@ -141,7 +141,7 @@ def simulate_drag(scene, prepared=None, *, rtol: float = 1e-12, atol: float = 0.
     status = x.status
     if not all(math.isfinite(v) for v in values):
         status = StatusCode.NON_FINITE
-    budget = EnergyBudget(run.E0, E, x.Wf, x.Wimp, x.Wd)
+    budget = EnergyBudget(run.E0, E, x.Wf, x.Wimp, drag_work=x.Wd)
     if status not in (StatusCode.NON_FINITE, StatusCode.TOLERANCE_NOT_MET) and \
             abs(budget.residual) > BUDGET_RTOL * max(abs(run.E0), abs(E), abs(x.Wf), abs(x.Wimp), abs(x.Wd)):
         status = StatusCode.ENERGY_BUDGET_MISMATCH

@@ -146,10 +146,11 @@ class EnergyBudget:
     final: float
     friction_work: float
     impact_loss: float
-    drag_work: float | None = None
+    #: The optional columns are keyword-only: a fifth positional number cannot land in the wrong one.
+    drag_work: float | None = field(default=None, kw_only=True)
     #: ``W_landing``: the energy lost at landings (physics.md, "Flight and landing"); None for a run
     #: that never left the curve (its budget and JSON are what they were).
-    landing_loss: float | None = None
+    landing_loss: float | None = field(default=None, kw_only=True)
 
     def __repr__(self) -> str:
         """As the dataclass writes it; ``drag_work`` and ``landing_loss`` only where there is one (a run
@@ -170,7 +171,8 @@ class EnergyBudget:
     @property
     def relative_residual(self) -> float:
         """Residual relative to the initial energy (or to the dissipated energy if E0 is 0)."""
-        lost = abs(self.friction_work) + abs(self.impact_loss) + abs(self.drag_work or 0.0) + abs(self.landing_loss or 0.0)
+        lost = (abs(self.friction_work) + abs(self.impact_loss) + abs(self.drag_work or 0.0)
+                + abs(self.landing_loss or 0.0))
         scale = max(abs(self.initial), lost, math.ulp(1.0))
         return abs(self.residual) / scale
 

@@ -300,5 +300,6 @@ def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend):
     if f.stopped:
         stats["stopped"] = f.stopped
     return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=no_samples,
-                  interpolant=None, energy_budget=EnergyBudget(E0, f.E_final, f.W_friction, f.W_impacts, f.W_landing),
+                  interpolant=None, energy_budget=EnergyBudget(E0, f.E_final, f.W_friction, f.W_impacts,
+                                                            landing_loss=f.W_landing),
                   t_final=f.t, q_final=f.q, qdot_final=f.qdot, zeno=zinfo, stats=stats)
