@@ -43,7 +43,6 @@ from functools import partial
 from typing import NamedTuple
 
 from symvib.numeric.drag_phase import PANEL, DragCurve, panels, span, walk
-from symvib.numeric.driver import BUDGET_RTOL
 from symvib.numeric.engine.bind import kernel_functions
 from symvib.numeric.engine.laws import (
     SLIDE,
@@ -60,6 +59,7 @@ from symvib.numeric.engine.scan import EDGE_RTOL, curve_scale
 from symvib.numeric.engine.state import Kernels
 from symvib.numeric.events import EnergyBudget, Event, Result, ZenoInfo, kind_of, status_of
 from symvib.numeric.layout import EventCode, StatusCode
+from symvib.numeric.trusted import BUDGET_RTOL
 
 __all__ = ["simulate_drag", "WINDOW", "ZENO_DRAG", "TOLERANCE_FACTOR", "DragInterval", "NO_DENSE"]
 

@@ -272,9 +272,9 @@ def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend):
     :func:`symvib.numeric.driver.simulate`."""
     import numpy as np
 
-    from symvib.numeric.driver import checked_status
     from symvib.numeric.events import EnergyBudget, Result, ZenoInfo, status_of
     from symvib.numeric.layout import SceneRow
+    from symvib.numeric.trusted import checked_status
 
     def run_segment(q0, qdot0, t_max, max_events):
         r = np.array(row, dtype=float)
