@@ -22,13 +22,9 @@ Examples
 """
 from __future__ import annotations
 
-import sys
-import warnings
-
-from symvib import provenance, safeio
+from symvib import provenance
 from symvib.kernelformat import KernelError, check_text
 from symvib.numeric import kernels as _kernels
-from symvib.paths import UserPathError
 from symvib.shapes import CATALOGUE, Shape
 
 __all__ = ["load_jets", "register_generator", "JETS_FOLDER", "JETS_SUFFIX"]
@@ -99,35 +95,10 @@ def _load(curve: Shape, generate):
     name = f"{stem}_{want[:16]}{JETS_SUFFIX}"
     folder = _kernels.cache_dir()
     path = folder / f"{name}.py"
-    try:
-        raw = safeio.read_bytes(folder, path.name, max_bytes=_kernels.MAX_MODULE_BYTES, what="kernel cache",
-                                private=True)
-    except FileNotFoundError:
-        raw = None
-    except UserPathError as err:
-        warnings.warn(f"{err}; regenerating it", stacklevel=3)
-        raw = None
-    if raw is not None:
-        text = raw.decode("utf-8", errors="replace")
-        try:
-            check_text(text, path, want)
-            return _kernels._exec(text, path, name)
-        except KernelError as err:
-            warnings.warn(f"{err}; regenerating it", stacklevel=3)
+    module = _kernels.read_cached(folder, name, want)
+    if module is not None:
+        return module
     if generate is None:
         raise KernelError(f"curve {curve.name!r} has no generated jets in {folder} (symvib.prepare.load_jets "
                           "generates them)")
-    text = generate(curve, source, path)
-    check_text(text, path, want)
-    try:
-        module = _kernels._exec(text, path, name)
-    except Exception as err:  # noqa: BLE001 - any failure of a fresh module is the generator's
-        sys.modules.pop(f"symvib.generated.{name}", None)
-        raise KernelError(f"{path}: the generated jets module does not import "
-                          f"({type(err).__name__}: {err}); nothing was cached") from None
-    try:
-        safeio.remove_file(folder, path.name, links=True)
-        safeio.write_text(folder, path.name, text, what="kernel cache", private=True)
-    except OSError as err:
-        warnings.warn(f"{err}; the jets module is not cached", stacklevel=3)
-    return module
+    return _kernels.cache_generated(generate(curve, source, path), folder, name, want, "jets module")

@@ -48,8 +48,8 @@ from symvib.shapes import CATALOGUE, Shape
 #: Progress of slow steps (a new curve's derivation): shown on a terminal by the command line.
 _log = logging.getLogger(__name__)
 
-__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "check_text", "verify_text", "check_interface",
-           "KernelError", "DIGEST_PREFIX"]
+__all__ = ["load", "load_generated", "generated_dir", "cache_dir", "read_cached", "cache_generated", "check_text",
+           "verify_text", "check_interface", "KernelError", "DIGEST_PREFIX"]
 
 #: Environment variable naming the cache folder for user curves.
 CACHE_ENV = cachetrust.CACHE_ENV
@@ -198,46 +198,62 @@ def _load(curve: Shape, check: bool, generate):
     key = f"symvib.generated.{name}"
     if key in sys.modules and getattr(sys.modules[key], "__file__", None) == str(path):
         return sys.modules[key]
-    try:
-        # Never through a link, and only a file that is the user's alone (symvib.safeio.read_bytes).
-        raw = safeio.read_bytes(folder, path.name, max_bytes=MAX_MODULE_BYTES, what="kernel cache", private=True)
-    except FileNotFoundError:
-        raw = None
-    except UserPathError as err:
-        warnings.warn(f"{err}; regenerating it", stacklevel=3)
-        raw = None
-    if raw is not None:
-        text = raw.decode("utf-8", errors="replace")
-        try:
-            check_text(text, path, want)
-            return _exec(text, path, name)
-        except KernelError as err:
-            # Tampered, truncated or from a broken generator: made again below.
-            warnings.warn(f"{err}; regenerating it", stacklevel=3)
+    module = read_cached(folder, name, want)
+    if module is not None:
+        return module
     if generate is None:
         raise KernelError(f"curve {curve.name!r} has no generated kernels in {folder} (symvib.prepare.load_kernels "
                           "generates them)")
     return _generate(curve, source, want, folder, name, generate)
 
 
+def read_cached(folder: Path, name: str, want: str):
+    """The module ``name`` from the cache ``folder`` if its text is there and checks against ``want``
+    (:func:`symvib.kernelformat.check_text`), else None (a warning says why an entry was refused:
+    it is made again)."""
+    path = folder / f"{name}.py"
+    try:
+        # Never through a link, and only a file that is the user's alone (symvib.safeio.read_bytes).
+        raw = safeio.read_bytes(folder, path.name, max_bytes=MAX_MODULE_BYTES, what="kernel cache", private=True)
+    except FileNotFoundError:
+        return None
+    except UserPathError as err:
+        warnings.warn(f"{err}; regenerating it", stacklevel=4)
+        return None
+    text = raw.decode("utf-8", errors="replace")
+    try:
+        check_text(text, path, want)
+        return _exec(text, path, name)
+    except KernelError as err:
+        # Tampered, truncated or from a broken generator: made again by the caller.
+        warnings.warn(f"{err}; regenerating it", stacklevel=4)
+        return None
+
+
 def _generate(curve: Shape, source: dict, want: str, folder: Path, name: str, generate):
     """Generate a user curve's module: its text from ``generate``, checked and imported, and only
-    then written into the cache (whole, never through a link: :func:`symvib.safeio.write_text`);
-    any failure leaves nothing in the cache."""
+    then written into the cache (:func:`cache_generated`)."""
     path = folder / f"{name}.py"
     _log.info("deriving the kernels of curve %r (first use; closed_form = %s), then caching them",
               curve.name, curve.closed_form)
-    text = generate(curve, source, path)
+    return cache_generated(generate(curve, source, path), folder, name, want)
+
+
+def cache_generated(text: str, folder: Path, name: str, want: str, what: str = "module"):
+    """Check and import a freshly generated module ``text`` (``what`` names it in messages), and only
+    then write it into the cache (whole, never through a link: :func:`symvib.safeio.write_text`);
+    any failure leaves nothing in the cache."""
+    path = folder / f"{name}.py"
     check_text(text, path, want)
     try:
         module = _exec(text, path, name)
     except Exception as err:  # noqa: BLE001 - any failure of a fresh module is the generator's
         sys.modules.pop(f"symvib.generated.{name}", None)
-        raise KernelError(f"{path}: the generated module does not import "
+        raise KernelError(f"{path}: the generated {what} does not import "
                           f"({type(err).__name__}: {err}); nothing was cached") from None
     try:
         safeio.remove_file(folder, path.name, links=True)   # a stale entry, or a link planted at its name
         safeio.write_text(folder, path.name, text, what="kernel cache", private=True)
     except OSError as err:   # a folder in its place, a full disk: the run goes on, uncached
-        warnings.warn(f"{err}; the module is not cached", stacklevel=3)
+        warnings.warn(f"{err}; the {what} is not cached", stacklevel=4)
     return module
