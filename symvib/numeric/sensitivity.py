@@ -31,6 +31,9 @@ direction), and a tangential zero of the normal force.  A sign change of the nor
 that crosses (:mod:`symvib.numeric.sensitivity_normal`) and the curve's own parameters
 (:mod:`symvib.numeric.sensitivity_curve`) are differentiated with the curve's jets
 (:mod:`symvib.numeric.jet_kernels`; physics.md, "Sensitivities" 8 and 9), read only then.
+On a unilateral curve the lift-off, the flight and its landings follow in closed form
+(:mod:`symvib.numeric.sensitivity_flight`; physics.md, "Sensitivities" 10); a tangential landing, one on
+the edge between sticking and sliding, and a bouncing-ball accumulation have no derivative.
 
 Examples
 --------
@@ -55,6 +58,7 @@ import numpy as np
 from symvib.kernelformat import KernelError
 from symvib.numeric.layout import EventCode, StatusCode
 from symvib.numeric.sensitivity_curve import PARAMETERS, CurveFunctions, resolve_wrt
+from symvib.numeric.sensitivity_flight import land, landing_reason, launch
 from symvib.numeric.sensitivity_normal import TANGENTIAL_N_REASON, normal_sign_change_tangent
 from symvib.numeric.sensitivity_table import Sensitivities
 
@@ -392,8 +396,9 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
     n = len(result.events)
     T, Q, VB, VA = (np.full((n, P), np.nan) for _ in range(4))
     reasons = []
-    D_impact_loss = np.zeros(P)
+    D_impact_loss, D_landing_loss = np.zeros(P), np.zeros(P)
     Dq_last = Dw_last = None
+    flight = None                           # the flight in the air (sensitivity_flight.Flight), if any
     legs, t_a = [], 0.0
     for i, ev in enumerate(result.events):
         kind = ev.kind.code
@@ -402,6 +407,20 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
             reasons.append(own or f"follows event {first_broken}, which has no derivatives ({broken})")
             if not broken:
                 broken, first_broken = own, i
+            continue
+        if kind == EventCode.LANDING:       # physics.md, "Sensitivities" 10
+            landed = land(c, scene, flight, ev.t, ev.q)
+            if isinstance(landed, str):
+                broken, first_broken = landed, i
+                reasons.append(broken)
+                continue
+            T[i], Q[i], VB[i], VA[i] = landed.Dt, landed.Dq, landed.Dv_before, landed.Dv_after
+            D_landing_loss += landed.D_loss
+            reasons.append("")
+            flight = landed.bounce
+            if flight is None:              # sliding resumes from the landing point
+                q_a, w_a, Dq_a, Dw_a, Dt_a, t_a = landed.q, landed.w, landed.Dq, landed.Dw, landed.Dt, ev.t
+                Dq_last, Dw_last = landed.Dq, landed.Dw
             continue
         q_e = ev.q
         turning = kind in (EventCode.REVERSAL, EventCode.ARREST)
@@ -415,7 +434,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
             iv = _Interval(c, q_a, w_a, q_e, s, turning, Dq_a, Dw_a, Dmu)
             if turning:
                 Dq_e = iv.dG_fixed_q_end() / (2 * c.g * iv.f_e)
-            elif kind == EventCode.NORMAL_SIGN_CHANGE:
+            elif kind in (EventCode.NORMAL_SIGN_CHANGE, EventCode.LIFT_OFF):
                 try:
                     Dq_e = normal_sign_change_tangent(c, iv)
                 except KernelError as err:     # (a user curve's jets not generated where this runs)
@@ -454,14 +473,20 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
         reasons.append("")
         if q_e != q_a:
             legs.append(Leg(iv, t_a, ev.t, Dt_a, Dt_e))
+        if kind == EventCode.LIFT_OFF:
+            flight = launch(c, q_e, v_minus, Dq_e, Dv_plus, ev.t, Dt_e)
         q_a, w_a, Dq_a, Dw_a, Dt_a, t_a = q_e, w_plus, Dq_e, Dw_plus, Dt_e, ev.t
         Dq_last, Dw_last = Dq_e, Dw_plus
-    final = {name: np.full(P, np.nan) for name in ("t_final", "q_final", "friction_work", "impact_loss")}
+    final_names = ("t_final", "q_final", "friction_work", "impact_loss") + (
+        ("landing_loss",) if scene.contact == "unilateral" else ())
+    final = {name: np.full(P, np.nan) for name in final_names}
     if not broken and result.status.code in FINAL_STATUSES and n and Dq_last is not None:
         q_f = result.events[-1].q
         DE_final = c.m * (Dw_last / 2 + c.g * (float(c.dz(q_f)) * Dq_last + c.geometry_dp("z", q_f)[0]))
         final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=D_impact_loss,
-                     friction_work=DE0 - DE_final - D_impact_loss)
+                     friction_work=DE0 - DE_final - D_impact_loss - D_landing_loss)
+        if "landing_loss" in final:
+            final["landing_loss"] = D_landing_loss
     for name in notes:
         j = wrt.index(name)
         for column in (T, Q, VB, VA, *final.values()):
@@ -490,8 +515,8 @@ def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
     (a turning point of ``G``, not a rest test where it already was)."""
     if kind == EventCode.LEFT_CURVE:
         return "the particle leaves the curve"
-    if kind in (EventCode.LIFT_OFF, EventCode.LANDING):
-        return "a flight (physics.md, \"Flight and landing\"; not derived yet); this event and the ones after it"
+    if kind == EventCode.LANDING:
+        return landing_reason(ev.detail)
     if ev.detail and "zeno" in ev.detail.lower():
         return "a Zeno accumulation of impacts (infinitely many events); this event and the ones after it"
     if kind in (EventCode.REVERSAL, EventCode.ARREST):
