@@ -13,13 +13,14 @@ it has ended (``waitpid`` without waiting: no file is read while it compiles); t
 after a clean end loads the compiled engine from disk (about a second), every run after it
 uses it.  The engines give the same events (``tests/test_backends.py``).
 
-The child is tethered (:func:`symvib.children.tether`: it dies with its parent, whatever
-its parent's death) and killed when its parent exits (:func:`stop_children`, at exit: the
-exit does not wait for a compile), or when it has run :data:`TIER_TIMEOUT` seconds.  A child that fails, or whose compiled engine numba could
-not write to its cache, leaves this process on the plain engine for that curve for good,
-with one :class:`TierWarning` line.  ``$SYMVIB_TIER=off``, ``$SYMVIB_BACKEND`` and an explicit
-``backend=`` start no child.  The start and the end of a compile are logged at INFO on the
-logger ``symvib.numeric.tiered``; which engine ran a run is ``Result.stats["backend"]``.
+The child is tethered (:func:`symvib.children.tether`: it dies with its parent, whatever its
+parent's death) and killed when its parent exits (:func:`stop_children`, at exit: the exit
+does not wait for a compile), or when it has run :data:`TIER_TIMEOUT` seconds. A child that
+fails, or whose compiled engine numba could not write to its cache, leaves this process on
+the plain engine for that curve for good, with one :class:`TierWarning` line.
+``$SYMVIB_TIER=off``, ``$SYMVIB_BACKEND`` and an explicit ``backend=`` start no child. The
+start and the end of a compile are logged at INFO on the logger ``symvib.numeric.tiered``;
+which engine ran a run is ``Result.stats["backend"]``.
 
 Why the specialized binding: compiling its ``simulate`` entry on empty caches took 18.3-20.4 s
 of CPU against 18.9-19.2 s for the shared binding's (docs/benchmarks.md, "The tiered engine"),
