@@ -19,6 +19,7 @@ from symvib.numeric.flight import (
     HORIZON,
     LEFT_STRETCH,
     TOUCHED,
+    LandingNotFound,
     Stretch,
     accumulation,
     landing,
@@ -100,7 +101,12 @@ def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0):
         if n_events + len(events) >= scene.max_events:
             return stop(StatusCode.MAX_EVENTS, 0.0, None)
         flights += 1
-        ld = landing(st, x0, z0, vx, vz, g, u, length)
+        try:
+            ld = landing(st, x0, z0, vx, vz, g, u, length)
+        except LandingNotFound as exc:
+            return stop(StatusCode.TOLERANCE_NOT_MET, 0.0,
+                        f"{exc}, in the flight launched at t = {t:.12g} s from x = {x0:.12g} m, z = {z0:.12g} m "
+                        "(physics.md, \"Flight and landing\" 3); the run stops at the launch")
         t_lim, where = math.inf, ""
         for side, qL in ((-1, scene.left), (1, scene.right)):
             if qL is not None:
@@ -115,9 +121,10 @@ def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0):
                         "s; the model has no impact of a flying particle on a limiter (physics.md, \"Flight and "
                         "landing\" 6)")
         if ld.kind == LEFT_STRETCH:
+            cut = " (beyond it the curve's kernels are not finite)" if any(st.cut) else ""
             return stop(StatusCode.LEFT_DOMAIN, ld.t,
                         f"the flying particle left the searched stretch {scene.shape.q} in [{st.qa:.12g}, "
-                        f"{st.qb:.12g}] of the curve without landing, at t = {t + ld.t:.12g} s (physics.md, "
+                        f"{st.qb:.12g}] of the curve{cut} without landing, at t = {t + ld.t:.12g} s (physics.md, "
                         "\"Flight and landing\" 6)")
         # The landing (physics.md, "Flight and landing" 4).
         xl, zl, dxl, dzl = st.point(ld.q)
@@ -191,7 +198,7 @@ def follow(scene, mod, cp, lo, hi, first, run_segment, events_of):
         # The lift-off that ended the sliding stretch `out`.
         q = float(out.q)
         qa, qb = searched_stretch(q, scene, lo, hi, scale)
-        if (qa, qb) not in stretches:
+        if (qa, qb) not in stretches or not stretches[(qa, qb)].qa <= q <= stretches[(qa, qb)].qb:
             stretches.clear()
             stretches[(qa, qb)] = Stretch(mod, cp, qa, qb, scale, q)
         st = stretches[(qa, qb)]
