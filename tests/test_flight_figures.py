@@ -105,3 +105,16 @@ def test_the_animation_of_a_run_with_flights_is_written(bounce, tmp_path):
     path = animate(bounce, tmp_path / "flight.gif", fps=10, duration=1.0)
     with Image.open(path) as im:
         assert im.n_frames == 10
+
+
+def test_a_run_stopped_in_flight_marks_where_it_stopped():
+    scene = scene_from_dict({"name": "crossed", "curve": {"shape": "circle"}, "parameters": {"R": 0.5},
+                             "physics": {"g": G, "mu": 0.0, "restitution": 1.0, "contact": "unilateral"},
+                             "limiters": {"left": -0.3, "right": 3.0}, "initial": {"q": 0.0, "qdot": 8.5}})
+    r = simulate(scene, backend="python")
+    ax = Figure().subplots()
+    figures.scene_sketch(r, ax)
+    marks = {label: (xs, zs) for label, xs, zs in _lines(ax)}
+    xs, zs = marks["end in flight (crossed_limiter)"]
+    x, z, _, _ = r.dense.position(r.t_final)
+    assert xs[0] == pytest.approx(x, abs=1e-12) and zs[0] == pytest.approx(z, abs=1e-12)

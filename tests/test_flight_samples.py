@@ -125,6 +125,8 @@ def test_flight_columns_have_no_curve_coordinate_and_no_contact_force(runs):
     assert (np.diff(S.t) >= 0).all() and (np.diff(S.interval) >= 0).all() and (np.diff(S.path) >= -1e-15).all()
     for k in np.unique(S.flight[fly]):
         assert len(np.unique(S.interval[S.flight == k])) == 1
+    # on the circle the arc-length coordinate from the start is R (q - q0), across the flights too
+    assert np.allclose(S.s[~fly], 0.5 * S.q[~fly], rtol=0, atol=1e-12)
 
 
 def test_the_flights_path_is_the_parabolas_arc_length(runs):

@@ -485,9 +485,13 @@ def scene_sketch(result, ax=None, *, paper=None):
 def _flights(ax, result, mod, cp):
     """A run's flight arcs and its lift-offs and landings (on the curve, at their ``q``) in the sketch."""
     label = "flight (parabola)"
-    for x, z in flight_arcs(result):
+    arcs = flight_arcs(result)
+    for x, z in arcs:
         ax.plot(x, z, label=label, zorder=4, **FLIGHT_STYLE)
         label = None
+    if arcs and result.samples.flight[-1] >= 0:   # the run stopped in flight (crossed_limiter, t_max, ...)
+        ax.plot(arcs[-1][0][-1:], arcs[-1][1][-1:], "X", color=FLIGHT_STYLE["color"], ms=9, ls="none", zorder=6,
+                label=f"end in flight ({result.status.value})")
     for kind in (EventKind.LIFT_OFF, EventKind.LANDING):
         qs = [e.q for e in result.events if e.kind is kind]
         if qs:

@@ -64,6 +64,18 @@ class _Status(NamedTuple):
     value: str
 
 
+class _StartedAt:
+    """The run's scene started at ``(q0, qdot0)``, unvalidated (a stretch starts where a landing put
+    the particle, which the scene's checks of a start need not accept): what a stretch's
+    :class:`~symvib.numeric.dense.DenseOutput` reads of it (the engine's row, ``g``, ``mu``)."""
+
+    def __init__(self, scene, q0, qdot0):
+        self._scene, self.q0, self.qdot0 = scene, float(q0), float(qdot0)
+
+    def __getattr__(self, name):
+        return getattr(self._scene, name)
+
+
 class FlightDense:
     """The state of a run with flights at any time (:meth:`state`, ``__call__``, :meth:`position`,
     :meth:`in_flight`) and, on the curve, at any position (:meth:`at`).
@@ -116,7 +128,7 @@ class FlightDense:
         if d is None:
             p = self._pieces[i]
             out = p.out
-            scene = self.result.scene.replace(q0=p.q, qdot0=p.qdot)
+            scene = _StartedAt(self.result.scene, p.q, p.qdot)
             if i == self._last_slide and int(out.status) != StatusCode.LEFT_CURVE:
                 status = self.result.status
             else:
