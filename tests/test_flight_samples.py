@@ -141,6 +141,17 @@ def test_the_flights_path_is_the_parabolas_arc_length(runs):
     assert S.path[sel][0] == pytest.approx(S.path[np.flatnonzero(sel)[0] - 1], abs=1e-15)
 
 
+@pytest.mark.parametrize("per_interval", [None, 10, 200])
+def test_a_flight_has_as_many_samples_as_a_sliding_interval(per_interval):
+    r = simulate(circle_scene(0.0), backend="python", samples_per_interval=per_interval)
+    S = r.samples
+    first = np.sum(S.interval == 0)   # the sliding up to the lift-off: one motion interval
+    asked = (per_interval or 96) + 1
+    assert np.sum(S.flight == 0) >= asked and first >= asked
+    if per_interval != 10:   # (at 10, one piece of the engine's logged intervals: a few of them here)
+        assert np.sum(S.flight == 0) == first
+
+
 # --- sliding: as a run from the landing state --------------------------------------------------------
 
 
@@ -266,3 +277,38 @@ def test_the_tables_and_json_carry_the_flight_columns_with_units(runs):
     data = json.loads(r.to_json(samples=True))
     assert data["samples"]["q"][int(np.flatnonzero(r.samples.flight >= 0)[0])] is None   # NaN in flight
     assert data["units"]["samples"]["W_landing"] == "J"
+
+
+# --- many scenes, and the compiled engine (slow) ----------------------------------------------------
+
+
+@pytest.mark.slow
+def test_random_unilateral_scenes_have_samples_that_close_the_budget_and_a_state_everywhere():
+    # the seeded random scenes of tests/test_flight.py (a bowl, the circle, a sine track)
+    import random
+
+    from test_flight import N_RANDOM, SEED, random_scene
+
+    rng = random.Random(SEED)
+    for i in range(N_RANDOM):
+        scene, name = random_scene(rng, i)
+        r = simulate(scene, backend="python")
+        S, b = r.samples, r.energy_budget
+        assert S is not None, (i, r.error)
+        total = S.E + S.W_mu + S.W_impacts + getattr(S, "W_landing", 0.0)
+        assert np.abs(total - b.initial).max() < BUDGET_TOL * b.initial, (i, name)
+        assert (np.diff(S.t) >= 0).all(), (i, name)
+        t = np.linspace(0.0, r.t_final, 64)
+        if r.count(EventKind.LIFT_OFF):
+            x, z, vx, vz = r.dense.position(t)
+            assert np.isfinite(np.stack([x, z, vx, vz])).all(), (i, name)
+            assert (np.isnan(r.state(t)[0]) == r.dense.in_flight(t)).all(), (i, name)
+
+
+@pytest.mark.slow
+def test_numba_samples_of_a_run_with_flights_equal_the_plain_ones():
+    a = simulate(circle_scene(0.5), backend="python").samples
+    b = simulate(circle_scene(0.5), backend="numba").samples
+    assert len(a.t) == len(b.t) and np.array_equal(a.flight, b.flight)
+    for name in ("t", "q", "qdot", "x", "z", "E", "W_mu", "W_landing"):
+        assert np.allclose(getattr(a, name), getattr(b, name), rtol=1e-12, atol=1e-12, equal_nan=True), name

@@ -368,7 +368,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         if samples:   # each sliding stretch sampled as any run is (physics.md, "Flight and landing")
             sampling = Sampling(partial(_stretch_samples, partial(_sample_engine, mod, requested, backend), cp, R,
                                         scene, mod), partial(_sample_plan, spi, nodes, samples_per_interval is None),
-                                spi)
+                                2 * plain_nodes(nodes) + 1)
         try:
             return result_with_flights(scene, prep, mod, eng, cp, row, R, out, backend, sampling)
         except (ArithmeticError, ValueError) as exc:

@@ -8,7 +8,8 @@ the engine's sliding stretches (:class:`~symvib.numeric.flights.Slide`), flights
 * on a sliding stretch, the samples the driver takes of any run (the engine's Gauss nodes of
   every motion interval, :func:`symvib.numeric.driver.simulate`), shifted by the stretch's start
   time and by the friction work, impact and landing losses before it;
-* on a flight, ``samples_per_interval + 1`` points evenly spaced in time on its parabola
+* on a flight, as many points as a sliding interval gets (``samples_per_interval`` and one, at
+  least; fewer where a long run keeps one piece per interval), evenly spaced in time on its parabola
   (:func:`arc_points`): ``x, z, vx, vz`` in closed form, ``q``, ``qdot``, ``v`` and ``s`` NaN
   (the particle is off the curve: it has no coordinate on it), ``F_N = F_mu = P_mu = 0``,
   ``E = Ek + Ep`` with ``Ek = m (vx^2 + vz^2) / 2``;
@@ -75,12 +76,13 @@ class Sampling(NamedTuple):
     """How the driver samples a run (:func:`symvib.numeric.driver.simulate` builds it): ``stretch(row,
     intervals, n_intervals, pieces)`` the samples of an engine run's logged intervals (``(Samples,
     None)`` or ``(None, message)``), ``pieces_of(n_intervals)`` the pieces per interval (``(pieces,
-    None)``, or ``(None, message)`` where there would be too many samples), and ``per_arc`` the
-    samples per motion interval asked for (a flight gets ``per_arc + 1`` points)."""
+    None)``, or ``(None, message)`` where there would be too many samples; a flight counts as an
+    interval), and ``per_piece`` the points a piece of an interval gives (a flight gets ``pieces
+    per_piece + 1`` points)."""
 
     stretch: object
     pieces_of: object
-    per_arc: int
+    per_piece: int
 
 
 def parabola_length(t, vx, vz, g):
@@ -144,7 +146,8 @@ def samples(scene, mod, cp, pieces, sampling: Sampling, scale: float):
         The run's length scale in ``q`` (the arc-length quadrature's panels).
     """
     n_intervals = sum(int(p.out.n_intervals) for p in pieces if isinstance(p, Slide))
-    per_interval, message = sampling.pieces_of(n_intervals)
+    n_arcs = sum(isinstance(p, Arc) for p in pieces)
+    per_interval, message = sampling.pieces_of(n_intervals + n_arcs)
     if message is not None:
         return None, message
     m, g = scene.m, scene.g
@@ -177,7 +180,7 @@ def samples(scene, mod, cp, pieces, sampling: Sampling, scale: float):
             travelled = float(cols["path"][-1])
             parts.append(cols)
         elif isinstance(p, Arc):
-            t, x, z, vx, vz = arc_points(p, sampling.per_arc + 1, g)
+            t, x, z, vx, vz = arc_points(p, per_interval * sampling.per_piece + 1, g)
             n = len(t)
             nan, zero = np.full(n, np.nan), np.zeros(n)
             Ek = 0.5 * m * (vx * vx + vz * vz)
