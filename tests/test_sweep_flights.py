@@ -108,7 +108,7 @@ def assert_row_is_the_result(res, i, r, tol=SAME):
 
 @pytest.mark.parametrize("make, vary, seed", [
     (circle, {"qdot": "4:10", "mu": "0.02:0.12", "R": "0.4:0.8"}, SEED_CIRCLE),
-    (bowl, {"qdot": "-6:-2.5", "mu": "0.01:0.15"}, SEED_BOWL),
+    (bowl, {"qdot": "-6:-2.5", "mu": "0.01:0.15", "a": "0.8:1.2"}, SEED_BOWL),
     (limited_circle, {"qdot": "6:10.5", "mu": "0.02:0.12"}, SEED_LIMITED),
 ], ids=["circle", "bowl", "circle-limiters"])
 @pytest.mark.parametrize("e", [0.0, 0.4])

@@ -37,8 +37,6 @@ Examples
 """
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
 from symvib.numeric.layout import EVENT_KINDS, STATUSES, EventCode, EventColumn, StatusCode, Summary
@@ -135,15 +133,22 @@ def follow_rows(spec, values, columns: dict, log, backend: str = "auto") -> dict
         followed rows; None when no events are logged.
     backend : {"auto", "numba", "python"}
         The sweep's backend: the followed rows' sliding stretches run on it (``"auto"`` as the
-        sweep resolves it, :func:`~symvib.numeric.driver.resolve_backend`).
+        sweep resolves it, :func:`~symvib.numeric.driver.resolve_backend`; on numba the curve's
+        single-scene engine is compiled too, once, and cached as the sweep's is).
 
     Returns
     -------
     dict
         The :data:`COLUMNS` of the chunk (0 on the rows that never left the curve).
+
+    Raises
+    ------
+    SceneError
+        Where the driver refuses a row's run (naming the field), with ``(sweep row N)`` appended.
     """
     from symvib.numeric.driver import resolve_backend, simulate
     from symvib.numeric.prepared import prepared_of
+    from symvib.numeric.scene import SceneError
 
     status = columns["status"]
     n = len(status)
@@ -155,11 +160,12 @@ def follow_rows(spec, values, columns: dict, log, backend: str = "auto") -> dict
     base = prepared_of(spec.scene)
     varies = any(a.field.startswith("parameters.") for a in spec.axes)
     for i in rows:
-        scene = scene_of_row(spec.scene, spec.axes, values, int(i))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+        try:
+            scene = scene_of_row(spec.scene, spec.axes, values, int(i))
             result = simulate(scene, nodes=spec.nodes, samples=False, backend=backend,
                               prepared=_row_prepared(base, scene, varies))
+        except SceneError as exc:   # (a refusal of the row's run, as simulate refuses it: naming the row)
+            raise SceneError(exc.field, f"{exc.reason} (sweep row {int(columns['row'][i])})") from None
         summary, flown, events = row_values(result, spec.log_events)
         for column in Summary:
             columns[column.name][i] = summary[column]
