@@ -4,9 +4,9 @@ Every row of a seeded random sweep of unilateral scenes, on the circle run fast 
 and on a bowl (the double well of tests/flight_reference.py), equals ``simulate`` of its scene:
 status, event kinds and count, final time, state and energies, its logged events; the flight
 columns are ``Result.stats["flights"]``, ``["landings"]`` and the budget's landing loss.  The
-chunked folder (``.npz`` and Zarr) and the command line give the same rows and write the columns;
-the compiled engine gives the plain one's rows (slow: it compiles the circle); a bilateral sweep
-has no flight columns.
+chunked folder (``.npz`` and Zarr), a Dask cluster and the command line give the same rows and
+write the columns; the compiled engine gives the plain one's rows (slow: it compiles the circle);
+a bilateral sweep has no flight columns.
 """
 import json
 import math
@@ -167,6 +167,19 @@ def test_the_folder_gives_the_in_memory_rows_and_holds_the_columns(tmp_path):
         assert np.array_equal(lazy["flights"].values, mem.grid("flights"))
     first = np.load(tmp_path / "npz" / "chunks" / "chunk-000000.npz")
     assert set(COLUMNS) <= set(first.files)
+
+
+def test_a_dask_cluster_follows_the_flights_as_this_process_does(tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    vary = {"qdot": "3,8,8.5,9"}
+    mem = sweep(circle(), vary, chunk=2, log_events=LOG, backend="python")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        res = sweep(circle(), vary, chunk=2, log_events=LOG, out=tmp_path / "dask", scheduler=client,
+                    backend="python")
+    for name in mem.columns:
+        assert np.array_equal(res[name], mem[name]), name
+    assert res["flights"][0] == 0 and np.all(res["flights"][1:] > 0)
 
 
 def test_a_chunk_without_the_flight_columns_is_computed_again(tmp_path):

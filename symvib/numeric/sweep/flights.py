@@ -19,8 +19,9 @@ before the series is summed; the ``landing`` event that ends it is not among ``l
 ``landing_loss``; J), all 0 on a row that never flies.  A bilateral sweep has none of them
 (:func:`column_names`), so its columns, chunks and identity are what they were.
 
-The followed rows cost what ``simulate`` costs them (flights are computed in Python, tens of
-milliseconds a row): a sweep of scenes that fly is slower than one whose scenes slide.
+The followed rows cost what ``simulate`` costs them (flights are computed in Python, about 10
+milliseconds a flight, on either backend): a sweep of scenes that fly is much slower than one whose
+scenes slide (docs/sweeps.md, "Flights").
 
 Examples
 --------
