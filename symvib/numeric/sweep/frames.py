@@ -6,8 +6,8 @@ field, named readably (``qdot0``, ``mu``, a curve parameter's name: see
 with the varied fields as coordinates along it.  Every summary column
 (:data:`symvib.numeric.layout.SUMMARY_COLUMNS`), the flight columns of a sweep of
 unilateral scenes (:mod:`symvib.numeric.sweep.flights`), the sensitivity columns when
-asked, the derived ``impact_share`` and, when events were logged, ``event_log`` are data variables carrying
-``units`` (SI), ``long_name`` and ``latex``; ``status`` holds the codes, named
+asked, the derived ``impact_share`` and, when events were logged, ``event_log`` are
+data variables carrying ``units`` (SI), ``long_name`` and ``latex``; ``status`` holds the codes, named
 by its ``flag_meanings`` (CF convention).  The Dataset's attributes name the
 sweep (:func:`dataset_attrs`).  :func:`dataframe` is the same as one row per
 scene, ``status`` as a categorical of the status names.
