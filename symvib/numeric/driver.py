@@ -13,7 +13,8 @@ summed as a geometric series once below ``laws.ZENO_W``), plastic impacts,
 ``mu = 0`` with ``k = 1`` (bounded by ``t_max``/``max_events``), the normal
 force changing sign (bilateral contact: the branch flips; ``physics.contact =
 "unilateral"``: the particle lifts off, flies and lands, :mod:`symvib.numeric.flights`;
-a sweep ends ``left_curve`` there), and the ends of the curve's regular domain.
+the sweep's compiled loop ends ``left_curve`` there and :mod:`symvib.numeric.sweep.flights`
+follows the row on), and the ends of the curve's regular domain.
 
 Every result is checked (:func:`checked_status`): a state that stops being
 finite ends the run at once with status ``non_finite`` (on the plain-Python
