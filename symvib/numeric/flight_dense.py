@@ -39,7 +39,7 @@ import numpy as np
 
 from symvib.numeric.dense import DenseOutput
 from symvib.numeric.flight import path
-from symvib.numeric.flights import Arc, Slide
+from symvib.numeric.flight_pieces import Arc, Slide
 from symvib.numeric.layout import StatusCode
 
 __all__ = ["FlightDense", "SLIDING", "FLYING", "ACCUMULATING"]

@@ -44,7 +44,7 @@ import numpy as np
 
 from symvib.numeric.events import Samples
 from symvib.numeric.flight import path
-from symvib.numeric.flights import Accumulated, Arc, Slide
+from symvib.numeric.flight_pieces import Accumulated, Arc, Slide
 from symvib.numeric.layout import SceneRow
 from symvib.numeric.quadrature import rule
 from symvib.numeric.scenerow import scene_row

@@ -27,56 +27,11 @@ from symvib.numeric.flight import (
     limiter_crossing,
     path,
 )
+from symvib.numeric.flight_pieces import Accumulated, Arc, Slide
 from symvib.numeric.layout import StatusCode
 
 __all__ = ["Followed", "Flown", "Slide", "Arc", "Accumulated", "follow", "fly", "searched_stretch", "events_of",
            "result_with_flights"]
-
-
-class Slide(NamedTuple):
-    """A sliding stretch of a run with flights (its log, for the samples and the dense output): the
-    engine's outcome ``out`` of a run from ``(q, qdot)`` that starts at time ``t0`` (the outcome's times
-    count from 0), and the friction work, impact and landing losses before it (J)."""
-
-    t0: float
-    q: float
-    qdot: float
-    out: object
-    W_friction: float
-    W_impacts: float
-    W_landing: float
-
-
-class Arc(NamedTuple):
-    """A flight (physics.md, "Flight and landing" 2): launched at time ``t0`` from ``(x0, z0)`` with
-    velocity ``(vx, vz)``, flying for ``T`` s (to its landing, or to where the run stopped in it), and
-    the friction work, impact and landing losses before it (J)."""
-
-    t0: float
-    T: float
-    x0: float
-    z0: float
-    vx: float
-    vz: float
-    W_friction: float
-    W_impacts: float
-    W_landing: float
-
-
-class Accumulated(NamedTuple):
-    """A bouncing-ball accumulation summed on the tangent line (physics.md, "Flight and landing"):
-    from time ``t0`` for ``T`` s, from ``(q0, qdot0)`` (the landing that started it) to ``(q1, qdot1)``,
-    with the losses before it (J; its own loss is in the next record's ``W_landing``)."""
-
-    t0: float
-    T: float
-    q0: float
-    qdot0: float
-    q1: float
-    qdot1: float
-    W_friction: float
-    W_impacts: float
-    W_landing: float
 
 
 class Followed(NamedTuple):
