@@ -46,7 +46,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cache
 
 import numpy as np
 
@@ -54,6 +53,17 @@ import numpy as np
 # symvib.numeric.events, whose Result.sensitivities calls up into this module).
 from symvib.kernelformat import KernelError
 from symvib.numeric.layout import EventCode, StatusCode
+from symvib.numeric.sensitivity_batch import (
+    ACCEPT,
+    INNER_NODES,
+    INTEGRAL_RTOL,
+    MAX_PANELS,
+    NODES,
+    RTOL,
+    end_integrals,
+    gauss,
+    time_derivatives,
+)
 from symvib.numeric.sensitivity_curve import PARAMETERS, CurveFunctions, resolve_wrt
 from symvib.numeric.sensitivity_normal import TANGENTIAL_N_REASON, normal_sign_change_tangent
 from symvib.numeric.sensitivity_table import Sensitivities
@@ -66,31 +76,8 @@ __all__ = ["sensitivities", "interval_tangents", "Sensitivities", "Tangents", "L
 CONE_EDGE = 1e-7
 #: Distance of a turning point from a limiter, in units of ``q_scale``, below which it grazes it.
 GRAZING = 1e-9
-#: Gauss-Legendre nodes per panel of the time derivative's integral in ``theta``.
-NODES = 20
-#: Agreement of two refinement levels (relative to the integral of the integrand's magnitude) that ends
-#: the refinement of a time derivative: far below what the derivatives of event times computed to
-#: 1e-12 can mean, and above the rounding of the integrand next to a turning point.
-RTOL = 1e-10
-#: The largest such difference a time derivative is kept with when no level reaches ``RTOL``.
-ACCEPT = 1e-8
-#: Most panels a time derivative may take (then its entries are NaN and the reason says why).
-MAX_PANELS = 256
-#: Nodes of the fixed rule that integrates ``F_s'``, ``F_s''`` and ``df/dmu`` between neighbouring nodes.
-INNER_NODES = 8
-#: Agreement of two piece counts that ends the integral of ``df/dmu`` over a whole interval.
-INTEGRAL_RTOL = 1e-14
 #: Statuses whose final state has derivatives (the run ended on an event).
 FINAL_STATUSES = (StatusCode.ARRESTED, StatusCode.RESTING_ON_LIMITER)
-
-
-@cache
-def _gauss(n):
-    """Gauss-Legendre nodes and weights on ``[-1, 1]`` (computed once per ``n``)."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    x.setflags(write=False)
-    w.setflags(write=False)
-    return x, w
 
 
 class _Interval:
@@ -102,25 +89,45 @@ class _Interval:
     accuracy where a difference of two ``F_s`` would not.
     """
 
-    def __init__(self, curve, q_a, w_a, q_e, s, turning_end, Dq_a, Dw_a, Dmu, G_e=None):
+    def __init__(self, curve, q_a, w_a, q_e, s, turning_end, Dq_a=None, Dw_a=None, Dmu=None, G_e=None,
+                 I_p_e=None):
         c = curve
         self.c, self.q_a, self.q_e, self.s, self.turning_end = c, q_a, q_e, s, turning_end
-        self.w_a, self.Dq_a, self.Dw_a, self.Dmu = w_a, Dq_a, Dw_a, Dmu
+        self.w_a = w_a
         self.E_a = math.exp(2 * s * c.mu * float(c.alpha(q_a)))
         self.G_a = w_a * self.E_a
-        alpha_a, dalpha_a = float(c.alpha(q_a)), float(c.dalpha(q_a))
+        self.alpha_a, self.dalpha_a = float(c.alpha(q_a)), float(c.dalpha(q_a))
         self.f_a = float(c.f(s, q_a))
-        # total derivative of G at the start: D(w_a E(q_a)), alpha's own derivative in a curve parameter too
-        self.DG_a = Dw_a * self.E_a + self.G_a * 2 * s * (alpha_a * Dmu + c.mu * dalpha_a * Dq_a
-                                                            + c.mu * c.geometry_dp("alpha", q_a)[0])
-        # dG/dp at fixed q, the part that does not depend on q: (dG/dp)(q) = A - 2 g I_p(q), with
-        # I_p(q) = Integral_{q_a}^{q} dF_s'/dp (mu and the curve's parameters)
-        self.A = self.DG_a + 2 * c.g * self.f_a * Dq_a
         self.f_e = float(c.f(s, q_e))
-        self.I_p_e = self.integral(lambda q: c.df_dp(s, q), q_a, q_e - q_a) if c.f_depends else 0.0
+        if I_p_e is None:       # (given by a caller that integrates many intervals at once)
+            I_p_e = self.integral(lambda q: c.df_dp(s, q), q_a, q_e - q_a) if c.f_depends else 0.0
+        self.I_p_e = I_p_e
         if G_e is None:
             G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(c.F(s, q_e) - c.F(s, q_a))
         self.G_e = G_e
+        alpha_e = c.alpha(np.array([q_e]))
+        self.alpha_e, self.dalpha_e, self.E_e = alpha_e, c.dalpha(np.array([q_e])), np.exp(2 * s * c.mu * alpha_e)
+        if Dq_a is not None:
+            self.set_start(Dq_a, Dw_a, Dmu)
+
+    def set_start(self, Dq_a, Dw_a, Dmu):
+        """The start's tangents ``Dq_a``, ``Dw_a`` (and ``Dmu``): the total derivative of ``G`` there."""
+        c, s = self.c, self.s
+        self.Dq_a, self.Dw_a, self.Dmu = Dq_a, Dw_a, Dmu
+        # total derivative of G at the start: D(w_a E(q_a)), alpha's own derivative in a curve parameter too
+        self.DG_a = Dw_a * self.E_a + self.G_a * 2 * s * (self.alpha_a * Dmu + c.mu * self.dalpha_a * Dq_a
+                                                            + c.mu * c.geometry_dp("alpha", self.q_a)[0])
+        # dG/dp at fixed q, the part that does not depend on q: (dG/dp)(q) = A - 2 g I_p(q), with
+        # I_p(q) = Integral_{q_a}^{q} dF_s'/dp (mu and the curve's parameters)
+        self.A = self.DG_a + 2 * c.g * self.f_a * Dq_a
+
+    def end_state(self):
+        """``w`` at the end and its total derivative there (shape (P,)): :meth:`along` at ``u = 1``, where
+        every integral from the end is empty."""
+        c, s = self.c, self.s
+        W = (self.DG_e - self.G_e * 2 * s * (np.outer(self.alpha_e, self.Dmu) + c.mu * self.dalpha_e[:, None]
+                                             * self.Dq_e[None, :] + c.mu * c.geometry_dp("alpha", self.q_e)))
+        return float((self.G_e / self.E_e)[0]), (W / self.E_e[:, None])[0]
 
     def dG_fixed_q_end(self):
         """``dG/dp`` at fixed ``q = q_e``."""
@@ -137,7 +144,7 @@ class _Interval:
         """``Integral_{anchor}^{anchor + D x} fn(q) dq`` at offsets ``x_sorted`` (ascending, from 0): a
         fixed Gauss rule between neighbours, summed.  Integrated in the offset, whose differences
         keep their relative accuracy next to the anchor where differences of ``q`` would not."""
-        x, w = _gauss(INNER_NODES)
+        x, w = gauss(INNER_NODES)
         ends = np.concatenate(([0.0], x_sorted))
         a, b = ends[:-1], ends[1:]
         mid, half = (a + b) / 2, (b - a) / 2
@@ -204,7 +211,7 @@ class _Interval:
         sigma = 1.0 if delta > 0 else -1.0
         length = abs(delta)
         d_delta = self.Dq_e - self.Dq_a
-        x, wts = _gauss(NODES)
+        x, wts = gauss(NODES)
 
         def integral(panels):
             edges = np.linspace(0.0, math.pi, panels + 1)
@@ -285,7 +292,7 @@ class _Interval:
         return G, (DG - G * 2 * s * (alpha * self.Dmu + c.mu * dalpha * Dq + c.mu * c.geometry_dp("alpha", q)[0])) / E
 
 
-def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
+def sensitivities(result, wrt=PARAMETERS, *, prepared=None, through=None) -> Sensitivities:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``.
 
     Parameters and errors as :func:`interval_tangents`, whose ``sensitivities`` this is.
@@ -295,7 +302,7 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None) -> Sensitivities:
     Sensitivities
         The record (:mod:`symvib.numeric.sensitivity_table`).
     """
-    return interval_tangents(result, wrt, prepared=prepared).sensitivities
+    return interval_tangents(result, wrt, prepared=prepared, through=through).sensitivities
 
 
 @dataclass(frozen=True)
@@ -324,7 +331,7 @@ class Tangents:
     legs: tuple
 
 
-def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Tangents:
+def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, through=None) -> Tangents:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``, and its intervals.
 
     Parameters
@@ -340,6 +347,11 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
     jets : module, optional
         The curve's jets module (default: :func:`symvib.numeric.jet_kernels.load_jets`, read only when a
         sign change of ``N`` or a curve parameter needs it).
+    through : int, optional
+        The index of the last event to differentiate (default: all): the later events' rows are NaN,
+        their reason says they were not asked for, and so is the final state unless it is the last
+        event.  The events up to it are the same numbers as without it (a fit that matches the
+        first events asks for those only).
 
     Returns
     -------
@@ -349,7 +361,15 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
     ------
     ValueError
         Naming ``wrt`` for an unknown, repeated or ambiguous parameter or a missing limiter, and
-        ``result`` for a failed run (its numbers are not a result).
+        ``result`` for a failed run (its numbers are not a result), ``through`` for a negative or
+        not whole index.
+
+    Notes
+    -----
+    Four passes: the run's path in scalars (each interval's ends, branch and ``w``); the integrals
+    of ``dF_s'/dp`` over every interval at once; the tangents of positions and speeds, event by
+    event; the time derivatives of every interval at once
+    (:mod:`symvib.numeric.sensitivity_batch`).  Only the first and third are loops over events.
     """
     from symvib.numeric.prepared import prepared_of
 
@@ -381,8 +401,6 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
     Dq_a = unit["q0"].copy()
     Dw_a = (2 * h0 ** 2 * qdot0 * unit["qdot0"] + 2 * h0 * dh0 * qdot0 ** 2 * unit["q0"]
             + 2 * h0 * qdot0 ** 2 * c.geometry_dp("h", q_a)[0])
-    Dt_a = np.zeros(P)
-    broken, first_broken = "", None
     notes = {}
     if qdot0 == 0 and "qdot0" in [t[2] for t in targets if t[1] == "scene"]:
         notes[next(t[0] for t in targets if t[1:] == ("scene", "qdot0"))] = \
@@ -390,29 +408,23 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
     DE0 = c.m * (Dw_a / 2 + c.g * (float(c.dz(q_a)) * Dq_a + c.geometry_dp("z", q_a)[0]))
 
     n = len(result.events)
+    last = n - 1 if through is None else _checked_through(through, n)
     T, Q, VB, VA = (np.full((n, P), np.nan) for _ in range(4))
-    reasons = []
+    # 1. the run's path, event by event, in scalars: each interval's ends, branch and w before and after
+    plan, _, broken = _plan(result.events[:last + 1], scene, c, q_a, w_a)
+    # 2. the integrals of dF_s'/dp over whole intervals, all at once (they need no tangent)
+    if c.f_depends:
+        for s, group in _by_branch([p[4] for p in plan]):
+            q0s, D = np.array([iv.q_a for iv in group]), np.array([iv.q_e - iv.q_a for iv in group])
+            for iv, I_p_e in zip(group, end_integrals(lambda v, s=s: c.df_dp(s, v), q0s, D, MAX_PANELS * NODES)):
+                iv.I_p_e = I_p_e
+    # 3. the tangents of the events' positions and speeds, event by event (no quadrature left)
     D_impact_loss = np.zeros(P)
-    Dq_last = Dw_last = None
-    legs, t_a = [], 0.0
-    for i, ev in enumerate(result.events):
-        kind = ev.kind.code
-        own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
-        if broken or own:
-            reasons.append(own or f"follows event {first_broken}, which has no derivatives ({broken})")
-            if not broken:
-                broken, first_broken = own, i
-            continue
-        q_e = ev.q
-        turning = kind in (EventCode.REVERSAL, EventCode.ARREST)
-        if q_e == q_a:                      # no motion in between (a rest test at the start)
-            Dq_e, Dw_minus, dT = Dq_a.copy(), Dw_a.copy(), np.zeros(P)
-            w_minus = w_a
+    for j, (i, ev, kind, turning, iv, w_minus) in enumerate(plan):
+        if iv is None:                      # no motion in between (a rest test at the start)
+            Dq_e, Dw_minus = Dq_a.copy(), Dw_a.copy()
         else:
-            sigma = 1 if q_e > q_a else -1
-            mid_q = q_a + (q_e - q_a) / 2
-            s = _branch(c, q_a, w_a, sigma, mid_q)
-            iv = _Interval(c, q_a, w_a, q_e, s, turning, Dq_a, Dw_a, Dmu)
+            iv.set_start(Dq_a, Dw_a, Dmu)
             if turning:
                 Dq_e = iv.dG_fixed_q_end() / (2 * c.g * iv.f_e)
             elif kind == EventCode.NORMAL_SIGN_CHANGE:
@@ -423,42 +435,55 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
                 else:
                     why = TANGENTIAL_N_REASON
                 if Dq_e is None:
-                    broken, first_broken = why, i
-                    reasons.append(broken)
-                    continue
+                    plan, broken = plan[:j], why
+                    break
             else:
-                Dq_e = limiter_D.get(q_e, np.zeros(P)) if kind in (EventCode.IMPACT, EventCode.REST_ON_LIMITER) \
+                Dq_e = limiter_D.get(ev.q, np.zeros(P)) if kind in (EventCode.IMPACT, EventCode.REST_ON_LIMITER) \
                     else np.zeros(P)
             iv.set_end(Dq_e)
-            w_end, W_end, _, _ = iv.along(np.array([1.0]))
-            w_minus, Dw_minus = (0.0, np.zeros(P)) if turning else (float(w_end[0]), W_end[0])
-            dT = iv.dT()
-            if dT is None:
-                broken, first_broken = "the time derivative's quadrature did not converge", i
-                reasons.append(broken)
-                continue
+            Dw_minus = np.zeros(P) if turning else iv.end_state()[1]
         sigma_in = 1.0 if ev.qdot_before >= 0 else -1.0
         v_minus = sigma_in * math.sqrt(max(w_minus, 0.0))
         Dv_minus = sigma_in * Dw_minus / (2 * math.sqrt(w_minus)) if w_minus > 0 else np.zeros(P)
         if kind == EventCode.IMPACT:
             k = scene.k
-            w_plus, Dw_plus = k * k * w_minus, 2 * k * Dk * w_minus + k * k * Dw_minus
+            Dw_plus = 2 * k * Dk * w_minus + k * k * Dw_minus
             Dv_plus = -(Dk * v_minus + k * Dv_minus)
             D_impact_loss += c.m / 2 * (-2 * k * Dk * w_minus + (1 - k * k) * Dw_minus)
         else:   # a turning point, or a sign change of N: w goes on (the branch flips with N)
-            w_plus, Dw_plus, Dv_plus = w_minus, Dw_minus, Dv_minus
-            if turning:
-                Dv_plus = np.zeros(P)
-        Dt_e = Dt_a + dT
-        T[i], Q[i], VB[i], VA[i] = Dt_e, Dq_e, Dv_minus, Dv_plus
-        reasons.append("")
-        if q_e != q_a:
+            Dw_plus, Dv_plus = Dw_minus, (np.zeros(P) if turning else Dv_minus)
+        Q[i], VB[i], VA[i] = Dq_e, Dv_minus, Dv_plus
+        Dq_a, Dw_a = Dq_e, Dw_plus
+    # 4. the time derivatives of all intervals at once; the first that fails ends the derivatives
+    dT = np.zeros((len(plan), P))
+    for lo in range(0, len(plan), CHUNK):      # (in chunks: none computed after one that fails)
+        for s, rows in _by_branch([p[4] for p in plan[lo:lo + CHUNK]], indices=True):
+            ends = {name: np.array([getattr(plan[lo + r][4], name) for r in rows]) for name in BATCH_FIELDS}
+            dT[[lo + r for r in rows]] = time_derivatives(c, s, ends)
+        if not np.all(np.isfinite(dT[lo:lo + CHUNK])):
+            break
+    failed = np.flatnonzero(~np.all(np.isfinite(dT), axis=1))
+    if len(failed):
+        j = int(failed[0])
+        plan, broken = plan[:j], "the time derivative's quadrature did not converge"
+    legs, t_a, Dt_a = [], 0.0, np.zeros(P)
+    for j, (i, ev, _, _, iv, _) in enumerate(plan):
+        Dt_e = Dt_a + dT[j]
+        T[i] = Dt_e
+        if iv is not None:
             legs.append(Leg(iv, t_a, ev.t, Dt_a, Dt_e))
-        q_a, w_a, Dq_a, Dw_a, Dt_a, t_a = q_e, w_plus, Dq_e, Dw_plus, Dt_e, ev.t
-        Dq_last, Dw_last = Dq_e, Dw_plus
+        t_a, Dt_a = ev.t, Dt_e
+    done = len(plan)
+    Q[done:], VB[done:], VA[done:] = np.nan, np.nan, np.nan
+    reasons = [""] * done
+    if broken:
+        q_start = plan[-1][1].q if plan else scene.q0
+        reasons += _reasons_after(result.events[done:last + 1], done, broken, scene, c, q_start)
+    reasons += [f"not asked for: after event {last} (through={last})"] * (n - 1 - last)
     final = {name: np.full(P, np.nan) for name in ("t_final", "q_final", "friction_work", "impact_loss")}
-    if not broken and result.status.code in FINAL_STATUSES and n and Dq_last is not None:
+    if not broken and last == n - 1 and result.status.code in FINAL_STATUSES and plan:
         q_f = result.events[-1].q
+        Dq_last, Dw_last = Dq_a, Dw_a
         DE_final = c.m * (Dw_last / 2 + c.g * (float(c.dz(q_f)) * Dq_last + c.geometry_dp("z", q_f)[0]))
         final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=D_impact_loss,
                      friction_work=DE0 - DE_final - D_impact_loss)
@@ -468,6 +493,59 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None) -> Ta
             column[..., j] = np.nan
     sens = Sensitivities(wrt, tuple(result.events), T, Q, VB, VA, tuple(reasons), final, notes)
     return Tangents(sens, tuple(legs))
+
+
+#: Intervals whose time derivatives are computed at once (a chunk after one that fails is not computed).
+CHUNK = 64
+#: The arrays of each interval that :func:`symvib.numeric.sensitivity_batch.time_derivatives` reads.
+BATCH_FIELDS = ("q_a", "q_e", "G_a", "G_e", "f_a", "f_e", "Dq_a", "Dq_e", "DG_a", "DG_e")
+
+
+def _checked_through(through, n: int) -> int:
+    """The index of the last event to differentiate: ``through`` within the run's events."""
+    if isinstance(through, bool) or not isinstance(through, (int, np.integer)) or through < 0:
+        raise ValueError(f"through: the index of an event (a whole number >= 0), got {through!r:.80}")
+    return min(int(through), n - 1)
+
+
+def _by_branch(intervals, indices=False):
+    """``(s, intervals on branch s)`` for each branch that has some (``indices``: their positions)."""
+    for s in (1, -1):
+        rows = [j for j, iv in enumerate(intervals) if iv is not None and iv.s == s]
+        if rows:
+            yield s, (rows if indices else [intervals[j] for j in rows])
+
+
+def _plan(events, scene, c, q_a, w_a):
+    """The differentiable events from the start, each ``(index, event, kind code, turning, interval or None,
+    w before it)``, and the first event without derivatives (its index, or None) and why."""
+    plan = []
+    for i, ev in enumerate(events):
+        kind = ev.kind.code
+        own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
+        if own:
+            return plan, i, own
+        turning = kind in (EventCode.REVERSAL, EventCode.ARREST)
+        if ev.q == q_a:                      # no motion in between (a rest test at the start)
+            iv, w_minus = None, w_a
+        else:
+            sigma = 1 if ev.q > q_a else -1
+            s = _branch(c, q_a, w_a, sigma, q_a + (ev.q - q_a) / 2)
+            iv = _Interval(c, q_a, w_a, ev.q, s, turning, I_p_e=0.0)
+            w_minus = 0.0 if turning else float((iv.G_e / iv.E_e)[0])
+        plan.append((i, ev, kind, turning, iv, w_minus))
+        q_a, w_a = ev.q, (scene.k * scene.k * w_minus if kind == EventCode.IMPACT else w_minus)
+    return plan, None, ""
+
+
+def _reasons_after(events, first, why, scene, c, q_a) -> list:
+    """The reasons of the events from the first without derivatives on (index ``first``, reason ``why``; the
+    particle was at ``q_a`` before it): each later one's own, else that it follows ``first``."""
+    out = [why]
+    for ev in events[1:]:
+        own = _not_differentiable(ev, scene, c, ev.kind.code, moved=ev.q != q_a)
+        out.append(own or f"follows event {first}, which has no derivatives ({why})")
+    return out
 
 
 def _branch(c, q_a, w_a, sigma, mid_q) -> int:
