@@ -416,7 +416,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     if c.f_depends:
         for s, group in _by_branch([p[4] for p in plan]):
             q0s, D = np.array([iv.q_a for iv in group]), np.array([iv.q_e - iv.q_a for iv in group])
-            for iv, I_p_e in zip(group, end_integrals(lambda v, s=s: c.df_dp(s, v), q0s, D, MAX_PANELS * NODES)):
+            for iv, I_p_e in zip(group, end_integrals(c, s, q0s, D, MAX_PANELS * NODES)):
                 iv.I_p_e = I_p_e
     # 3. the tangents of the events' positions and speeds, event by event (no quadrature left)
     D_impact_loss = np.zeros(P)

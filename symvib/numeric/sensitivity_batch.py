@@ -96,25 +96,39 @@ def cumulative(fns, anchor, D, x_sorted, magnitude=False):
     """
     single = callable(fns)
     fns = (fns,) if single else tuple(fns)
-    x, w = gauss(INNER_NODES)
-    mid, half = _pieces(x_sorted)
-    nodes = anchor[:, None, None] + D[:, None, None] * (mid[:, None] + half[:, None] * x[None, :])[None]
+    nodes, half = _nodes(anchor, D, x_sorted)
     flat = nodes.ravel()
     out = []
     for fn in fns:
         vals = np.asarray(fn(flat))
         for v in ((vals, np.abs(vals)) if magnitude else (vals,)):
-            v = v.reshape(nodes.shape + v.shape[1:])                   # (M, pieces, nodes[, columns])
-            sums = np.moveaxis(v, 2, -1) @ w
-            shape = (1, -1) + (1,) * (sums.ndim - 2)
-            out.append(D.reshape((-1,) + (1,) * (sums.ndim - 1)) * np.cumsum(half.reshape(shape) * sums, axis=1))
+            out.append(_summed(v.reshape(nodes.shape + v.shape[1:]), D, half))
     return out[0] if single and not magnitude else out
 
 
-def end_integrals(fn, anchor, D, max_pieces):
-    """``Integral_{anchor}^{anchor + D} fn(q) dq`` of each interval (shape (M, columns)): :func:`cumulative`
-    over 8, 16, ... equal pieces until two agree to ``INTEGRAL_RTOL`` of the integral of ``|fn|``, column
-    by column, each interval to its own count (the last count tried where none agree)."""
+def _nodes(anchor, D, x_sorted):
+    """The inner Gauss nodes of :func:`cumulative` (shape (M, pieces, INNER_NODES)) and the pieces' half-widths."""
+    x, _ = gauss(INNER_NODES)
+    mid, half = _pieces(x_sorted)
+    return anchor[:, None, None] + D[:, None, None] * (mid[:, None] + half[:, None] * x[None, :])[None], half
+
+
+def _summed(v, D, half):
+    """The cumulative sums of :func:`cumulative` from the values ``v`` at its nodes (shape (M, pieces, nodes[,
+    columns]))."""
+    _, w = gauss(INNER_NODES)
+    sums = np.moveaxis(v, 2, -1) @ w
+    shape = (1, -1) + (1,) * (sums.ndim - 2)
+    return D.reshape((-1,) + (1,) * (sums.ndim - 1)) * np.cumsum(half.reshape(shape) * sums, axis=1)
+
+
+def end_integrals(c, s, anchor, D, max_pieces):
+    """``Integral_{anchor}^{anchor + D} dF_s'/dp dq`` of each interval (shape (M, P)): :func:`cumulative`
+    over 8, 16, ... equal pieces until two agree to ``INTEGRAL_RTOL`` of the integral of ``|dF_s'/dp|``,
+    column by column, each interval to its own count (the last count tried where none agree).  Without
+    curve parameters only ``mu``'s column is integrated (the others are 0)."""
+    factors = c.df_dp_factors(s)
+    fn = factors[0] if factors else (lambda v: c.df_dp(s, v))
     M = len(anchor)
     result, previous = None, None
     active = np.arange(M)
@@ -135,7 +149,7 @@ def end_integrals(fn, anchor, D, max_pieces):
         pieces *= 2
     if len(active):
         result[active] = previous
-    return result
+    return result[:, None] * factors[1] if factors else result
 
 
 def time_derivatives(c, s, ends):
@@ -207,21 +221,29 @@ def _level(c, s, ends, rows, panels):
     Dq = (1 - u)[None, :, None] * Dq_a[:, None, :] + u[None, :, None] * Dq_e[:, None, :]
     G = np.empty((M, n))
     DG = np.empty((M, n, P))
+    factors = c.df_dp_factors(s) if c.f_depends else None
     fns = [lambda v: c.f(s, v), lambda v: c.df(s, v)]
     if c.f_depends:
-        fns.append(lambda v: c.df_dp(s, v))
-    for from_start, order in ((True, start), (False, end)):
-        if not len(order):
-            continue
+        fns.append(factors[0] if factors else (lambda v: c.df_dp(s, v)))
+    halves = [(from_start, order) for from_start, order in ((True, start), (False, end)) if len(order)]
+    inner = []
+    for from_start, order in halves:       # the nodes of both halves, for one call of each kernel
+        x = u[order] if from_start else d[order]
+        inner.append(_nodes(q_a if from_start else q_e, delta if from_start else -delta, x))
+    values = [np.asarray(fn(np.concatenate([nodes.ravel() for nodes, _ in inner]))) for fn in fns]
+    cut = 0
+    for (from_start, order), (nodes, half) in zip(halves, inner):
         x = u[order] if from_start else d[order]
         q_c, D, G_c, DG_c, f_c = ((q_a, delta, e["G_a"], e["DG_a"], e["f_a"]) if from_start
                                   else (q_e, -delta, e["G_e"], e["DG_e"], e["f_e"]))
-        int_f, int_df, *int_dp = cumulative(fns, q_c, D, x)
+        int_f, int_df, *int_dp = (_summed(v[cut:cut + nodes.size].reshape(nodes.shape + v.shape[1:]), D, half)
+                                  for v in values)
+        cut += nodes.size
         G[:, order] = G_c[:, None] - 2 * c.g * int_f
         step = (x if from_start else -x)[None, :, None] * (Dq_e - Dq_a)[:, None, :]
         dg = DG_c[:, None, :] - 2 * c.g * (int_df[:, :, None] * Dq[:, order] + f_c[:, None, None] * step)
         if int_dp:
-            dg -= 2 * c.g * int_dp[0]
+            dg -= 2 * c.g * (int_dp[0][:, :, None] * factors[1] if factors else int_dp[0])
         DG[:, order] = dg
     flat = q.ravel()
     alpha, dalpha = c.alpha(flat).reshape(M, n), c.dalpha(flat).reshape(M, n)
