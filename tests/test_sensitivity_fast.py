@@ -103,3 +103,19 @@ def test_the_option_s_text_names_curve_parameters_and_refuses_an_ambiguous_one()
         make_spec(ambiguous, {"qdot": "1:2:2"}, sensitivities="k")
     with pytest.raises(SceneError, match="sensitivities: 'q': give distinct names from mu, k, .*, right, p"):
         make_spec(resolve_scene("paper-parabola"), {"qdot": "6:7:2"}, sensitivities="q")
+
+
+@pytest.mark.parametrize("scene", [resolve_scene("paper-parabola").replace(k=0.8), scene_from_dict(USER)],
+                         ids=["paper-parabola-k0.8", "user-hump"])
+def test_early_samples_are_differentiated_as_among_later_ones(scene):
+    from symvib.numeric.sample_sensitivity import sample_sensitivities
+
+    res = _run(scene)
+    t_end = res.events[-1].t
+    early = np.linspace(0.01, 0.3, 7) * t_end
+    alone = sample_sensitivities(res, early, _wrt(scene), "xz")      # differentiated up to those samples only
+    among = sample_sensitivities(res, np.concatenate([early, [0.9 * t_end]]), _wrt(scene), "xz")
+    assert alone.reasons == among.reasons[:len(early)]
+    a, b = alone.derivatives, among.derivatives[:len(early)]
+    assert np.array_equal(np.isnan(a), np.isnan(b))
+    assert np.all(np.nan_to_num(np.abs(a - b)) <= SAME * (np.nanmax(np.abs(b), axis=0) + 1e-300))
