@@ -457,9 +457,10 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     # 4. the time derivatives of all intervals at once; the first that fails ends the derivatives
     dT = np.zeros((len(plan), P))
     for lo in range(0, len(plan), CHUNK):      # (in chunks: none computed after one that fails)
-        for s, rows in _by_branch([p[4] for p in plan[lo:lo + CHUNK]], indices=True):
-            ends = {name: np.array([getattr(plan[lo + r][4], name) for r in rows]) for name in BATCH_FIELDS}
-            dT[[lo + r for r in rows]] = time_derivatives(c, s, ends)
+        rows = [lo + r for r, p in enumerate(plan[lo:lo + CHUNK]) if p[4] is not None]
+        if rows:
+            ends = {name: np.array([getattr(plan[r][4], name) for r in rows]) for name in BATCH_FIELDS}
+            dT[rows] = time_derivatives(c, ends)
         if not np.all(np.isfinite(dT[lo:lo + CHUNK])):
             break
     failed = np.flatnonzero(~np.all(np.isfinite(dT), axis=1))
@@ -498,7 +499,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
 #: Intervals whose time derivatives are computed at once (a chunk after one that fails is not computed).
 CHUNK = 64
 #: The arrays of each interval that :func:`symvib.numeric.sensitivity_batch.time_derivatives` reads.
-BATCH_FIELDS = ("q_a", "q_e", "G_a", "G_e", "f_a", "f_e", "Dq_a", "Dq_e", "DG_a", "DG_e")
+BATCH_FIELDS = ("s", "q_a", "q_e", "G_a", "G_e", "f_a", "f_e", "Dq_a", "Dq_e", "DG_a", "DG_e")
 
 
 def _checked_through(through, n: int) -> int:
@@ -508,12 +509,12 @@ def _checked_through(through, n: int) -> int:
     return min(int(through), n - 1)
 
 
-def _by_branch(intervals, indices=False):
-    """``(s, intervals on branch s)`` for each branch that has some (``indices``: their positions)."""
+def _by_branch(intervals):
+    """``(s, intervals on branch s)`` for each branch that has some."""
     for s in (1, -1):
-        rows = [j for j, iv in enumerate(intervals) if iv is not None and iv.s == s]
-        if rows:
-            yield s, (rows if indices else [intervals[j] for j in rows])
+        group = [iv for iv in intervals if iv is not None and iv.s == s]
+        if group:
+            yield s, group
 
 
 def _plan(events, scene, c, q_a, w_a):

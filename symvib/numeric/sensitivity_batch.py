@@ -152,13 +152,14 @@ def end_integrals(c, s, anchor, D, max_pieces):
     return result[:, None] * factors[1] if factors else result
 
 
-def time_derivatives(c, s, ends):
-    """Derivatives of the durations of intervals on branch ``s`` (shape (M, P), the intervals in time
-    order); a row is NaN where the refinement fails (a non-finite level, or no two levels within
+def time_derivatives(c, ends):
+    """Derivatives of the durations of intervals (shape (M, P), the intervals in time order, on either
+    branch); a row is NaN where the refinement fails (a non-finite level, or no two levels within
     ``ACCEPT``), and so is every row after the first that fails past ``BATCH_PANELS`` (not computed:
     the derivatives end at the first failure).
 
-    ``ends`` holds arrays over the intervals: ``q_a``, ``q_e``, ``G_a``, ``G_e``, ``f_a``, ``f_e`` (M,)
+    ``ends`` holds arrays over the intervals: the branch ``s`` (+-1), ``q_a``, ``q_e``, ``G_a``, ``G_e``,
+    ``f_a``, ``f_e`` (M,)
     and the tangents ``Dq_a``, ``Dq_e``, ``DG_a``, ``DG_e`` (M, P); ``c`` is the
     :class:`~symvib.numeric.sensitivity_curve.CurveFunctions` of the run.  The levels up to
     ``BATCH_PANELS`` panels are evaluated for all unconverged intervals at once, the finer ones
@@ -168,16 +169,16 @@ def time_derivatives(c, s, ends):
     out = np.full((M, P), np.nan)
     if M == 0:
         return out
-    state = _Refinement(M, P, _level(c, s, ends, np.arange(M), 2)[0])
+    state = _Refinement(M, P, _level(c, ends, np.arange(M), 2)[0])
     active, panels = np.arange(M), 2
     while panels < min(BATCH_PANELS, MAX_PANELS) and len(active):
         panels *= 2
-        active = state.step(out, active, *_level(c, s, ends, active, panels))
+        active = state.step(out, active, *_level(c, ends, active, panels))
     for r in active:                     # (in time order)
         rows, level = np.array([r]), panels
         while level < MAX_PANELS and len(rows):
             level *= 2
-            rows = state.step(out, rows, *_level(c, s, ends, rows, level))
+            rows = state.step(out, rows, *_level(c, ends, rows, level))
         if len(rows) and state.best_gap[r] <= ACCEPT:
             out[r] = state.best[r]
         if not np.all(np.isfinite(out[r])):
@@ -208,7 +209,7 @@ class _Refinement:
         return rows[finite & ~converged]
 
 
-def _level(c, s, ends, rows, panels):
+def _level(c, ends, rows, panels):
     """The integral of the time derivative's integrand and of its magnitude on ``panels`` panels, for the
     intervals ``rows`` of ``ends`` (shape (len(rows), P) each)."""
     u, d, weights, start, end = _theta_level(panels)
@@ -221,24 +222,22 @@ def _level(c, s, ends, rows, panels):
     Dq = (1 - u)[None, :, None] * Dq_a[:, None, :] + u[None, :, None] * Dq_e[:, None, :]
     G = np.empty((M, n))
     DG = np.empty((M, n, P))
-    factors = c.df_dp_factors(s) if c.f_depends else None
-    fns = [lambda v: c.f(s, v), lambda v: c.df(s, v)]
+    s = e["s"]
+    fns = [c.f, c.df]
+    factors = c.df_dp_factors(1) if c.f_depends else None     # (its columns are the same on both branches)
     if c.f_depends:
-        fns.append(factors[0] if factors else (lambda v: c.df_dp(s, v)))
+        fns.append(c.df_dmu if factors else c.df_dp)
     halves = [(from_start, order) for from_start, order in ((True, start), (False, end)) if len(order)]
     inner = []
-    for from_start, order in halves:       # the nodes of both halves, for one call of each kernel
+    for from_start, order in halves:
         x = u[order] if from_start else d[order]
         inner.append(_nodes(q_a if from_start else q_e, delta if from_start else -delta, x))
-    values = [np.asarray(fn(np.concatenate([nodes.ravel() for nodes, _ in inner]))) for fn in fns]
-    cut = 0
-    for (from_start, order), (nodes, half) in zip(halves, inner):
+    values = [_on_branches(fn, s, [nodes for nodes, _ in inner]) for fn in fns]
+    for h, ((from_start, order), (_, half)) in enumerate(zip(halves, inner)):
         x = u[order] if from_start else d[order]
         q_c, D, G_c, DG_c, f_c = ((q_a, delta, e["G_a"], e["DG_a"], e["f_a"]) if from_start
                                   else (q_e, -delta, e["G_e"], e["DG_e"], e["f_e"]))
-        int_f, int_df, *int_dp = (_summed(v[cut:cut + nodes.size].reshape(nodes.shape + v.shape[1:]), D, half)
-                                  for v in values)
-        cut += nodes.size
+        int_f, int_df, *int_dp = (_summed(v[h], D, half) for v in values)
         G[:, order] = G_c[:, None] - 2 * c.g * int_f
         step = (x if from_start else -x)[None, :, None] * (Dq_e - Dq_a)[:, None, :]
         dg = DG_c[:, None, :] - 2 * c.g * (int_df[:, :, None] * Dq[:, order] + f_c[:, None, None] * step)
@@ -247,8 +246,8 @@ def _level(c, s, ends, rows, panels):
         DG[:, order] = dg
     flat = q.ravel()
     alpha, dalpha = c.alpha(flat).reshape(M, n), c.dalpha(flat).reshape(M, n)
-    E = np.exp(2 * s * c.mu * alpha)
-    W = (DG - G[:, :, None] * 2 * s * (alpha[:, :, None] * c.Dmu + c.mu * dalpha[:, :, None] * Dq
+    E = np.exp(2 * s[:, None] * c.mu * alpha)
+    W = (DG - G[:, :, None] * 2 * s[:, None, None] * (alpha[:, :, None] * c.Dmu + c.mu * dalpha[:, :, None] * Dq
                                       + c.mu * c.geometry_dp("alpha", flat).reshape(M, n, P))) / E[:, :, None]
     w = G / E
     length = np.abs(delta)
@@ -259,3 +258,22 @@ def _level(c, s, ends, rows, panels):
           + c.geometry_dp("h", flat).reshape(M, n, P) * length[:, None, None]) / root[:, :, None]
          - 0.5 * (h * length[:, None])[:, :, None] * W / (w * root)[:, :, None])
     return np.einsum("n,mnp->mp", weights, J), np.einsum("n,mnp->mp", weights, np.abs(J))
+
+
+def _on_branches(fn, s, parts):
+    """``fn(sign, q)`` at the nodes ``parts`` (one array of shape (M, pieces, nodes) per half of the
+    intervals), each interval's on its branch ``s`` (M,): one call per branch for all halves."""
+    out = [None] * len(parts)
+    for sign in (1, -1):
+        rows = np.flatnonzero(s == sign)
+        if not len(rows):
+            continue
+        values = np.asarray(fn(sign, np.concatenate([p[rows].ravel() for p in parts])))
+        cut = 0
+        for h, p in enumerate(parts):
+            size = len(rows) * p.shape[1] * p.shape[2]
+            if out[h] is None:
+                out[h] = np.empty(p.shape + values.shape[1:])
+            out[h][rows] = values[cut:cut + size].reshape((len(rows),) + p.shape[1:] + values.shape[1:])
+            cut += size
+    return out
