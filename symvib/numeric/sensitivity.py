@@ -90,23 +90,24 @@ class _Interval:
     """
 
     def __init__(self, curve, q_a, w_a, q_e, s, turning_end, Dq_a=None, Dw_a=None, Dmu=None, G_e=None,
-                 I_p_e=None):
+                 I_p_e=None, ends=None):
         c = curve
         self.c, self.q_a, self.q_e, self.s, self.turning_end = c, q_a, q_e, s, turning_end
         self.w_a = w_a
-        self.E_a = math.exp(2 * s * c.mu * float(c.alpha(q_a)))
+        # (``ends``: the kernels at both ends, from a caller that evaluates them for many intervals at once)
+        alpha_a, dalpha_a, f_a, f_e, F_a, F_e, alpha_e, dalpha_e = ends or (
+            float(c.alpha(q_a)), float(c.dalpha(q_a)), float(c.f(s, q_a)), float(c.f(s, q_e)), c.F(s, q_a),
+            c.F(s, q_e), c.alpha(np.array([q_e])), c.dalpha(np.array([q_e])))
+        self.E_a = math.exp(2 * s * c.mu * alpha_a)
         self.G_a = w_a * self.E_a
-        self.alpha_a, self.dalpha_a = float(c.alpha(q_a)), float(c.dalpha(q_a))
-        self.f_a = float(c.f(s, q_a))
-        self.f_e = float(c.f(s, q_e))
+        self.alpha_a, self.dalpha_a, self.f_a, self.f_e = alpha_a, dalpha_a, f_a, f_e
         if I_p_e is None:       # (given by a caller that integrates many intervals at once)
             I_p_e = self.integral(lambda q: c.df_dp(s, q), q_a, q_e - q_a) if c.f_depends else 0.0
         self.I_p_e = I_p_e
         if G_e is None:
-            G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(c.F(s, q_e) - c.F(s, q_a))
+            G_e = 0.0 if turning_end else self.G_a - 2 * c.g * float(F_e - F_a)
         self.G_e = G_e
-        alpha_e = c.alpha(np.array([q_e]))
-        self.alpha_e, self.dalpha_e, self.E_e = alpha_e, c.dalpha(np.array([q_e])), np.exp(2 * s * c.mu * alpha_e)
+        self.alpha_e, self.dalpha_e, self.E_e = alpha_e, dalpha_e, np.exp(2 * s * c.mu * alpha_e)
         if Dq_a is not None:
             self.set_start(Dq_a, Dw_a, Dmu)
 
@@ -521,6 +522,11 @@ def _plan(events, scene, c, q_a, w_a):
     """The differentiable events from the start, each ``(index, event, kind code, turning, interval or None,
     w before it)``, and the first event without derivatives (its index, or None) and why."""
     plan = []
+    # the kernels at every event and every interval's middle, each called once for all of them
+    at = np.array([q_a] + [ev.q for ev in events])
+    middle = at[:-1] + (at[1:] - at[:-1]) / 2
+    alpha, dalpha, alpha_mid = c.alpha(at), c.dalpha(at), c.alpha(middle)
+    F, f, F_mid = ({s: fn(s, x) for s in (1, -1)} for fn, x in ((c.F, at), (c.f, at), (c.F, middle)))
     for i, ev in enumerate(events):
         kind = ev.kind.code
         own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
@@ -531,8 +537,10 @@ def _plan(events, scene, c, q_a, w_a):
             iv, w_minus = None, w_a
         else:
             sigma = 1 if ev.q > q_a else -1
-            s = _branch(c, q_a, w_a, sigma, q_a + (ev.q - q_a) / 2)
-            iv = _Interval(c, q_a, w_a, ev.q, s, turning, I_p_e=0.0)
+            s = _branch(c, w_a, sigma, middle[i], (alpha[i], alpha_mid[i], F[sigma][i], F_mid[sigma][i]))
+            ends = (float(alpha[i]), float(dalpha[i]), float(f[s][i]), float(f[s][i + 1]), F[s][i], F[s][i + 1],
+                    alpha[i + 1:i + 2], dalpha[i + 1:i + 2])
+            iv = _Interval(c, q_a, w_a, ev.q, s, turning, I_p_e=0.0, ends=ends)
             w_minus = 0.0 if turning else float((iv.G_e / iv.E_e)[0])
         plan.append((i, ev, kind, turning, iv, w_minus))
         q_a, w_a = ev.q, (scene.k * scene.k * w_minus if kind == EventCode.IMPACT else w_minus)
@@ -549,12 +557,14 @@ def _reasons_after(events, first, why, scene, c, q_a) -> list:
     return out
 
 
-def _branch(c, q_a, w_a, sigma, mid_q) -> int:
+def _branch(c, w_a, sigma, mid_q, values) -> int:
     """The branch ``s = sigma sign(N)`` of an interval (no sign change of ``N`` inside: the engine
-    ends an interval there), from ``N`` at its middle on the branch that assumes ``N > 0``."""
-    G_a = w_a * math.exp(2 * sigma * c.mu * float(c.alpha(q_a)))
-    G_mid = G_a - 2 * c.g * float(c.F(sigma, mid_q) - c.F(sigma, q_a))
-    w_mid = G_mid / math.exp(2 * sigma * c.mu * float(c.alpha(mid_q)))
+    ends an interval there), from ``N`` at its middle ``mid_q`` on the branch that assumes ``N > 0``
+    (``values``: ``alpha`` at its start and middle, ``F_sigma`` at its start and middle)."""
+    alpha_a, alpha_mid, F_a, F_mid = values
+    G_a = w_a * math.exp(2 * sigma * c.mu * float(alpha_a))
+    G_mid = G_a - 2 * c.g * float(F_mid - F_a)
+    w_mid = G_mid / math.exp(2 * sigma * c.mu * float(alpha_mid))
     return sigma if c.N(mid_q, w_mid) >= 0 else -sigma
 
 
