@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import statistics
 import subprocess
 import sys
@@ -71,6 +72,10 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--entries", default="simulate,sweep")
     opts = ap.parse_args(argv)
+    # Killed (SIGTERM), leave by the same `finally` as an error does: the worktrees are removed; and
+    # forget the worktrees of a run killed harder (SIGKILL) whose folders are gone.
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
+    subprocess.run(["git", "-C", str(ROOT), "worktree", "prune"], check=False)
     entries = [e for e in opts.entries.split(",") if e]
     results = {(side, e): [] for side in ("base", "head") for e in entries}
     with tempfile.TemporaryDirectory() as tmp:

@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import signal
 import statistics
 import subprocess
 import sys
@@ -85,6 +86,10 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=50)
     ap.add_argument("--cpu", default="1", help="the core both processes are pinned to ('' for none)")
     opts = ap.parse_args(argv)
+    # Killed (SIGTERM), leave by the same `finally` as an error does: the worktrees are removed; and
+    # forget the worktrees of a run killed harder (SIGKILL) whose folders are gone.
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
+    subprocess.run(["git", "-C", str(ROOT), "worktree", "prune"], check=False)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         folders = {"base": checkout(opts.base, tmp / "base")}

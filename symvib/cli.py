@@ -654,6 +654,10 @@ def _cmd_sweep(args) -> int:
           f"{len(res.reused)} reused"
           + (f" ({len(res.discarded)} found truncated or foreign)" if res.discarded else ""))
     print(f"  status: {status}; {events} events; {np.mean(res['impacts']):.3g} impacts per scene on average")
+    if "flights" in res.columns:   # a sweep of unilateral scenes (physics.md, "Flight and landing")
+        flew = int(np.count_nonzero(res["flights"]))
+        print(f"  flights: {int(np.sum(res['flights']))} in {flew} of {res.count} scenes; landings: "
+              f"{int(np.sum(res['landings']))}; energy lost at landings: {float(np.nansum(res['landing_loss'])):.6g} J")
     if res.computed and res.seconds > 0:
         n = sum(len(res.spec.rows(i)[0]) for i in res.computed)
         print(f"  {n / res.seconds:,.0f} scenes/s over {res.seconds:.3g} s")

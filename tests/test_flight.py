@@ -214,7 +214,9 @@ def test_a_bouncing_ball_run_end_to_end_closes_its_budget_and_arrests():
     assert data["energy_budget"]["landing_loss"] == b.landing_loss and data["units"]["energy_budget"]["landing_loss"]
     assert {"lift_off", "landing"} <= {e["kind"] for e in data["events"]}
     assert "landing loss" in r.event_table()
-    assert r.samples is None and "flights" in r.error   # (none yet: it says so)
+    S = r.samples   # (its samples: tests/test_flight_samples.py)
+    flown = [e for e in r.events if e.kind is EventKind.LANDING and "accumulation" not in e.detail]
+    assert S.flight.max() + 1 == len(flown) and r.error is None   # (the summed bounces are not sampled)
     # a bilateral run's budget and JSON are as they were: no landing column
     plain = simulate(scene.replace(contact="bilateral"), backend="python", samples=False)
     assert plain.energy_budget.landing_loss is None and "landing_loss" not in plain.to_dict()["energy_budget"]

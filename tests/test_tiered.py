@@ -153,7 +153,7 @@ def test_an_opt_out_or_an_explicit_backend_starts_no_child(tmp_path, how):
 
 
 #: Failing compile children: one that exits 1, the real one whose compiler raises, one that "compiles"
-#: without writing numba's cache; and what the warning says of each.
+#: without writing numba's cache, one that never ends; and what the warning says of each.
 FAILING_CHILDREN = {
     "exits-1": ("def child(parent, module, call, send):\n    sys.exit(1)\n", "ended with status 1"),
     "raises": ("from symvib.numeric import driver\nbound = driver.bound_engine\n"
@@ -163,6 +163,9 @@ FAILING_CHILDREN = {
                "driver.bound_engine = no_numba\nchild = tiered._compile\n",
                "MemoryError: out of memory"),
     "no-cache": ("def child(parent, module, call, send):\n    pass\n", "numba could not write"),
+    # a child that never ends (a lock held at the fork, a stuck compile): killed after TIER_TIMEOUT
+    "stuck": ("import time\ntiered.TIER_TIMEOUT = 1.0\n"
+              "def child(parent, module, call, send):\n    time.sleep(3600)\n", "did not end within 1 s"),
 }
 
 

@@ -10,6 +10,10 @@ The state between events comes from the run's dense output ``result.state(t)`` w
 the result has one, otherwise from its samples (:attr:`Result.samples`: the Gauss
 nodes of every motion interval, where ``q`` and ``qdot`` are exact) by cubic Hermite
 interpolation in each interval (:func:`states`), which is more than a picture needs.
+A run with flights (physics.md, "Flight and landing") moves the particle along its flight
+arcs, the parabolas in closed form, not along the curve (:func:`positions`); its flights are
+drawn dashed behind it, and the phase portrait's point waits off the axes while it flies
+(it has no ``q`` in flight).
 
 Frames are evenly spaced in time from 0 to ``t_final``: ``round(fps * duration)`` of
 them (:func:`frame_times`), ``duration`` the length of the animation in seconds
@@ -37,7 +41,8 @@ from symvib import safeio
 from symvib.numeric.events import EventKind
 from symvib.paths import check_output_file
 
-__all__ = ["animate", "check_animation_path", "frame_times", "states", "DEFAULT_FPS", "MAX_FRAMES", "FORMATS"]
+__all__ = ["animate", "check_animation_path", "frame_times", "states", "positions", "DEFAULT_FPS", "MAX_FRAMES",
+           "FORMATS"]
 
 #: Frames per second unless asked otherwise.
 DEFAULT_FPS = 20
@@ -121,6 +126,23 @@ def states(result, times) -> tuple:
     return np.where(after, result.q_final, q), np.where(after, result.qdot_final, qdot)
 
 
+def positions(result, times) -> tuple:
+    """``(x, z)`` of the particle at ``times``: on the curve at ``q(t)`` (:func:`states`), in flight on
+    its parabola (the dense output's :meth:`~symvib.numeric.flight_dense.FlightDense.position`)."""
+    from symvib.numeric.kernels import load
+
+    times = np.asarray(times, dtype=float)
+    q, _ = states(result, times)
+    mod, cp = load(result.scene.shape), tuple(result.scene.param_values)
+    on = np.isfinite(q)
+    qs = np.where(on, q, 0.0)
+    x = np.array(np.broadcast_to(mod.x(qs, *cp), qs.shape), dtype=float)
+    z = np.array(np.broadcast_to(mod.z(qs, *cp), qs.shape), dtype=float)
+    if not on.all():   # in flight: the parabola (a run with flights has its dense output)
+        x[~on], z[~on] = result.dense.position(times[~on])[:2]
+    return x, z
+
+
 def _curve_range(result, q):
     """The ``q`` range drawn: what the run visits and its limiters, with a margin, inside the domain."""
     scene = result.scene
@@ -199,12 +221,14 @@ def animate(result, path, *, fps: float = DEFAULT_FPS, duration: float | None = 
     ax_curve.set_xlabel("$x$ [m]")
     ax_curve.set_ylabel("$z$ [m]")
     ax_curve.grid(alpha=0.3)
-    ax_curve.set_title(f"{scene.shape.name}: the particle on the curve", fontsize=10)
+    flying = bool(result.count(EventKind.LIFT_OFF))
+    ax_curve.set_title(f"{scene.shape.name}: the particle on the curve{' and in flight' * flying}", fontsize=10)
     figures.phase_portrait(result, ax=ax_phase)
-    xs, zs = mod.x(q, *cp), mod.z(q, *cp)
+    xs, zs = positions(result, times)
     fine = np.linspace(0.0, times[-1], TRACK_POINTS_PER_FRAME * len(times))
-    fine_q, _ = states(result, fine)
-    fine_x, fine_z = mod.x(fine_q, *cp), mod.z(fine_q, *cp)
+    fine_x, fine_z = positions(result, fine)
+    for x_arc, z_arc in figures.flight_arcs(result):   # the flights, behind the particle
+        ax_curve.plot(x_arc, z_arc, **figures.FLIGHT_STYLE, alpha=0.5)
     (track,) = ax_curve.plot([], [], color="tab:orange", lw=2, alpha=0.6)
     (particle,) = ax_curve.plot([], [], "o", color="tab:orange", ms=10, mec="k")
     (state,) = ax_phase.plot([], [], "o", color="tab:orange", ms=9, mec="k", zorder=5)
@@ -212,6 +236,7 @@ def animate(result, path, *, fps: float = DEFAULT_FPS, duration: float | None = 
     bar = fig.add_artist(_bar())
     moving = (track, particle, state, clock, bar)
     impacts = np.array([e.t for e in result.events if e.kind is EventKind.IMPACT])
+    landings = np.array([e.t for e in result.events if e.kind is EventKind.LANDING])
     t_end = times[-1] if times[-1] > 0 else 1.0
     behind = TRACK_SHARE * t_end
 
@@ -222,7 +247,11 @@ def animate(result, path, *, fps: float = DEFAULT_FPS, duration: float | None = 
         particle.set_data([xs[k]], [zs[k]])
         state.set_data([q[k]], [qdot[k]])
         n_imp = int(np.sum(impacts <= t))
-        clock.set_text(f"t = {t:.3f} s of {result.t_final:.3f} s, {n_imp} impact{'s' * (n_imp != 1)}")
+        text = f"t = {t:.3f} s of {result.t_final:.3f} s, {n_imp} impact{'s' * (n_imp != 1)}"
+        if flying:
+            n_land = int(np.sum(landings <= t))
+            text += f", {n_land} landing{'s' * (n_land != 1)}"
+        clock.set_text(text)
         bar.set_width(t / t_end)
         return moving
 

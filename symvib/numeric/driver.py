@@ -13,7 +13,8 @@ summed as a geometric series once below ``laws.ZENO_W``), plastic impacts,
 ``mu = 0`` with ``k = 1`` (bounded by ``t_max``/``max_events``), the normal
 force changing sign (bilateral contact: the branch flips; ``physics.contact =
 "unilateral"``: the particle lifts off, flies and lands, :mod:`symvib.numeric.flights`;
-a sweep ends ``left_curve`` there), and the ends of the curve's regular domain.
+the sweep's compiled loop ends ``left_curve`` there and :mod:`symvib.numeric.sweep.flights`
+follows the row on), and the ends of the curve's regular domain.
 
 Every result is checked (:func:`checked_status`): a state that stops being
 finite ends the run at once with status ``non_finite`` (on the plain-Python
@@ -361,10 +362,16 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
                    partial(compile_by_running, mod, cp, row, R, samples))
     status = checked_status(out.status, out.t, out.q, out.qdot, out.E0, out.E_final, out.W_friction, out.W_impacts)
     if status == StatusCode.LEFT_CURVE and scene.contact == "unilateral":   # physics.md, "Flight and landing"
+        from symvib.numeric.flight_samples import Sampling
         from symvib.numeric.flights import result_with_flights
 
+        sampling = None
+        if samples:   # each sliding stretch sampled as any run is (physics.md, "Flight and landing")
+            sampling = Sampling(partial(_stretch_samples, partial(_sample_engine, mod, requested, backend), cp, R,
+                                        scene, mod), partial(_sample_plan, spi, nodes, samples_per_interval is None),
+                                2 * plain_nodes(nodes) + 1)
         try:
-            return result_with_flights(scene, prep, mod, eng, cp, row, R, out, backend)
+            return result_with_flights(scene, prep, mod, eng, cp, row, R, out, backend, sampling)
         except (ArithmeticError, ValueError) as exc:
             if not _math_error(exc):
                 raise
@@ -391,14 +398,9 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     budget = EnergyBudget(float(out.E0), float(out.E_final), float(out.W_friction), float(out.W_impacts))
     sampler = interpolant = None
     if samples and status != StatusCode.NON_FINITE:
-        pieces = sample_pieces(spi, nodes)
-        if samples_per_interval is None and int(out.n_intervals) * spi > SAMPLE_BUDGET:
-            pieces = 1
-        wanted = int(out.n_intervals) * pieces * (2 * plain_nodes(nodes) + 1)
-        if wanted > MAX_SAMPLES:
-            sampler = partial(_no_samples, f"samples: {int(out.n_intervals):,} intervals at samples_per_interval "
-                                           f"{spi} would give about {wanted:,} samples, more than {MAX_SAMPLES:,}; "
-                                           "ask for fewer (samples_per_interval) or a shorter run (run.max_events)")
+        pieces, too_many = _sample_plan(spi, nodes, samples_per_interval is None, int(out.n_intervals))
+        if too_many:
+            sampler = partial(_no_samples, too_many)
         else:
             sampler = partial(_lazy_samples, partial(_sample_engine, mod, requested, backend), cp, row,
                               out.intervals, out.n_intervals, R, scene, mod, pieces)
@@ -449,6 +451,27 @@ def _dense(mod, cp, ivs, R, result):
     from symvib.numeric.dense import DenseOutput
 
     return DenseOutput(result, mod, cp, ivs, R)
+
+
+def _sample_plan(spi: int, nodes: int, default: bool, n_intervals: int):
+    """``(pieces, None)``: the pieces each of ``n_intervals`` logged intervals is sampled in (one where
+    the default ``spi`` would pass :data:`SAMPLE_BUDGET`), or ``(None, message)`` where the samples
+    would pass :data:`MAX_SAMPLES`."""
+    pieces = sample_pieces(spi, nodes)
+    if default and n_intervals * spi > SAMPLE_BUDGET:
+        pieces = 1
+    wanted = n_intervals * pieces * (2 * plain_nodes(nodes) + 1)
+    if wanted > MAX_SAMPLES:
+        return None, (f"samples: {n_intervals:,} intervals at samples_per_interval {spi} would give about "
+                      f"{wanted:,} samples, more than {MAX_SAMPLES:,}; ask for fewer (samples_per_interval) or a "
+                      "shorter run (run.max_events)")
+    return pieces, None
+
+
+def _stretch_samples(engine_of, cp, R, scene, mod, row, ivs, ni, pieces):
+    """The samples of one sliding stretch of a run with flights (``row`` its start): as
+    :func:`_lazy_samples` (:class:`symvib.numeric.flight_samples.Sampling`)."""
+    return _lazy_samples(engine_of, cp, row, ivs, ni, R, scene, mod, pieces)
 
 
 def _no_samples(message):

@@ -56,7 +56,7 @@ MESSAGES = {
     Status.MAX_EVENTS: "the event bound max_events was reached",
     Status.LEFT_DOMAIN: "the particle reached an end of the curve's regular domain (a singular point)",
     Status.LEFT_CURVE: "the normal force reached 0 and the particle left the curve (unilateral contact; simulate() "
-                       "follows its flight, but not with air drag, and a sweep does not)",
+                       "and a sweep follow its flight, a run with air drag does not)",
     Status.NON_FINITE: "error: the state stopped being finite (overflow); the numbers are not a result",
     Status.ENERGY_BUDGET_MISMATCH: "error: the energy budget does not close; the numbers are not a result",
     Status.TOLERANCE_NOT_MET: "error: the time of a motion interval could not be brought within its tolerance "

@@ -1,7 +1,9 @@
 """Figures of a run: the scene, the forces, the phase portrait and the paper's energy analysis.
 
 * :func:`scene_sketch` -- the curve in ``(x, z)`` with its limiters, the start
-  point and the arc of relative equilibrium (paper figs. 2, 3, 5, 12, 19);
+  point and the arc of relative equilibrium (paper figs. 2, 3, 5, 12, 19); a run
+  with flights (physics.md, "Flight and landing") adds each flight's arc and its
+  lift-off and landing;
 * :func:`force_diagram` -- the forces on the particle at a sample, drawn on
   the curve (paper fig. 1 b);
 * :func:`phase_portrait` -- ``(q, qdot)``, the two branches (``v > 0``,
@@ -12,9 +14,13 @@
 * :func:`energy_vs_q` -- ``F_N``, ``P_mu``, ``Ek``, ``Ep`` or ``E`` against
   ``q``, one curve per motion interval with an arrow in its direction of motion
   (figs. 7-11, 14-18, 22-26);
-* :func:`energy_vs_t` -- ``E(t)`` with the friction work and impact losses
-  stacked on it: they add up to ``E0`` at every sample (not in the paper);
+* :func:`energy_vs_t` -- ``E(t)`` with the friction work and impact losses (and
+  landing losses, drag work) stacked on it: they add up to ``E0`` at every sample
+  (not in the paper);
 * :func:`run_figures` / :func:`save_run_figures` -- all of them, with captions.
+
+The figures against ``q`` draw a run's sliding only (in flight the particle has no
+``q``: physics.md, "Flight and landing"); the sketch and the energy in time draw its flights too.
 
 Every figure has axis labels with units in brackets, a title naming the paper's
 figure it reproduces (when given) and a caption (:data:`CAPTIONS`).  Branches
@@ -38,7 +44,7 @@ from symvib.numeric.events import EventKind
 from symvib.paths import UserPathError, check_output_dir, inside, safe_stem
 
 __all__ = ["phase_portrait", "energy_vs_q", "energy_vs_t", "scene_sketch", "force_diagram", "run_figures",
-           "save_run_figures", "equilibrium_arcs", "QUANTITIES", "CAPTIONS", "FIGURE_NAMES"]
+           "save_run_figures", "equilibrium_arcs", "flight_arcs", "QUANTITIES", "CAPTIONS", "FIGURE_NAMES"]
 
 #: Plotted quantities: label, unit.
 QUANTITIES = {
@@ -62,6 +68,8 @@ LEGEND_OUTSIDE = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxe
 #: Colour and line of a limiter, and of an impact's jump.
 LIMITER_STYLE = {"color": "0.35", "lw": 1.0, "ls": "-.", "zorder": 1}
 IMPACT_COLOUR = "tab:red"
+#: Line of a flight's arc in the sketch (physics.md, "Flight and landing" 2).
+FLIGHT_STYLE = {"color": "tab:purple", "ls": (0, (4, 2)), "lw": 1.3}
 #: Relative-equilibrium band: face colour and hatch.
 BAND_STYLE = {"facecolor": "tab:green", "alpha": 0.15, "hatch": "...", "edgecolor": "tab:green", "lw": 0.0}
 #: Points of the grid on which the band |tan alpha| <= mu_s and the sketch's curve are evaluated.
@@ -163,15 +171,28 @@ def _start_values(result) -> dict:
 
 
 def _intervals(result):
-    """``(selection, sign of v)`` of every motion interval of the samples."""
+    """``(selection, sign of v)`` of every motion interval of the samples on the curve (a flight's
+    samples, without ``q``, are left out)."""
     S = result.samples
     if S is None or not len(S.t):
         return
     bounds = np.flatnonzero(np.diff(S.interval)) + 1
     for sl in np.split(np.arange(len(S.t)), bounds):
+        if np.isnan(S.q[sl]).all():   # a flight (physics.md, "Flight and landing")
+            continue
         v = S.v[sl]
-        sign = 1 if np.sum(v) >= 0 else -1
+        sign = 1 if np.nansum(v) >= 0 else -1
         yield sl, sign
+
+
+def flight_arcs(result) -> list:
+    """``(x, z)`` arrays of each flight of a run, from its samples (physics.md, "Flight and landing"
+    2: the parabola in closed form); empty for a run without flights or samples."""
+    S = result.samples
+    flight = getattr(S, "flight", None)
+    if flight is None:
+        return []
+    return [(S.x[flight == k], S.z[flight == k]) for k in np.unique(flight[flight >= 0]).tolist()]
 
 
 #: Colour, marker and legend label of each event kind in the phase portrait.
@@ -323,7 +344,8 @@ def energy_vs_q(result, quantity: str, ax=None, *, paper=None):
         ax.plot([result.scene.q0], [_start_values(result)[quantity]], ">", color="k", ms=7, ls="none",
                 label=STILL_LABEL)
     elif quantity == "Ep":
-        order = np.argsort(S.q, kind="stable")
+        on = np.flatnonzero(np.isfinite(S.q))   # (on the curve: in flight the particle has no q)
+        order = on[np.argsort(S.q[on], kind="stable")]
         ax.plot(S.q[order], values[order], color="k", lw=1.3, label="$E_p = m g z$ (depends on the position only)")
         for kind in (EventKind.REVERSAL, EventKind.IMPACT, EventKind.ARREST):
             ev = [e for e in result.events if e.kind is kind]
@@ -369,8 +391,10 @@ def energy_vs_t(result, ax=None, *, paper=None):
     colors = ["tab:blue", "tab:orange", "0.6"]
     if getattr(S, "W_drag", None) is not None:   # a run with air drag (physics.md, "Air drag")
         layers, labels, colors = layers + [S.W_drag], labels + ["drag work $W_d$"], colors + ["tab:green"]
+    if getattr(S, "W_landing", None) is not None:   # a run with flights (physics.md, "Flight and landing")
+        layers, labels, colors = layers + [S.W_landing], labels + ["landing losses $W_l$"], colors + ["tab:purple"]
     polys = ax.stackplot(S.t, *layers, labels=labels, colors=colors, alpha=0.75)
-    for poly, hatch in zip(polys, ("", "//", "..", "\\\\")):
+    for poly, hatch in zip(polys, ("", "//", "..", "\\\\", "xx")):
         poly.set_hatch(hatch)
     ax.axhline(result.energy_budget.initial, color="k", lw=0.8, ls="--", label="$E_0$")
     ax.set_xlabel("$t$ [s]")
@@ -388,8 +412,8 @@ def _sketch_range(result):
     sc = result.scene
     qs = [sc.q0] + [e.q for e in result.events] + [v for v in (sc.left, sc.right) if v is not None]
     S = result.samples
-    if S is not None and len(S.q):
-        qs += [float(S.q.min()), float(S.q.max())]
+    if S is not None and np.isfinite(S.q).any():   # (in flight q is NaN)
+        qs += [float(np.nanmin(S.q)), float(np.nanmax(S.q))]
     lo, hi = min(qs), max(qs)
     pad = SKETCH_MARGIN * max(hi - lo, 1e-3)
     # (the run's own domain: a curve with a singular point inside its declared one is drawn up to it)
@@ -450,11 +474,31 @@ def scene_sketch(result, ax=None, *, paper=None):
     if result.events and result.events[-1].kind in (EventKind.ARREST, EventKind.REST_ON_LIMITER):
         xf, zf, _ = _point(mod, cp, result.q_final)
         ax.plot([xf], [zf], "*", color="tab:red", ms=11, ls="none", label="final rest", zorder=6)
+    _flights(ax, result, mod, cp)
     # Gravity, beside the axes (under the legend), where it covers nothing.
     ax.annotate("", xy=(1.05, 0.05), xytext=(1.05, 0.3), xycoords="axes fraction", annotation_clip=False,
                 arrowprops={"arrowstyle": "-|>", "color": "0.3"})
     ax.text(1.07, 0.17, "gravity $g$", transform=ax.transAxes, fontsize=8, va="center")
     return _plane_axes(ax, _title(result, "the scene", paper))
+
+
+def _flights(ax, result, mod, cp):
+    """A run's flight arcs and its lift-offs and landings (on the curve, at their ``q``) in the sketch."""
+    label = "flight (parabola)"
+    arcs = flight_arcs(result)
+    for x, z in arcs:
+        ax.plot(x, z, label=label, zorder=4, **FLIGHT_STYLE)
+        label = None
+    if arcs and result.samples.flight[-1] >= 0:   # the run stopped in flight (crossed_limiter, t_max, ...)
+        ax.plot(arcs[-1][0][-1:], arcs[-1][1][-1:], "X", color=FLIGHT_STYLE["color"], ms=9, ls="none", zorder=6,
+                label=f"end in flight ({result.status.value})")
+    for kind in (EventKind.LIFT_OFF, EventKind.LANDING):
+        qs = [e.q for e in result.events if e.kind is kind]
+        if qs:
+            c, mk, lab = event_style(kind)
+            xs = np.broadcast_to(mod.x(np.array(qs), *cp), (len(qs),))
+            zs = np.broadcast_to(mod.z(np.array(qs), *cp), (len(qs),))
+            ax.plot(xs, zs, mk, color=c, ms=7, mec="k", mew=0.5, ls="none", label=f"{lab} ({len(qs)})", zorder=6)
 
 
 def _plane_axes(ax, title: str):
@@ -571,6 +615,11 @@ def run_figures(result, *, only=None, paper=None) -> list:
         text = caption(name, paper.get(name))
         if _static_above_kinetic(result):   # the band is static friction's, wider than the sliding cone
             text = text.replace("|tan alpha| <= mu ", "|tan alpha| <= mu_s (static friction) ")
+        if name == "energy-time" and result.energy_budget.landing_loss is not None:   # landings' own layer
+            text = text.replace("W_mu and impact losses stacked", "W_mu, impact losses and landing losses W_l stacked")
+        if name == "sketch" and result.energy_budget.landing_loss is not None:   # a run with flights
+            text += (" Dashed purple: the flights (parabolas, physics.md \"Flight and landing\"); triangles: "
+                     "lift-offs and landings on the curve.")
         if name == "energy-time" and result.energy_budget.drag_work is not None:   # air drag's own layer
             text = text.replace("W_mu and impact losses", "W_mu, impact losses and drag work W_d").replace(
                 "of the friction work", "of the friction and drag work")

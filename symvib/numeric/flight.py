@@ -23,8 +23,9 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = ["path", "Stretch", "landing", "Landing", "landing_law", "LandingLaw", "limiter_crossing",
-           "accumulation", "Accumulation", "EPS", "GRAZE", "LIFT_START", "SAMPLE_STEP", "KAPPA_SAFETY",
-           "TOUCH_RTOL", "HORIZON", "ACCUMULATION_W", "MAX_LOCAL_BOUNCES", "LANDED", "TOUCHED", "LEFT_STRETCH"]
+           "accumulation", "Accumulation", "LandingNotFound", "EPS", "GRAZE", "LIFT_START", "SAMPLE_STEP",
+           "KAPPA_SAFETY", "TOUCH_RTOL", "HORIZON", "ACCUMULATION_W", "MAX_LOCAL_BOUNCES", "LANDED", "TOUCHED",
+           "LEFT_STRETCH", "MAX_EVALUATIONS", "SAMPLED"]
 
 #: Unit roundoff of a double.
 EPS = 2.220446049250313e-16
@@ -52,8 +53,15 @@ MAX_LOCAL_BOUNCES = 100_000
 #: before the path left the searched stretch.
 LANDED, TOUCHED, LEFT_STRETCH = 0, 1, 2
 #: Most evaluations of the signed distance one landing search may take (a safeguard: the tests of
-#: :func:`landing` end long before it on every curve the engine runs).
-MAX_EVALUATIONS = 200_000
+#: :func:`landing` end long before it on every curve the engine runs); past it the run stops with
+#: status ``tolerance_not_met`` (:class:`LandingNotFound`).
+MAX_EVALUATIONS = 50_000
+#: The kernels a :class:`Stretch` samples (the stretch ends where one is not finite).
+SAMPLED = ("x", "z", "dx", "dz", "h", "dh", "dalpha", "kappa")
+
+
+class LandingNotFound(RuntimeError):
+    """The landing search used up :data:`MAX_EVALUATIONS` distances without deciding."""
 
 
 def path(t, x0, z0, vx, vz, g):
@@ -84,16 +92,64 @@ class Stretch:
     def __init__(self, mod, cp, qa, qb, scale, q_near):
         self.mod, self.cp, self.qa, self.qb, self.q_near = mod, tuple(cp), float(qa), float(qb), float(q_near)
         n = max(2, int(math.ceil((qb - qa) / (SAMPLE_STEP * scale))) + 1)
-        self.q = np.linspace(qa, qb, n)
-        self.x = np.asarray(np.broadcast_to(mod.x(self.q, *cp), self.q.shape), dtype=float)
-        self.z = np.asarray(np.broadcast_to(mod.z(self.q, *cp), self.q.shape), dtype=float)
-        kappa = np.asarray(np.broadcast_to(mod.kappa(self.q, *cp), self.q.shape), dtype=float)
+        q = np.linspace(qa, qb, n)
+        with np.errstate(all="ignore"):
+            values = {name: np.asarray(np.broadcast_to(getattr(mod, name)(q, *cp), q.shape), dtype=float)
+                      for name in SAMPLED}
+        # Where a kernel is not finite (it overflows far out, e.g. exp(x^2/b^2) in a Gaussian's h'),
+        # the stretch ends at the last finite sample on each side of the launch: what lies beyond
+        # is not searched (a flight that gets there leaves the stretch; physics.md, "Flight and landing" 6).
+        finite = np.all([np.isfinite(v) for v in values.values()], axis=0)
+        i = int(np.clip(np.searchsorted(q, q_near), 0, n - 1))
+        self.cut = (False, False)
+        if finite[i]:
+            bad = np.flatnonzero(~finite)
+            lo, hi = bad[bad < i], bad[bad > i]
+            first, last = (int(lo[-1]) + 1 if len(lo) else 0), (int(hi[0]) - 1 if len(hi) else n - 1)
+            # (a scalar kernel may overflow where its array form gave a finite value, x / inf = 0:
+            # the ends move in, by bisection, to where the scalar kernels are finite too)
+            first, last = self._scalar_finite(q, i, first, -1), self._scalar_finite(q, i, last, 1)
+            if (first, last) != (0, n - 1) and last - first >= 1:
+                self.cut = (first > 0, last < n - 1)
+                q = q[first:last + 1]
+                values = {name: v[first:last + 1] for name, v in values.items()}
+                self.qa, self.qb = float(q[0]), float(q[-1])
+        self.q, self.x, self.z = q, values["x"], values["z"]
+        kappa = values["kappa"]
         finite = np.isfinite(kappa)   # (no bound where the curvature is not finite: the Lipschitz test alone)
         self.kappa_max = KAPPA_SAFETY * float(np.max(np.abs(kappa[finite]))) if finite.all() else math.inf
+        # |d kappa / ds| between neighbouring samples (the cubic test of landing(); inf: none)
+        ds = np.hypot(np.diff(self.x), np.diff(self.z))
+        with np.errstate(all="ignore"):
+            slope = np.abs(np.diff(kappa)) / ds
+        self.kappa_slope_max = (KAPPA_SAFETY * float(np.max(slope)) if finite.all() and np.all(np.isfinite(slope))
+                                else math.inf)
         # Between samples the curve may bulge out of their box by about a sample's length.
         step = self.step = float(np.max(np.hypot(np.diff(self.x), np.diff(self.z))))
         self.box = (float(self.x.min()) - step, float(self.x.max()) + step, float(self.z.min()) - step,
                     float(self.z.max()) + step)
+
+    def _finite_at(self, q) -> bool:
+        """Whether every scalar kernel of :data:`SAMPLED` is finite at ``q`` (none overflows)."""
+        m, cp = self.mod, self.cp
+        try:
+            return all(math.isfinite(getattr(m, f"{name}_scalar")(q, *cp)) for name in SAMPLED)
+        except (ArithmeticError, ValueError):
+            return False
+
+    def _scalar_finite(self, q, inner, end, side) -> int:
+        """The sample index nearest ``end`` (between ``inner``, the launch's, and ``end``, on ``side``)
+        where the scalar kernels are finite, assuming they fail only beyond some index (an overflow
+        far out); ``inner`` itself when they fail there too."""
+        if self._finite_at(float(q[end])):
+            return end
+        good, bad = inner, end
+        if not self._finite_at(float(q[good])):
+            return inner
+        while abs(bad - good) > 1:
+            mid = (good + bad) // 2
+            good, bad = (mid, bad) if self._finite_at(float(q[mid])) else (good, mid)
+        return good
 
     def point(self, q):
         """``(x, z, x', z')`` at ``q``."""
@@ -164,6 +220,19 @@ class Stretch:
         side = (-dz * (X - x) + dx * (Z - z)) / h
         return float(q), math.copysign(math.hypot(X - x, Z - z), side)
 
+    def motion(self, X, Z, VX, VZ, g):
+        """``(d, d', d'')``: the signed distance of the point ``(X, Z)`` moving with ``(VX, VZ)`` under
+        gravity, and its first two time derivatives (physics.md, "Flight and landing" 3):
+        ``d' = V . n``, ``d'' = -g cos(alpha) - kappa v_t^2 / (1 - kappa d)`` at the nearest point."""
+        q, d = self.nearest(X, Z)
+        m, cp = self.mod, self.cp
+        dx, dz = m.dx_scalar(q, *cp), m.dz_scalar(q, *cp)
+        h = math.hypot(dx, dz)
+        tx, tz = dx / h, dz / h
+        v_t = tx * VX + tz * VZ
+        kappa = float(m.kappa_scalar(q, *cp))
+        return d, -tz * VX + tx * VZ, -g * tx - kappa * v_t * v_t / (1.0 - kappa * d)
+
     def exit_time(self, x0, z0, vx, vz, g):
         """The time after which the path from ``(x0, z0)`` is outside the stretch's box for good."""
         xlo, xhi, zlo, _ = self.box
@@ -206,12 +275,15 @@ def landing(stretch, x0, z0, vx, vz, g, u, length):
     t_end = stretch.exit_time(x0, z0, vx, vz, g)
     count = [0]
 
-    def dist(t):
+    def motion(t):
         count[0] += 1
         if count[0] > MAX_EVALUATIONS:
-            raise RuntimeError("landing: the search took more than MAX_EVALUATIONS distances")
-        x, z, _, _ = path(t, x0, z0, vx, vz, g)
-        return stretch.nearest(x, z)[1]
+            raise LandingNotFound(f"the landing search took more than {MAX_EVALUATIONS} distances without "
+                                  "deciding whether the flight lands")
+        return stretch.motion(*path(t, x0, z0, vx, vz, g), g)
+
+    def dist(t):
+        return motion(t)[0]
 
     def speed(t):
         return math.hypot(vx, vz - g * t)
@@ -232,10 +304,11 @@ def landing(stretch, x0, z0, vx, vz, g, u, length):
         return Landing(LEFT_STRETCH, t_end, stretch.nearest(x, z)[0])
     if d0 <= 0.0:   # into the curve at once (a graze on the wrong side): lands there
         return Landing(TOUCHED, t0, stretch.nearest(*path(t0, x0, z0, vx, vz, g)[:2])[0])
-    d_end = dist(t_end)
-    stack = [(t0, d0, t_end, d_end)]
+    stack = [(t0, motion(t0), t_end, motion(t_end))]
+    ks = stretch.kappa_slope_max
     while stack:
-        ta, da, tb, db = stack.pop()
+        ta, Ma, tb, Mb = stack.pop()
+        da, db = Ma[0], Mb[0]
         dt = tb - ta
         tm = ta + 0.5 * dt
         if db <= 0.0:   # a crossing in [ta, tb]: its first one
@@ -247,18 +320,43 @@ def landing(stretch, x0, z0, vx, vz, g, u, length):
             vmax = max(speed(ta), speed(tb))
             if da + db > vmax * dt:
                 continue   # 1-Lipschitz: root-free
+            near = kmax * (max(da, db) + 0.5 * vmax * dt) <= 0.5   # within half the radius of curvature
             A = g + 2.0 * kmax * vmax * vmax
-            if kmax * (max(da, db) + 0.5 * vmax * dt) <= 0.5 and min(da, db) > A * dt * dt / 8.0:   # (inf: never)
-                continue   # |d''| <= A within half the radius of curvature: root-free
+            if near and min(da, db) > A * dt * dt / 8.0:   # (inf: never)
+                continue   # |d''| <= A: root-free
+            J = (6.0 * g * kmax + (8.0 * ks + 12.0 * kmax * kmax) * vmax * vmax) * vmax   # a bound of |d'''|
+            if near and (_cubic_clear(da, Ma[1], Ma[2], J, dt) or _cubic_clear(db, -Mb[1], Mb[2], J, dt)):
+                continue   # Taylor from an end with |d'''| <= J: root-free (after a lift-off d ~ t^3)
             if dt <= TOUCH_RTOL * tb or not ta < tm < tb:
                 t = ta if da <= db else tb
                 x, z, _, _ = path(t, x0, z0, vx, vz, g)
                 return Landing(TOUCHED, t, stretch.nearest(x, z)[0])
-        dm = dist(tm)
-        stack.append((tm, dm, tb, db))
-        stack.append((ta, da, tm, dm))
+        Mm = motion(tm)
+        stack.append((tm, Mm, tb, Mb))
+        stack.append((ta, Ma, tm, Mm))
     x, z, _, _ = path(t_end, x0, z0, vx, vz, g)
     return Landing(LEFT_STRETCH, t_end, stretch.nearest(x, z)[0])
+
+
+def _cubic_clear(d, d1, d2, J, span):
+    """Whether ``p(s) = d + d1 s + d2 s^2 / 2 - J s^3 / 6``, a lower bound of the distance ``s`` after
+    an end where it is ``d > 0`` with derivatives ``d1, d2`` (given a bound ``J`` of the third
+    derivative), stays positive for ``0 <= s <= span``."""
+    if not (d > 0.0 and math.isfinite(J) and J >= 0.0):
+        return False
+
+    def p(s):
+        return d + s * (d1 + s * (0.5 * d2 - s * J / 6.0))
+
+    if not p(span) > 0.0:
+        return False
+    # p' = d1 + d2 s - J s^2 / 2; its local minimum (where p'' = d2 - J s > 0) inside (0, span)
+    if J > 0.0:
+        disc = d2 * d2 + 2.0 * J * d1
+        s = (d2 - math.sqrt(disc)) / J if disc >= 0.0 else math.nan
+    else:
+        s = -d1 / d2 if d2 > 0.0 else math.nan
+    return not (0.0 < s < span) or p(s) > 0.0
 
 
 class LandingLaw(NamedTuple):

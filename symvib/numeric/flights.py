@@ -19,6 +19,7 @@ from symvib.numeric.flight import (
     HORIZON,
     LEFT_STRETCH,
     TOUCHED,
+    LandingNotFound,
     Stretch,
     accumulation,
     landing,
@@ -28,8 +29,54 @@ from symvib.numeric.flight import (
 )
 from symvib.numeric.layout import StatusCode
 
-__all__ = ["Followed", "Flown", "follow", "fly", "searched_stretch", "events_of", "result_with_flights",
-           "NO_SAMPLES", "no_samples"]
+__all__ = ["Followed", "Flown", "Slide", "Arc", "Accumulated", "follow", "fly", "searched_stretch", "events_of",
+           "result_with_flights"]
+
+
+class Slide(NamedTuple):
+    """A sliding stretch of a run with flights (its log, for the samples and the dense output): the
+    engine's outcome ``out`` of a run from ``(q, qdot)`` that starts at time ``t0`` (the outcome's times
+    count from 0), and the friction work, impact and landing losses before it (J)."""
+
+    t0: float
+    q: float
+    qdot: float
+    out: object
+    W_friction: float
+    W_impacts: float
+    W_landing: float
+
+
+class Arc(NamedTuple):
+    """A flight (physics.md, "Flight and landing" 2): launched at time ``t0`` from ``(x0, z0)`` with
+    velocity ``(vx, vz)``, flying for ``T`` s (to its landing, or to where the run stopped in it), and
+    the friction work, impact and landing losses before it (J)."""
+
+    t0: float
+    T: float
+    x0: float
+    z0: float
+    vx: float
+    vz: float
+    W_friction: float
+    W_impacts: float
+    W_landing: float
+
+
+class Accumulated(NamedTuple):
+    """A bouncing-ball accumulation summed on the tangent line (physics.md, "Flight and landing"):
+    from time ``t0`` for ``T`` s, from ``(q0, qdot0)`` (the landing that started it) to ``(q1, qdot1)``,
+    with the losses before it (J; its own loss is in the next record's ``W_landing``)."""
+
+    t0: float
+    T: float
+    q0: float
+    qdot0: float
+    q1: float
+    qdot1: float
+    W_friction: float
+    W_impacts: float
+    W_landing: float
 
 
 class Followed(NamedTuple):
@@ -83,16 +130,20 @@ class Flown(NamedTuple):
     stop: object
 
 
-def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0):
+def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0, log=None):
     """Flights, landings and bounces from a launch at time ``t`` from ``(x0, z0)`` with velocity ``(vx,
     vz)`` and normal speed ``u`` (0 at a lift-off) over the stretch ``st`` (:class:`~symvib.numeric.flight.Stretch`),
     until sliding resumes or the run stops in flight (physics.md, "Flight and landing" 2-6 and the
     bouncing-ball accumulation); ``length`` is the run's length scale in metres, ``n_events`` the
-    events logged before.  Returns a :class:`Flown`."""
+    events logged before; ``log``, a list, receives an :class:`Arc` per flight and an :class:`Accumulated`
+    per accumulation (their landing losses before them counted from this launch).  Returns a :class:`Flown`."""
     g, m, mu, e = scene.g, scene.m, scene.mu, scene.restitution_curve
     events, W_l, flights, landings = [], 0.0, 0, 0
+    log = [] if log is None else log
 
     def stop(status, dt, msg):
+        if dt > 0.0:
+            log.append(Arc(t, dt, x0, z0, vx, vz, 0.0, 0.0, W_l))
         f = _in_flight(status, t, dt, st, x0, z0, vx, vz, g, m, events, 0.0, 0.0, W_l, t_err, flights, landings, msg)
         return Flown(events, W_l, flights, landings, None, f)
 
@@ -100,7 +151,12 @@ def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0):
         if n_events + len(events) >= scene.max_events:
             return stop(StatusCode.MAX_EVENTS, 0.0, None)
         flights += 1
-        ld = landing(st, x0, z0, vx, vz, g, u, length)
+        try:
+            ld = landing(st, x0, z0, vx, vz, g, u, length)
+        except LandingNotFound as exc:
+            return stop(StatusCode.TOLERANCE_NOT_MET, 0.0,
+                        f"{exc}, in the flight launched at t = {t:.12g} s from x = {x0:.12g} m, z = {z0:.12g} m "
+                        "(physics.md, \"Flight and landing\" 3); the run stops at the launch")
         t_lim, where = math.inf, ""
         for side, qL in ((-1, scene.left), (1, scene.right)):
             if qL is not None:
@@ -115,9 +171,10 @@ def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0):
                         "s; the model has no impact of a flying particle on a limiter (physics.md, \"Flight and "
                         "landing\" 6)")
         if ld.kind == LEFT_STRETCH:
+            cut = " (beyond it the curve's kernels are not finite)" if any(st.cut) else ""
             return stop(StatusCode.LEFT_DOMAIN, ld.t,
                         f"the flying particle left the searched stretch {scene.shape.q} in [{st.qa:.12g}, "
-                        f"{st.qb:.12g}] of the curve without landing, at t = {t + ld.t:.12g} s (physics.md, "
+                        f"{st.qb:.12g}] of the curve{cut} without landing, at t = {t + ld.t:.12g} s (physics.md, "
                         "\"Flight and landing\" 6)")
         # The landing (physics.md, "Flight and landing" 4).
         xl, zl, dxl, dzl = st.point(ld.q)
@@ -125,6 +182,7 @@ def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0):
         tx, tz = dxl / h, dzl / h
         _, _, vxl, vzl = path(ld.t, x0, z0, vx, vz, g)
         law = landing_law(vxl, vzl, tx, tz, e, mu)
+        log.append(Arc(t, ld.t, x0, z0, vx, vz, 0.0, 0.0, W_l))
         t += ld.t
         landings += 1
         W_l += m * law.loss
@@ -143,6 +201,7 @@ def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0):
                 return Flown(events, W_l, flights, landings, None, f)
             q_acc = ld.q + acc.ds / h
             h_acc = float(mod.h_scalar(q_acc, *cp))
+            log.append(Accumulated(t, acc.time, ld.q, law.v_after / h, q_acc, acc.v_after / h_acc, 0.0, 0.0, W_l))
             t += acc.time
             E_acc = m * (0.5 * acc.v_after ** 2 + g * float(mod.z_scalar(q_acc, *cp)))
             W_l += E_after - E_acc
@@ -159,7 +218,7 @@ def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0):
             return Flown(events, W_l, flights, landings, (t, ld.q, law.v_after / h), None)
 
 
-def follow(scene, mod, cp, lo, hi, first, run_segment, events_of):
+def follow(scene, mod, cp, lo, hi, first, run_segment, events_of, log=None):
     """Follow a unilateral run past its lift-offs (physics.md, "Flight and landing").
 
     Parameters
@@ -175,6 +234,9 @@ def follow(scene, mod, cp, lo, hi, first, run_segment, events_of):
     events_of : callable
         ``events_of(outcome, t0, t_err0)``: its events as :class:`~symvib.numeric.events.Event`,
         shifted by ``t0`` and ``t_err0``, a ``left_curve`` as ``lift_off``.
+    log : list, optional
+        Receives the run's pieces in time order: a :class:`Slide` per sliding stretch, an
+        :class:`Arc` per flight, an :class:`Accumulated` per bouncing-ball accumulation.
 
     Returns
     -------
@@ -186,20 +248,24 @@ def follow(scene, mod, cp, lo, hi, first, run_segment, events_of):
     W_f, W_i, W_l, t_err = float(first.W_friction), float(first.W_impacts), 0.0, float(first.t_err)
     flights = landings = 0
     stretches = {}
+    log = [] if log is None else log
+    log.append(Slide(0.0, float(scene.q0), float(scene.qdot0), first, 0.0, 0.0, 0.0))
 
     while True:
         # The lift-off that ended the sliding stretch `out`.
         q = float(out.q)
         qa, qb = searched_stretch(q, scene, lo, hi, scale)
-        if (qa, qb) not in stretches:
+        if (qa, qb) not in stretches or not stretches[(qa, qb)].qa <= q <= stretches[(qa, qb)].qb:
             stretches.clear()
             stretches[(qa, qb)] = Stretch(mod, cp, qa, qb, scale, q)
         st = stretches[(qa, qb)]
         st.q_near = q
         x0, z0, dx, dz = st.point(q)
         qd = float(out.qdot)
+        pieces = []
         flown = fly(scene, mod, cp, st, t_off + float(out.t), x0, z0, qd * dx, qd * dz, 0.0,
-                    scale * math.hypot(dx, dz), len(events), t_err)
+                    scale * math.hypot(dx, dz), len(events), t_err, pieces)
+        log += [p._replace(W_friction=W_f, W_impacts=W_i, W_landing=W_l + p.W_landing) for p in pieces]
         events += flown.events
         W_l += flown.W_landing
         flights += flown.flights
@@ -216,6 +282,7 @@ def follow(scene, mod, cp, lo, hi, first, run_segment, events_of):
                             math.nan, None, flights, landings)
         # Sliding resumes from the landing point (the rest test at qdot = 0).
         out = run_segment(q_s, qdot_s, max(scene.t_max - t_off, 0.0), scene.max_events - len(events))
+        log.append(Slide(t_off, q_s, qdot_s, out, W_f, W_i, W_l))
         events += events_of(out, t_off, t_err)
         W_f += float(out.W_friction)
         W_i += float(out.W_impacts)
@@ -240,16 +307,6 @@ def _in_flight(status, t, dt, st, x0, z0, vx, vz, g, m, events, W_f, W_i, W_l, t
                     landings)
 
 
-#: Why a run with flights has no samples (yet): its events and energy budget are complete.
-NO_SAMPLES = ("samples: a run with flights has none yet (the flight arcs are not sampled; physics.md, \"Flight and "
-              "landing\"); its events and energy budget are complete")
-
-
-def no_samples():
-    """``(None, message)``: a run with flights has no samples yet (:data:`NO_SAMPLES`)."""
-    return None, NO_SAMPLES
-
-
 def events_of(out, t0, t_err0, plastic):
     """The events of an engine outcome as :class:`~symvib.numeric.events.Event`, shifted by ``t0`` and
     ``t_err0``; a ``left_curve`` is the ``lift_off`` it is in a run with flights."""
@@ -265,27 +322,36 @@ def events_of(out, t0, t_err0, plastic):
     return found
 
 
-def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend):
+def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend, sampling=None):
     """The :class:`~symvib.numeric.events.Result` of a unilateral run whose first sliding stretch
     ``first`` (an engine outcome) ended ``left_curve``: :func:`follow` on the engine ``eng`` of the
     curve's kernels ``mod`` (``row``, ``R``: the run's scene row and rules).  Called by
-    :func:`symvib.numeric.driver.simulate`."""
+    :func:`symvib.numeric.driver.simulate`, with ``sampling``
+    (:class:`~symvib.numeric.flight_samples.Sampling`) where the run keeps its samples: the sliding
+    stretches then keep their intervals, and the result has samples
+    (:func:`symvib.numeric.flight_samples.samples`) and a dense output
+    (:class:`symvib.numeric.flight_dense.FlightDense`); physics.md, "Flight and landing", Samples."""
+    from functools import partial
+
     import numpy as np
 
     from symvib.numeric.events import EnergyBudget, Result, ZenoInfo, status_of
     from symvib.numeric.layout import SceneRow
     from symvib.numeric.trusted import checked_status
 
+    keep = sampling is not None
+
     def run_segment(q0, qdot0, t_max, max_events):
         r = np.array(row, dtype=float)
         r[SceneRow.q0], r[SceneRow.qdot0] = q0, qdot0
         r[SceneRow.t_max], r[SceneRow.max_events] = t_max, max_events
-        return eng.simulate(cp, r, R, False)
+        return eng.simulate(cp, r, R, keep)
 
     plastic = scene.k == 0.0
+    log = []
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):   # (the driver catches an overflow)
         f = follow(scene, mod, cp, prep.domain.lo, prep.domain.hi, first, run_segment,
-                   lambda out, t0, te0: events_of(out, t0, te0, plastic))
+                   lambda out, t0, te0: events_of(out, t0, te0, plastic), log)
     E0 = float(first.E0)
     status = checked_status(f.status, f.t, f.q, f.qdot, E0, f.E_final, f.W_friction, f.W_impacts + f.W_landing)
     events = list(f.events)
@@ -299,7 +365,16 @@ def result_with_flights(scene, prep, mod, eng, cp, row, R, first, backend):
              "flights": f.flights, "landings": f.landings, "scale": float(first.scale)}
     if f.stopped:
         stats["stopped"] = f.stopped
-    return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=no_samples,
-                  interpolant=None, energy_budget=EnergyBudget(E0, f.E_final, f.W_friction, f.W_impacts,
+    sampler = interpolant = None
+    if keep and status != StatusCode.NON_FINITE:
+        from symvib.numeric.flight_dense import FlightDense
+        from symvib.numeric.flight_samples import samples
+
+        pieces = tuple(log)
+        sampler = partial(samples, scene, mod, cp, pieces, sampling, float(first.scale))
+        interpolant = partial(FlightDense, mod=mod, params=cp, rules=R, pieces=pieces)
+    stats["intervals"] = sum(int(p.out.n_intervals) for p in log if isinstance(p, Slide)) if keep else None
+    return Result(scene=scene, status=status_of(status), events=tuple(events), sampler=sampler,
+                  interpolant=interpolant, energy_budget=EnergyBudget(E0, f.E_final, f.W_friction, f.W_impacts,
                                                             landing_loss=f.W_landing),
                   t_final=f.t, q_final=f.q, qdot_final=f.qdot, zeno=zinfo, stats=stats)

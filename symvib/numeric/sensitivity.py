@@ -31,6 +31,9 @@ direction), and a tangential zero of the normal force.  A sign change of the nor
 that crosses (:mod:`symvib.numeric.sensitivity_normal`) and the curve's own parameters
 (:mod:`symvib.numeric.sensitivity_curve`) are differentiated with the curve's jets
 (:mod:`symvib.numeric.jet_kernels`; physics.md, "Sensitivities" 8 and 9), read only then.
+On a unilateral curve the lift-off, the flight and its landings follow in closed form
+(:mod:`symvib.numeric.sensitivity_flight`; physics.md, "Sensitivities" 10); a tangential landing, one on
+the edge between sticking and sliding, and a bouncing-ball accumulation have no derivative.
 
 Examples
 --------
@@ -65,6 +68,7 @@ from symvib.numeric.sensitivity_batch import (
     time_derivatives,
 )
 from symvib.numeric.sensitivity_curve import PARAMETERS, CurveFunctions, resolve_wrt
+from symvib.numeric.sensitivity_flight import land, landing_reason, launch
 from symvib.numeric.sensitivity_normal import TANGENTIAL_N_REASON, normal_sign_change_tangent
 from symvib.numeric.sensitivity_table import Sensitivities
 
@@ -410,9 +414,82 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
 
     n = len(result.events)
     last = n - 1 if through is None else _checked_through(through, n)
-    T, Q, VB, VA = (np.full((n, P), np.nan) for _ in range(4))
+    events = result.events
+    path = _Path(q_a, w_a, Dq_a, Dw_a, np.zeros(P), 0.0, tuple(np.full((n, P), np.nan) for _ in range(4)), [],
+                 np.zeros(P), np.zeros(P))
+    units = (Dmu, Dk, limiter_D)
+    i, broken, first, flight = 0, "", None, None
+    while i <= last and not broken:
+        ev = events[i]
+        if ev.kind.code != EventCode.LANDING:       # sliding, up to a lift-off or a landing
+            i, broken, first, flight = _slide(c, scene, events, i, last, path, units)
+            continue
+        broken = _not_differentiable(ev, scene, c, EventCode.LANDING)   # physics.md, "Sensitivities" 10
+        landed = broken or land(c, scene, flight, ev.t, ev.q)
+        if isinstance(landed, str):
+            broken, first = landed, i
+            break
+        for column, value in zip(path.table, (landed.Dt, landed.Dq, landed.Dv_before, landed.Dv_after)):
+            column[i] = value
+        path.D_landing_loss += landed.D_loss
+        flight = landed.bounce
+        if flight is None:              # sliding resumes from the landing point
+            path.q, path.w, path.Dq, path.Dw = landed.q, landed.w, landed.Dq, landed.Dw
+            path.Dt, path.t = landed.Dt, ev.t
+        i += 1
+    T, Q, VB, VA = path.table
+    reasons = [""] * (first if broken else last + 1)
+    if broken:
+        reasons += _reasons_after(events[first:last + 1], first, broken, scene, c, path.q)
+    reasons += [f"not asked for: after event {last} (through={last})"] * (n - 1 - last)
+    final_names = ("t_final", "q_final", "friction_work", "impact_loss") + (
+        ("landing_loss",) if scene.contact == "unilateral" else ())
+    final = {name: np.full(P, np.nan) for name in final_names}
+    if not broken and n and last == n - 1 and result.status.code in FINAL_STATUSES:
+        q_f = events[-1].q
+        DE_final = c.m * (path.Dw / 2 + c.g * (float(c.dz(q_f)) * path.Dq + c.geometry_dp("z", q_f)[0]))
+        final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=path.D_impact_loss,
+                     friction_work=DE0 - DE_final - path.D_impact_loss - path.D_landing_loss)
+        if "landing_loss" in final:
+            final["landing_loss"] = path.D_landing_loss
+    for name in notes:
+        j = wrt.index(name)
+        for column in (T, Q, VB, VA, *final.values()):
+            column[..., j] = np.nan
+    sens = Sensitivities(wrt, tuple(events), T, Q, VB, VA, tuple(reasons), final, notes)
+    return Tangents(sens, tuple(path.legs))
+
+
+@dataclass
+class _Path:
+    """Where the differentiation of a run is: the particle's position and ``w`` after the last event
+    differentiated and their tangents, that event's time and time tangent, the table's columns
+    ``(T, Q, VB, VA)`` so far, the legs, and the tangents of the impact and landing losses."""
+
+    q: float
+    w: float
+    Dq: np.ndarray
+    Dw: np.ndarray
+    Dt: np.ndarray
+    t: float
+    table: tuple
+    legs: list
+    D_impact_loss: np.ndarray
+    D_landing_loss: np.ndarray
+
+
+def _slide(c, scene, events, start, last, path, units):
+    """Differentiate the sliding events from ``start`` on, up to a lift-off (included), a landing (not
+    included) or ``last``, in four passes (:func:`interval_tangents`), advancing ``path``.
+
+    Returns the next event's index, why the derivatives end (empty if they go on), the index of the
+    first event without them, and the flight launched at a lift-off (or None).
+    """
+    Dmu, Dk, limiter_D = units
+    T, Q, VB, VA = path.table
+    P = len(Dmu)
     # 1. the run's path, event by event, in scalars: each interval's ends, branch and w before and after
-    plan, _, broken = _plan(result.events[:last + 1], scene, c, q_a, w_a)
+    plan, first, broken = _plan(events, start, last, scene, c, path.q, path.w)
     # 2. the integrals of dF_s'/dp over whole intervals, all at once (they need no tangent)
     if c.f_depends:
         for s, group in _by_branch([p[4] for p in plan]):
@@ -420,6 +497,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
             for iv, I_p_e in zip(group, end_integrals(c, s, q0s, D, MAX_PANELS * NODES)):
                 iv.I_p_e = I_p_e
     # 3. the tangents of the events' positions and speeds, event by event (no quadrature left)
+    Dq_a, Dw_a, lift = path.Dq, path.Dw, None
     D_impact_loss = np.zeros(P)
     for j, (i, ev, kind, turning, iv, w_minus) in enumerate(plan):
         if iv is None:                      # no motion in between (a rest test at the start)
@@ -428,7 +506,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
             iv.set_start(Dq_a, Dw_a, Dmu)
             if turning:
                 Dq_e = iv.dG_fixed_q_end() / (2 * c.g * iv.f_e)
-            elif kind == EventCode.NORMAL_SIGN_CHANGE:
+            elif kind in (EventCode.NORMAL_SIGN_CHANGE, EventCode.LIFT_OFF):
                 try:
                     Dq_e = normal_sign_change_tangent(c, iv)
                 except KernelError as err:     # (a user curve's jets not generated where this runs)
@@ -436,7 +514,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
                 else:
                     why = TANGENTIAL_N_REASON
                 if Dq_e is None:
-                    plan, broken = plan[:j], why
+                    plan, first, broken = plan[:j], i, why
                     break
             else:
                 Dq_e = limiter_D.get(ev.q, np.zeros(P)) if kind in (EventCode.IMPACT, EventCode.REST_ON_LIMITER) \
@@ -450,11 +528,13 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
             k = scene.k
             Dw_plus = 2 * k * Dk * w_minus + k * k * Dw_minus
             Dv_plus = -(Dk * v_minus + k * Dv_minus)
-            D_impact_loss += c.m / 2 * (-2 * k * Dk * w_minus + (1 - k * k) * Dw_minus)
+            D_impact_loss = D_impact_loss + c.m / 2 * (-2 * k * Dk * w_minus + (1 - k * k) * Dw_minus)
         else:   # a turning point, or a sign change of N: w goes on (the branch flips with N)
             Dw_plus, Dv_plus = Dw_minus, (np.zeros(P) if turning else Dv_minus)
         Q[i], VB[i], VA[i] = Dq_e, Dv_minus, Dv_plus
         Dq_a, Dw_a = Dq_e, Dw_plus
+        if kind == EventCode.LIFT_OFF:
+            lift = (ev.q, v_minus, Dq_e, Dv_plus)
     # 4. the time derivatives of all intervals at once; the first that fails ends the derivatives
     dT = np.zeros((len(plan), P))
     for lo in range(0, len(plan), CHUNK):      # (in chunks: none computed after one that fails)
@@ -467,34 +547,24 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     failed = np.flatnonzero(~np.all(np.isfinite(dT), axis=1))
     if len(failed):
         j = int(failed[0])
-        plan, broken = plan[:j], "the time derivative's quadrature did not converge"
-    legs, t_a, Dt_a = [], 0.0, np.zeros(P)
+        plan, first, broken = plan[:j], plan[j][0], "the time derivative's quadrature did not converge"
+    if broken and first is not None:       # (the rows pass 3 wrote past the first event without derivatives)
+        for column in (Q, VB, VA):
+            column[first:last + 1] = np.nan
     for j, (i, ev, _, _, iv, _) in enumerate(plan):
-        Dt_e = Dt_a + dT[j]
+        Dt_e = path.Dt + dT[j]
         T[i] = Dt_e
         if iv is not None:
-            legs.append(Leg(iv, t_a, ev.t, Dt_a, Dt_e))
-        t_a, Dt_a = ev.t, Dt_e
-    done = len(plan)
-    Q[done:], VB[done:], VA[done:] = np.nan, np.nan, np.nan
-    reasons = [""] * done
-    if broken:
-        q_start = plan[-1][1].q if plan else scene.q0
-        reasons += _reasons_after(result.events[done:last + 1], done, broken, scene, c, q_start)
-    reasons += [f"not asked for: after event {last} (through={last})"] * (n - 1 - last)
-    final = {name: np.full(P, np.nan) for name in ("t_final", "q_final", "friction_work", "impact_loss")}
-    if not broken and last == n - 1 and result.status.code in FINAL_STATUSES and plan:
-        q_f = result.events[-1].q
-        Dq_last, Dw_last = Dq_a, Dw_a
-        DE_final = c.m * (Dw_last / 2 + c.g * (float(c.dz(q_f)) * Dq_last + c.geometry_dp("z", q_f)[0]))
-        final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=D_impact_loss,
-                     friction_work=DE0 - DE_final - D_impact_loss)
-    for name in notes:
-        j = wrt.index(name)
-        for column in (T, Q, VB, VA, *final.values()):
-            column[..., j] = np.nan
-    sens = Sensitivities(wrt, tuple(result.events), T, Q, VB, VA, tuple(reasons), final, notes)
-    return Tangents(sens, tuple(legs))
+            path.legs.append(Leg(iv, path.t, ev.t, path.Dt, Dt_e))
+        path.q, path.Dt, path.t = ev.q, Dt_e, ev.t
+    if plan:      # (past the first event without derivatives, only path.q is read: the reasons')
+        _, _, kind, _, _, w_minus = plan[-1]
+        path.w = scene.k * scene.k * w_minus if kind == EventCode.IMPACT else w_minus
+        path.Dq, path.Dw, path.D_impact_loss = Dq_a, Dw_a, path.D_impact_loss + D_impact_loss
+    flight = None
+    if lift is not None and not broken and plan and plan[-1][2] == EventCode.LIFT_OFF:
+        flight = launch(c, lift[0], lift[1], lift[2], lift[3], path.t, path.Dt)
+    return (plan[-1][0] + 1 if plan else start), broken, first, flight
 
 
 #: Intervals whose time derivatives are computed at once (a chunk after one that fails is not computed).
@@ -518,17 +588,25 @@ def _by_branch(intervals):
             yield s, group
 
 
-def _plan(events, scene, c, q_a, w_a):
-    """The differentiable events from the start, each ``(index, event, kind code, turning, interval or None,
-    w before it)``, and the first event without derivatives (its index, or None) and why."""
+def _plan(events, start, last, scene, c, q_a, w_a):
+    """The differentiable sliding events from ``start`` (the particle at ``q_a`` with ``w_a``) to a
+    lift-off (included), a landing (not included) or ``last``, each ``(index, event, kind code,
+    turning, interval or None, w before it)``; and the first event without derivatives (its index,
+    or None) and why."""
     plan = []
+    stop = start
+    while stop < last and events[stop].kind.code not in (EventCode.LIFT_OFF, EventCode.LANDING):
+        stop += 1
+    if events[stop].kind.code == EventCode.LANDING:
+        stop -= 1
+    segment = events[start:stop + 1]
     # the kernels at every event and every interval's middle, each called once for all of them
-    at = np.array([q_a] + [ev.q for ev in events])
+    at = np.array([q_a] + [ev.q for ev in segment])
     middle = at[:-1] + (at[1:] - at[:-1]) / 2
     alpha, dalpha, alpha_mid = c.alpha(at), c.dalpha(at), c.alpha(middle)
     F, f, F_mid = ({s: fn(s, x) for s in (1, -1)} for fn, x in ((c.F, at), (c.f, at), (c.F, middle)))
-    for i, ev in enumerate(events):
-        kind = ev.kind.code
+    for j, ev in enumerate(segment):
+        i, kind = start + j, ev.kind.code
         own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
         if own:
             return plan, i, own
@@ -537,9 +615,9 @@ def _plan(events, scene, c, q_a, w_a):
             iv, w_minus = None, w_a
         else:
             sigma = 1 if ev.q > q_a else -1
-            s = _branch(c, w_a, sigma, middle[i], (alpha[i], alpha_mid[i], F[sigma][i], F_mid[sigma][i]))
-            ends = (float(alpha[i]), float(dalpha[i]), float(f[s][i]), float(f[s][i + 1]), F[s][i], F[s][i + 1],
-                    alpha[i + 1:i + 2], dalpha[i + 1:i + 2])
+            s = _branch(c, w_a, sigma, middle[j], (alpha[j], alpha_mid[j], F[sigma][j], F_mid[sigma][j]))
+            ends = (float(alpha[j]), float(dalpha[j]), float(f[s][j]), float(f[s][j + 1]), F[s][j], F[s][j + 1],
+                    alpha[j + 1:j + 2], dalpha[j + 1:j + 2])
             iv = _Interval(c, q_a, w_a, ev.q, s, turning, I_p_e=0.0, ends=ends)
             w_minus = 0.0 if turning else float((iv.G_e / iv.E_e)[0])
         plan.append((i, ev, kind, turning, iv, w_minus))
@@ -579,8 +657,8 @@ def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
     (a turning point of ``G``, not a rest test where it already was)."""
     if kind == EventCode.LEFT_CURVE:
         return "the particle leaves the curve"
-    if kind in (EventCode.LIFT_OFF, EventCode.LANDING):
-        return "a flight (physics.md, \"Flight and landing\"; not derived yet); this event and the ones after it"
+    if kind == EventCode.LANDING:
+        return landing_reason(ev.detail)
     if ev.detail and "zeno" in ev.detail.lower():
         return "a Zeno accumulation of impacts (infinitely many events); this event and the ones after it"
     if kind in (EventCode.REVERSAL, EventCode.ARREST):

@@ -39,9 +39,9 @@ class Sensitivities:
     reasons : tuple of str
         Per event, why its row is NaN (empty where it is differentiable).
     final : dict
-        ``t_final``, ``q_final``, ``friction_work``, ``impact_loss`` -> derivatives, shape
-        (parameters,); NaN when the run did not end on an event or an event before is not
-        differentiable.
+        ``t_final``, ``q_final``, ``friction_work``, ``impact_loss`` (and ``landing_loss`` on a
+        unilateral curve) -> derivatives, shape (parameters,); NaN when the run did not end on an
+        event or an event before is not differentiable.
     notes : dict
         Parameter -> why its whole column is NaN (a start at rest has no derivative in ``qdot0``).
     """

@@ -2,7 +2,8 @@
 
 For each scene of a :class:`~symvib.numeric.sweep.SweepResult`: the number of
 impacts, the arrest (or rest) time and position, and the share of the lost
-energy that went into impacts, ``W_impacts / (W_friction + W_impacts)``,
+energy that went into impacts, ``W_impacts / (W_friction + W_impacts)`` (and the
+number of flights, for a sweep of unilateral scenes),
 drawn over the first two varied fields that take more than one value: as an
 image on a grid sweep (with more axes, at the first value of the others, said
 in the title),
@@ -35,7 +36,7 @@ from matplotlib.figure import Figure
 from symvib import safeio
 from symvib.numeric.sweep.labels import axis_label, column_attrs, field_attrs, label, unit_text
 
-__all__ = ["sweep_maps", "MAPS"]
+__all__ = ["sweep_maps", "MAPS", "FLIGHT_MAPS"]
 
 #: Mapped quantities: column (or SweepResult attribute) -> title (the colour bar's label, with the
 #: symbol and units, is :func:`symvib.numeric.sweep.labels.column_attrs`').
@@ -45,10 +46,14 @@ MAPS = {
     "q_final": "arrest (or rest) position",
     "impact_share": "share of the energy lost to impacts",
 }
+#: Mapped too in a sweep of unilateral scenes, which has the flight columns
+#: (:mod:`symvib.numeric.sweep.flights`).
+FLIGHT_MAPS = {"flights": "number of flights"}
 #: Quantities that are counts (drawn with one colour per value).
-INTEGER_MAPS = ("impacts",)
+INTEGER_MAPS = ("impacts", "flights")
 #: Quantities whose label leaves out the symbol (a formula too long for a colour bar).
 NO_SYMBOL = ("impact_share",)
+_TITLES = MAPS | FLIGHT_MAPS
 FIGSIZE = (6.4, 4.8)
 DPI = 120
 
@@ -59,7 +64,7 @@ def _values(res, name):
 
 def _value_label(scene, name):
     """``long name $symbol$ [units]`` of a mapped quantity (title text as the long name)."""
-    return label(column_attrs(scene, name) | {"long_name": MAPS[name]}, symbol=name not in NO_SYMBOL)
+    return label(column_attrs(scene, name) | {"long_name": _TITLES[name]}, symbol=name not in NO_SYMBOL)
 
 
 def _at(scene, axis):
@@ -78,13 +83,18 @@ def _at_first(res, others):
     return sel
 
 
-def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
-    """Write one PNG per quantity of :data:`MAPS` into ``out_dir``; returns the paths.
+def sweep_maps(res, out_dir, *, names=None) -> list:
+    """Write one PNG per quantity of ``names`` into ``out_dir``; returns the paths.
+
+    ``names`` defaults to :data:`MAPS`, and :data:`FLIGHT_MAPS` after them for a sweep with
+    flight columns (of unilateral scenes).
 
     ``out_dir`` is created if missing and must be a real folder of the user's (not a
     symbolic link); each map is written whole, never through a link (:mod:`symvib.safeio`).
     """
     out = safeio.check_root(out_dir, "maps folder")
+    if names is None:
+        names = tuple(MAPS) + (tuple(FLIGHT_MAPS) if "flights" in res.columns else ())
     spread = [a for a in res.spec.axes if not a.grid or a.size > 1] or list(res.spec.axes)
     shown = spread[:2]
     scene = res.spec.scene
@@ -126,7 +136,7 @@ def sweep_maps(res, out_dir, *, names=tuple(MAPS)) -> list:
         fixed += "" if varied & {"physics.mu", "physics.alpha0"} else f", $\\mu$ = {scene.mu:.4g}"
         if scene.mu_s is not None and not varied & {"physics.mu_s", "physics.alpha0_s"}:
             fixed += f", $\\mu_s$ = {scene.mu_s:.4g}"
-        ax.set_title(f"{scene.name}: {MAPS[name]}{note}\n({res.count} scenes{fixed})", fontsize=10)
+        ax.set_title(f"{scene.name}: {_TITLES[name]}{note}\n({res.count} scenes{fixed})", fontsize=10)
         fig.tight_layout()
         path = out / f"{name}.png"
         with safeio.replacing(out, path.name, what="maps folder") as fh:

@@ -13,13 +13,14 @@ it has ended (``waitpid`` without waiting: no file is read while it compiles); t
 after a clean end loads the compiled engine from disk (about a second), every run after it
 uses it.  The engines give the same events (``tests/test_backends.py``).
 
-The child is tethered (:func:`symvib.children.tether`: it dies with its parent, whatever
-its parent's death) and killed when its parent exits (:func:`stop_children`, at exit: the
-exit does not wait for a compile).  A child that fails, or whose compiled engine numba could
-not write to its cache, leaves this process on the plain engine for that curve for good,
-with one :class:`TierWarning` line.  ``$SYMVIB_TIER=off``, ``$SYMVIB_BACKEND`` and an explicit
-``backend=`` start no child.  The start and the end of a compile are logged at INFO on the
-logger ``symvib.numeric.tiered``; which engine ran a run is ``Result.stats["backend"]``.
+The child is tethered (:func:`symvib.children.tether`: it dies with its parent, whatever its
+parent's death) and killed when its parent exits (:func:`stop_children`, at exit: the exit
+does not wait for a compile), or when it has run :data:`TIER_TIMEOUT` seconds. A child that
+fails, or whose compiled engine numba could not write to its cache, leaves this process on
+the plain engine for that curve for good, with one :class:`TierWarning` line.
+``$SYMVIB_TIER=off``, ``$SYMVIB_BACKEND`` and an explicit ``backend=`` start no child. The
+start and the end of a compile are logged at INFO on the logger ``symvib.numeric.tiered``;
+which engine ran a run is ``Result.stats["backend"]``.
 
 Why the specialized binding: compiling its ``simulate`` entry on empty caches took 18.3-20.4 s
 of CPU against 18.9-19.2 s for the shared binding's (docs/benchmarks.md, "The tiered engine"),
@@ -59,6 +60,12 @@ TIER_CALLS = 50
 #: starts the sooner the loop is 20-50 times faster; the core is lost only where a loop stops
 #: within the next 20 s.  (Measured effect on a 100,000-run loop: docs/benchmarks.md.)
 TIER_SECONDS = 1.0
+#: Seconds a compile child may run before it is killed and the curve stays on the plain engine, with
+#: a :class:`TierWarning`: about 10 times the longest compile measured under load (75 s of wall,
+#: docs/benchmarks.md).  A child forked from a process whose other threads held a lock at the fork
+#: (a logging handler's, a user's thread pool's) can wait on it for ever; nothing hangs in the parent
+#: (it never waits for the child), but without this bound the loop would wait in vain.
+TIER_TIMEOUT = 900.0
 
 _log = logging.getLogger(__name__)
 
@@ -192,6 +199,11 @@ def _poll(tier: _Tier) -> None:
     """Look whether ``tier``'s child ended (no wait); on its end, reap it and settle the tier."""
     child = tier.child
     if child.exitcode is None:   # waitpid(WNOHANG)
+        if time.monotonic() - tier.started > TIER_TIMEOUT:
+            child.kill()
+            child.join()
+            tier.pipe.close()
+            _fail(tier, f"it did not end within {TIER_TIMEOUT:g} s and was killed")
         return
     from symvib.numeric.engine.bind import is_compiled
 

@@ -14,6 +14,10 @@ their loop versions:
 * :func:`grown`: a full log copied into a larger one by NumPy, not element by element;
 * ``clock``: ``time.monotonic``, the wall clock a run's deadline is read on (the compiled
   engine's :func:`symvib.numeric.engine.loop.clock` has none);
+* :func:`turn_rate`: 0 where a kernel overflows, as the compiled version gives 0 where it is
+  not finite (Python's ``math`` raises ``OverflowError`` where compiled code returns ``inf``: a
+  curve whose kernels overflow far from the start, ``exp(x^2/b^2)`` in a Gaussian's, would stop a
+  plain run at its set-up that the compiled engine runs);
 
 and :func:`plain_rules` gives the rules' nodes and weights as lists.  Each
 computes what its loop version computes (``tests/test_plain.py``); the
@@ -28,6 +32,7 @@ Examples
 """
 from __future__ import annotations
 
+import math
 import time
 from functools import cache
 
@@ -36,7 +41,7 @@ import numpy as np
 from symvib.numeric.engine.rebind import ENGINE_MODULES, rebound_functions
 from symvib.numeric.engine.state import Rules
 
-__all__ = ["scratch", "cumulate", "grown", "plain_rules", "plain_entries", "plain_functions", "PRIMITIVES"]
+__all__ = ["scratch", "cumulate", "grown", "turn_rate", "plain_rules", "plain_entries", "plain_functions", "PRIMITIVES"]
 
 
 def scratch(rows, n):
@@ -58,8 +63,19 @@ def grown(a, n, rows):
     return new
 
 
+def turn_rate(x, K, cp):
+    """``|alpha'(x)| = |kappa h|`` (:func:`symvib.numeric.engine.scan.turn_rate`), 0 where it is not finite
+    or a kernel overflows."""
+    try:
+        r = abs(K.kappa(x, *cp) * K.h(x, *cp))
+    except (OverflowError, ZeroDivisionError, ValueError):
+        return 0.0
+    return r if math.isfinite(r) else 0.0
+
+
 #: The primitives the plain-Python engine takes instead of the engine's loop versions.
-PRIMITIVES = {"scratch": scratch, "cumulate": cumulate, "grown": grown, "clock": time.monotonic}
+PRIMITIVES = {"scratch": scratch, "cumulate": cumulate, "grown": grown, "clock": time.monotonic,
+              "turn_rate": turn_rate}
 
 
 def plain_rules(R: Rules) -> Rules:

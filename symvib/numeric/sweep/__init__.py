@@ -13,7 +13,8 @@ fields, named with the scene file's own keys (``qdot``, ``q``, ``mu``,
   depend on which process draws them.
 
 Every scene runs the same compiled loop as :func:`symvib.numeric.driver.simulate`,
-so a sweep's event sequences are the single-scene driver's.  Per scene it keeps
+so a sweep's event sequences are the single-scene driver's (a unilateral scene's row that
+lifts off is followed on as ``simulate`` follows it: :mod:`~symvib.numeric.sweep.flights`).  Per scene it keeps
 the columns :data:`symvib.numeric.layout.SUMMARY_COLUMNS` (status, event counts,
 final time and position, friction work, impact loss, energies) and, with
 ``log_events=L``, the first ``L`` events; with ``sensitivities=("mu", "k")`` the final
@@ -30,6 +31,8 @@ The modules, one concept each:
 * :mod:`~symvib.numeric.sweep.spec` - the definition (:func:`make_spec`, :class:`SweepSpec`);
 * :mod:`~symvib.numeric.sweep.rows` - a chunk's scene rows, checked by the scene's own checks;
 * :mod:`~symvib.numeric.sweep.labels` - readable names, units (SI), LaTeX symbols of the columns;
+* :mod:`~symvib.numeric.sweep.flights` - the rows of unilateral scenes followed past their lift-off
+  (physics.md, "Flight and landing"), and their columns ``flights``, ``landings``, ``landing_loss``;
 * :mod:`~symvib.numeric.sweep.sensitivity_columns` - the opt-in columns of the final state's exact
   derivatives (``sensitivities=("mu", "k")``), computed per scene by the driver;
 * :mod:`~symvib.numeric.sweep.schema` - the columns' names and kinds, the layout :data:`FORMAT`,

@@ -4,9 +4,10 @@
 field, named readably (``qdot0``, ``mu``, a curve parameter's name: see
 :mod:`symvib.numeric.sweep.labels`), and a random sweep the dimension ``row``
 with the varied fields as coordinates along it.  Every summary column
-(:data:`symvib.numeric.layout.SUMMARY_COLUMNS`), the derived ``impact_share``
-and, when events were logged, ``event_log`` are data variables carrying
-``units`` (SI), ``long_name`` and ``latex``; ``status`` holds the codes, named
+(:data:`symvib.numeric.layout.SUMMARY_COLUMNS`), the flight columns of a sweep of
+unilateral scenes (:mod:`symvib.numeric.sweep.flights`), the sensitivity columns when
+asked, the derived ``impact_share`` and, when events were logged, ``event_log`` are
+data variables carrying ``units`` (SI), ``long_name`` and ``latex``; ``status`` holds the codes, named
 by its ``flag_meanings`` (CF convention).  The Dataset's attributes name the
 sweep (:func:`dataset_attrs`).  :func:`dataframe` is the same as one row per
 scene, ``status`` as a categorical of the status names.
@@ -39,6 +40,7 @@ import numpy as np
 
 from symvib import __version__
 from symvib.numeric.layout import EVENT_COLUMNS, STATUSES, SUMMARY_COLUMNS
+from symvib.numeric.sweep.flights import column_names as flight_columns
 from symvib.numeric.sweep.labels import COLUMN_LABELS, column_attrs, field_attrs
 from symvib.numeric.sweep.limits import EVENT_WIDTH
 from symvib.numeric.sweep.schema import FORMAT, impact_share, variable_names
@@ -110,6 +112,8 @@ def dataset(spec, columns: dict, ident: str, *, store: bool = False):
     for name in SUMMARY_COLUMNS:
         attrs = status_attrs(scene) if name == "status" else column_attrs(scene, name)
         data[name] = (dims, columns[name].reshape(shape), attrs)
+    for name in flight_columns(scene):
+        data[name] = (dims, columns[name].reshape(shape), column_attrs(scene, name))
     for name in sensitivity_columns(spec.sensitivities):
         data[name] = (dims, columns[name].reshape(shape), sensitivity_attrs(scene, name, COLUMN_LABELS))
     if spec.log_events:
@@ -139,7 +143,7 @@ def dataframe(spec, columns: dict, ident: str):
     for a in spec.axes:
         data[names[a.field]] = np.asarray(columns[a.field])
         attrs[names[a.field]] = field_attrs(scene, a.field)
-    for name in SUMMARY_COLUMNS:
+    for name in SUMMARY_COLUMNS + tuple(flight_columns(scene)):
         data[name] = np.asarray(columns[name])
         attrs[name] = column_attrs(scene, name)
     for name in sensitivity_columns(spec.sensitivities):

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from symvib.numeric.layout import SUMMARY_COLUMNS
 from symvib.numeric.scene import field_unit
+from symvib.numeric.sweep.flights import LABELS as FLIGHT_LABELS
 
 __all__ = ["FIELD_LABELS", "COLUMN_LABELS", "axis_name", "field_attrs", "column_attrs",
            "axis_label", "label", "unit_text", "coordinate_latex"]
@@ -49,8 +50,8 @@ FIELD_LABELS = {
     "run.t_max": ("t_max", "time limit", "t_\\mathrm{{max}}"),
     "run.max_events": ("max_events", "event limit", "N_\\mathrm{{max}}"),
 }
-#: Summary columns (:data:`symvib.numeric.layout.SUMMARY_COLUMNS`) and derived ones:
-#: name -> (long name, units, LaTeX symbol).
+#: Summary columns (:data:`symvib.numeric.layout.SUMMARY_COLUMNS`), derived ones and the flight
+#: columns of a sweep of unilateral scenes: name -> (long name, units, LaTeX symbol).
 COLUMN_LABELS = {
     "status": ("why the run stopped (code: flag_meanings)", "1", ""),
     "events": ("number of events", "1", "N_\\mathrm{{events}}"),
@@ -69,6 +70,7 @@ COLUMN_LABELS = {
     "impact_share": ("share of the energy lost to impacts, W_impacts / (W_friction + W_impacts)", "1",
                      "W_\\mathrm{{impacts}} / (W_\\mathrm{{friction}} + W_\\mathrm{{impacts}})"),
 }
+COLUMN_LABELS.update(FLIGHT_LABELS)   # a sweep of unilateral scenes' columns (symvib.numeric.sweep.flights)
 assert set(SUMMARY_COLUMNS) <= set(COLUMN_LABELS), "every summary column needs a label"
 #: LaTeX of the curve coordinates' names; others are written as they are.
 _GREEK = {"phi": "\\varphi", "theta": "\\theta", "psi": "\\psi", "chi": "\\chi", "alpha": "\\alpha",

@@ -44,6 +44,8 @@ class SweepResult:
     spec : SweepSpec
     columns : dict of str -> ndarray
         ``row``, each varied field, the :data:`symvib.numeric.layout.SUMMARY_COLUMNS`,
+        ``flights``, ``landings`` and ``landing_loss`` for unilateral scenes
+        (:mod:`~symvib.numeric.sweep.flights`),
         ``event_log`` (shape ``(count, log_events, 6)``: kind, t, q,
         qdot_before, qdot_after, energy) when events were logged.
     computed, reused : tuple of int
@@ -112,7 +114,8 @@ class SweepResult:
         readably (``qdot0``, ``mu``; :mod:`symvib.numeric.sweep.labels`), so
         ``ds[name]`` equals :meth:`grid`; a random sweep has the dimension
         ``row`` and the varied fields as coordinates along it.  Data variables:
-        the summary columns, ``impact_share`` and ``event_log`` (if logged),
+        the summary columns, the flight columns of a sweep of unilateral scenes
+        (:mod:`~symvib.numeric.sweep.flights`), ``impact_share`` and ``event_log`` (if logged),
         each with ``units`` (SI), ``long_name`` and ``latex`` attributes; the
         Dataset's attributes hold ``sweep_id`` and the definition
         (:func:`symvib.numeric.sweep.frames.dataset`).

@@ -28,7 +28,7 @@ from symvib.numeric.driver import sweep_function
 from symvib.numeric.layout import Summary
 from symvib.numeric.prepared import prepared_of
 from symvib.numeric.scene import Scene, SceneError
-from symvib.numeric.sweep import limits, sensitivity_columns
+from symvib.numeric.sweep import flights, limits, sensitivity_columns
 from symvib.numeric.sweep.limits import SweepError
 from symvib.numeric.sweep.lock import WriterLock
 from symvib.numeric.sweep.progress import Progress
@@ -47,7 +47,9 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
 
     A pure function of its arguments (it runs on Dask workers): returns the
     chunk's columns as a dict of arrays (``row``, the varied fields, the
-    :data:`symvib.numeric.layout.SUMMARY_COLUMNS`, and ``event_log`` when asked).
+    :data:`symvib.numeric.layout.SUMMARY_COLUMNS`, the flight columns of a unilateral scene, whose
+    rows that lift off fly on: :mod:`~symvib.numeric.sweep.flights`, the sensitivity columns and
+    ``event_log`` when asked).
     """
     spec = SweepSpec.from_dict(definition)
     if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < spec.chunks:
@@ -61,10 +63,13 @@ def run_chunk(definition: dict, index: int, backend: str = "auto") -> dict:
     for column in Summary:
         values_ = summary[:, column]
         out[column.name] = values_.astype(np.int64) if column.name in INTEGER_COLUMNS else values_
+    log = logs[:, :spec.log_events] if spec.log_events else None
+    if flights.unilateral(spec.scene):   # rows that lifted off fly on (physics.md, "Flight and landing")
+        out.update(flights.follow_rows(spec, values, out, log, backend))
     if spec.sensitivities:
         out.update(sensitivity_columns.compute(spec, values, out["status"], backend))
-    if spec.log_events:
-        out["event_log"] = logs[:, :spec.log_events]
+    if log is not None:
+        out["event_log"] = log
     return out
 
 

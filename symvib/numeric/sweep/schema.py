@@ -11,8 +11,9 @@ any :class:`~symvib.numeric.sweep.spec.SweepSpec`, read by its ``axes``,
 
 * The columns (:func:`column_names`), one row per scene: ``row`` (the scene's
   number in the sweep), each varied field by its dotted name (``initial.qdot``),
-  the summary columns :data:`symvib.numeric.layout.SUMMARY_COLUMNS` and, when
-  events are logged, ``event_log``.  As labelled data and in a Zarr store a
+  the summary columns :data:`symvib.numeric.layout.SUMMARY_COLUMNS`, the flight
+  columns of a sweep of unilateral scenes (:data:`symvib.numeric.sweep.flights.COLUMNS`)
+  and, when events are logged, ``event_log``.  As labelled data and in a Zarr store a
   varied field is named readably (:func:`variable_names`: ``qdot0``).
 * Their kinds: ``row`` and :data:`INTEGER_COLUMNS` (codes and counts) are
   ``int64``, the others ``float64`` (:func:`column_dtype`); ``event_log`` holds
@@ -44,6 +45,7 @@ import json
 import numpy as np
 
 from symvib.numeric.layout import STATUSES, SUMMARY_COLUMNS, Summary
+from symvib.numeric.sweep import flights
 from symvib.numeric.sweep.labels import axis_name
 from symvib.numeric.sweep.limits import EVENT_WIDTH, SweepError
 from symvib.numeric.sweep.sensitivity_columns import REASON_COLUMN
@@ -77,15 +79,18 @@ def sweep_id(definition: dict) -> str:
 
 
 def column_names(spec) -> list:
-    """The sweep's columns in their order: ``row``, the varied fields, the summary columns, the sensitivity
-    columns (when asked: :mod:`~symvib.numeric.sweep.sensitivity_columns`), ``event_log``."""
-    return (["row"] + [a.field for a in spec.axes] + list(SUMMARY_COLUMNS)
+    """The sweep's columns in their order: ``row``, the varied fields, the summary columns, the flight
+    columns (a unilateral scene's: :mod:`~symvib.numeric.sweep.flights`), the sensitivity columns (when
+    asked: :mod:`~symvib.numeric.sweep.sensitivity_columns`), ``event_log``."""
+    return (["row"] + [a.field for a in spec.axes] + list(SUMMARY_COLUMNS) + flights.column_names(spec.scene)
             + sensitivity_columns(getattr(spec, "sensitivities", ())) + (["event_log"] if spec.log_events else []))
 
 
 def column_dtype(name: str) -> np.dtype:
-    """The dtype of column ``name``: ``int64`` for ``row`` and :data:`INTEGER_COLUMNS`, else ``float64``."""
-    return np.dtype(np.int64 if name in ("row", REASON_COLUMN) or name in INTEGER_COLUMNS else np.float64)
+    """The dtype of column ``name``: ``int64`` for ``row``, :data:`INTEGER_COLUMNS` and the counts of
+    flights and landings, else ``float64``."""
+    integer = name in ("row", REASON_COLUMN) or name in INTEGER_COLUMNS or name in flights.INTEGER_COLUMNS
+    return np.dtype(np.int64 if integer else np.float64)
 
 
 def column_tail(spec, name: str) -> tuple:

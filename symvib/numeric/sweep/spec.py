@@ -28,6 +28,7 @@ from symvib.numeric.layout import SUMMARY_COLUMNS
 from symvib.numeric.scene import Scene, SceneError, scene_from_dict
 from symvib.numeric.sweep import limits
 from symvib.numeric.sweep.axes import Axis, canonical_field, parse_axis
+from symvib.numeric.sweep.flights import column_names as flight_columns
 from symvib.numeric.sweep.limits import EVENT_WIDTH, ITEM, SweepError
 from symvib.numeric.sweep.rows import scene_rows
 from symvib.numeric.sweep.sensitivity_columns import check_wrt
@@ -136,9 +137,10 @@ class SweepSpec:
         return rows, [a.low + (a.high - a.low) * u[:, j] for j, a in enumerate(self.axes)]
 
     def chunk_bytes(self) -> int:
-        """Bytes of the columns of one full chunk (row, varied fields, summary, event log)."""
-        per_row = (1 + len(self.axes) + len(SUMMARY_COLUMNS) + len(sensitivity_columns(self.sensitivities))
-                   + EVENT_WIDTH * self.log_events) * ITEM
+        """Bytes of the columns of one full chunk (row, varied fields, summary, flights, sensitivities,
+        event log)."""
+        per_row = (1 + len(self.axes) + len(SUMMARY_COLUMNS) + len(flight_columns(self.scene))
+                   + len(sensitivity_columns(self.sensitivities)) + EVENT_WIDTH * self.log_events) * ITEM
         return min(self.chunk, self.count) * per_row
 
     def scalars(self, values, rows=None) -> tuple:
