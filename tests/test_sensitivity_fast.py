@@ -16,6 +16,9 @@ from symvib.numeric.sweep import sweep
 SAME = 1e-12
 PAPER = [(name, k) for name in ("paper-parabola", "paper-cycloid", "paper-circle-7", "paper-circle-3.8")
          for k in (1.0, 0.8)]
+FLIGHTS = {"curve": {"shape": "circle"}, "parameters": {"R": 1.0},      # lift-offs, bounces, an accumulation
+           "physics": {"mu": 0.1, "restitution": 0.8, "contact": "unilateral", "restitution_curve": 0.3},
+           "initial": {"q": 0.0, "qdot": 7.0}}
 USER = {"curve": {"name": "sens-fast-hump", "z": "a*(1 - cos(x/b))"}, "parameters": {"a": 0.3, "b": 0.2},
         "physics": {"mu": 0.05, "restitution": 0.7}, "limiters": {"left": -1.5, "right": 1.5},
         "initial": {"q": 0.0, "qdot": 4.0}}
@@ -39,19 +42,21 @@ def _assert_same(fast, full, rows):
         assert np.all(np.nan_to_num(np.abs(a[rows] - b[rows])) <= SAME * scale), (a[rows] - b[rows]) / scale
 
 
-@pytest.mark.parametrize("scene", [resolve_scene(n).replace(k=k) for n, k in PAPER] + [scene_from_dict(USER)],
-                         ids=[f"{n}-k{k}" for n, k in PAPER] + ["user-hump"])
+@pytest.mark.parametrize("scene", [resolve_scene(n).replace(k=k) for n, k in PAPER]
+                         + [scene_from_dict(USER), scene_from_dict(FLIGHTS)],
+                         ids=[f"{n}-k{k}" for n, k in PAPER] + ["user-hump", "flights"])
 def test_batched_time_derivatives_equal_each_interval_s_own_refinement(scene):
     tangents = interval_tangents(_run(scene), _wrt(scene))
     assert tangents.legs
-    for leg in tangents.legs:     # (the per-interval quadrature, _Interval.dT, is the reference)
+    for leg in tangents.legs:     # (the per-interval quadrature, Interval.dT, is the reference)
         own, batched = leg.interval.dT(), leg.Dt_e - leg.Dt_a
         scale = np.max(np.abs(own)) + 1e-300
         assert np.all(np.abs(batched - own) <= SAME * scale), (batched - own) / scale
 
 
-@pytest.mark.parametrize("scene", [resolve_scene(n).replace(k=k) for n, k in PAPER] + [scene_from_dict(USER)],
-                         ids=[f"{n}-k{k}" for n, k in PAPER] + ["user-hump"])
+@pytest.mark.parametrize("scene", [resolve_scene(n).replace(k=k) for n, k in PAPER]
+                         + [scene_from_dict(USER), scene_from_dict(FLIGHTS)],
+                         ids=[f"{n}-k{k}" for n, k in PAPER] + ["user-hump", "flights"])
 def test_a_truncated_table_equals_the_full_one_on_its_events(scene):
     res = _run(scene)
     full = sensitivities(res, _wrt(scene))

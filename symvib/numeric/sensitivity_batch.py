@@ -4,10 +4,10 @@ Given the tangents at both ends of each motion interval, its time derivative (it
 integral in ``theta`` whose integrand needs ``G``, ``f(q) - f(q_c)`` and ``Integral dF_s'/dp``
 from the nearer end ``q_c``: none of it depends on another interval.  So the Gauss-Legendre
 levels of :mod:`symvib.numeric.sensitivity` (``NODES`` nodes a panel, doubled until two levels
-agree) are evaluated here for all intervals of one branch in one NumPy pass: the kernels take
-arrays, the nodes of a level are the same ``u`` for every interval, and only the intervals that
-have not converged go on to the next level.  Each interval gets the same levels, nodes and
-arithmetic as one at a time (:meth:`symvib.numeric.sensitivity._Interval.dT`, kept as the
+agree) are evaluated here for all intervals in one NumPy pass (each kernel called once per
+branch): the kernels take arrays, the nodes of a level are the same ``u`` for every interval, and
+only the intervals that have not converged go on to the next level.  Each interval gets the same levels, nodes and
+arithmetic as one at a time (:meth:`symvib.numeric.sensitivity_interval.Interval.dT`, kept as the
 reference), so the two agree to rounding.
 
 The same holds for the integral of ``dF_s'/dp`` over a whole interval (item 2, the ``dG/dp`` of
