@@ -117,6 +117,8 @@ def _summed(v, D, half):
     """The cumulative sums of :func:`cumulative` from the values ``v`` at its nodes (shape (M, pieces, nodes[,
     columns]))."""
     _, w = gauss(INNER_NODES)
+    if v.ndim == 3:              # (one column: the nodes are the last axis already)
+        return D[:, None] * np.cumsum(half[None, :] * (v @ w), axis=1)
     sums = np.moveaxis(v, 2, -1) @ w
     shape = (1, -1) + (1,) * (sums.ndim - 2)
     return D.reshape((-1,) + (1,) * (sums.ndim - 1)) * np.cumsum(half.reshape(shape) * sums, axis=1)
@@ -263,6 +265,10 @@ def _level(c, ends, rows, panels):
 def _on_branches(fn, s, parts):
     """``fn(sign, q)`` at the nodes ``parts`` (one array of shape (M, pieces, nodes) per half of the
     intervals), each interval's on its branch ``s`` (M,): one call per branch for all halves."""
+    if np.all(s == s[0]):        # (one branch: no rows to pick)
+        values = np.asarray(fn(int(s[0]), np.concatenate([p.ravel() for p in parts])))
+        cuts = np.cumsum([p.size for p in parts])[:-1]
+        return [v.reshape(p.shape + values.shape[1:]) for v, p in zip(np.split(values, cuts), parts)]
     out = [None] * len(parts)
     for sign in (1, -1):
         rows = np.flatnonzero(s == sign)
