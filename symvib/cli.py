@@ -581,7 +581,8 @@ def build_sweep_parser() -> argparse.ArgumentParser:
     ap.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address (tcp://...)")
     ap.add_argument("--backend", default="auto", choices=("auto", "numba", "python"))
     ap.add_argument("--sensitivities", metavar="P,Q", help="add the exact derivatives of t_final, q_final, "
-                    "friction_work, impact_loss with respect to these parameters (mu, k, qdot0, q0, left, right) "
+                    "friction_work, impact_loss with respect to these parameters (mu, k, qdot0, q0, left, right, or "
+                    "the curve's: p or parameters.p) "
                     "as columns d_<column>_d_<parameter> and sensitivity_reason: each scene run again by the "
                     "single-scene driver, a slower path (docs/sweeps.md)")
     ap.add_argument("--plot", action="store_true", help="write maps over the first two varied fields")

@@ -214,7 +214,8 @@ def _model(scene, observed, free, run):
             r[1][k] = result.events[index[k]].q - observed.q[k]
 
     def jacobian():
-        sens = sensitivities(result, wrt=free)
+        # (the events after the last matched one are not differentiated: no row needs them)
+        sens = sensitivities(result, wrt=free, through=index[matched - 1] if matched else 0)
         blocks, usable = [], []
         for values in ([sens.t] if observed.q is None else [sens.t, sens.q]):
             J = np.zeros((n_obs, len(free)))

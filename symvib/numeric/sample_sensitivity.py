@@ -109,7 +109,10 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
     if bad.any():
         raise ValueError(f"t: sample {int(np.flatnonzero(bad)[0]) + 1} ({float(times[bad][0])!r} s) is not in the "
                          f"run's time span [0, {dense.t_max:g}] s (status {result.status.value})")
-    tangents = interval_tangents(result, wrt, prepared=prepared)
+    # (no event after the one that ends the last sample's interval, and the one after it, is needed)
+    event_times = np.array([e.t for e in result.events])
+    through = int(np.searchsorted(event_times, np.max(times), side="left")) + 1 if len(times) else None
+    tangents = interval_tangents(result, wrt, prepared=prepared, through=through)
     sens = tangents.sensitivities
     q, qdot = (np.asarray(a, dtype=float).reshape(-1) for a in dense.state(times))
     Dq, reasons = _position_tangents(result, tangents, times, q, qdot)

@@ -115,6 +115,7 @@ class CurveFunctions:
         self.P = len(targets)
         self.Dmu = np.array([1.0 if t[1:] == ("scene", "mu") else 0.0 for t in targets])
         self._curve_columns = [(j, t[2]) for j, t in enumerate(targets) if t[1] == "curve"]
+        self._zero_block = np.zeros((0, self.P))
         self._jets_of = jets     # a module, or a callable that loads it (only when first needed)
         self._jets = None
 
@@ -142,8 +143,9 @@ class CurveFunctions:
 
     def df_dmu(self, s, q):
         """``d F_s' / d mu`` at fixed ``q``."""
-        E = np.exp(2 * s * self.mu * self.alpha(q))
-        return E * (2 * s * self.alpha(q) * (self.dz(q) + s * self.mu * self.dx(q)) + s * self.dx(q))
+        alpha, dx = self.alpha(q), self.dx(q)
+        E = np.exp(2 * s * self.mu * alpha)
+        return E * (2 * s * alpha * (self.dz(q) + s * self.mu * dx) + s * dx)
 
     @property
     def f_depends(self) -> bool:
@@ -161,15 +163,32 @@ class CurveFunctions:
             out[:, j] = fn(q, self.mu, *self._cp)
         return out
 
+    def df_dp_factors(self, s):
+        """``(fn, columns)`` with ``d F_s' / d p = fn(q) * columns`` when no curve parameter is in ``wrt``
+        (``fn = d F_s'/d mu``, ``columns`` the unit row of ``mu``); None otherwise.  An integral of
+        ``dF_s'/dp`` is then one integral of ``fn`` times ``columns``."""
+        if self._curve_columns:
+            return None
+        return (lambda q: self.df_dmu(s, q)), self.Dmu
+
     def geometry_dp(self, what, q):
         """``d(what)/dp`` at fixed ``q`` for ``what`` in :data:`symvib.codegen.jets.PARAM_JET` (``alpha``,
         ``h``, ``z``, ...), one column per parameter (shape ``(len(q), P)``; 0 but for curve parameters)."""
         q = np.atleast_1d(np.asarray(q, dtype=float))
+        if not self._curve_columns:
+            return self._zeros(len(q))
         out = np.zeros((len(q), self.P))
         for j, name in self._curve_columns:
             values = getattr(self.jets, f"param_jet_{self.jets.PARAM_JETS[name]}")(q, *self._cp)
             out[:, j] = values[self.jets.PARAM_JET.index(what)]
         return out
+
+    def _zeros(self, n):
+        """A read-only ``(n, P)`` block of zeros (the derivatives of the geometry without curve parameters)."""
+        if self._zero_block.shape[0] < n:
+            self._zero_block = np.zeros((max(n, 2 * self._zero_block.shape[0]), self.P))
+            self._zero_block.setflags(write=False)
+        return self._zero_block[:n]
 
     def dkappa(self, q) -> float:
         """``kappa'(q)`` (the jets' ``jet3``)."""

@@ -41,7 +41,7 @@ def normal_sign_change_tangent(c, iv):
     ----------
     c : symvib.numeric.sensitivity_curve.CurveFunctions
         The curve, with the parameters of ``wrt``.
-    iv : symvib.numeric.sensitivity._Interval
+    iv : symvib.numeric.sensitivity_interval.Interval
         The interval ending at the event (its end not a turning point).
     """
     q, s = iv.q_e, iv.s

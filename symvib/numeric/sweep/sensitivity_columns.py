@@ -5,7 +5,9 @@ per scene, the derivatives of the summary columns ``t_final``, ``q_final``,
 ``friction_work`` and ``impact_loss`` with respect to each named parameter,
 ``d_<column>_d_<parameter>`` (``d_t_final_d_mu``: the names of the summary columns and of
 :attr:`symvib.numeric.sensitivity.Sensitivities.final`), and ``sensitivity_reason``, a code
-of :data:`REASONS` that says why a row's derivatives are NaN (0: they exist).
+of :data:`REASONS` that says why a row's derivatives are NaN (0: they exist).  A parameter is
+one of :data:`~symvib.numeric.sensitivity.PARAMETERS` or of the curve's, by its name (``p``)
+or as ``parameters.p`` (physics.md, "Sensitivities" 9), as ``Result.sensitivities`` takes it.
 
 The compiled sweep loop keeps no intervals, so these columns are computed per scene
 from the single-scene driver's run (:func:`symvib.numeric.driver.simulate`, the same
@@ -27,6 +29,7 @@ import numpy as np
 
 from symvib.numeric.scene import SceneError
 from symvib.numeric.sensitivity import PARAMETERS
+from symvib.numeric.sensitivity_curve import CURVE_PREFIX, resolve_wrt
 
 __all__ = ["QUANTITIES", "REASON_COLUMN", "REASONS", "column_names", "check_wrt", "reason_code", "compute",
            "column_attrs", "scene_of_row"]
@@ -80,10 +83,18 @@ def check_wrt(scene, wrt, axes=()) -> tuple:
         wrt = tuple(wrt or ())
     except TypeError:
         raise SceneError("sensitivities", f"give parameter names (a list, or 'mu,k'), got {wrt!r:.80}") from None
-    unknown = [p for p in wrt if not isinstance(p, str) or p not in PARAMETERS]
+    curve = tuple(name for name, _ in scene.params)
+    known = PARAMETERS + curve + tuple(CURVE_PREFIX + name for name in curve)
+    unknown = [p for p in wrt if not isinstance(p, str) or p not in known]
     if unknown or len(set(wrt)) != len(wrt):
         raise SceneError("sensitivities", f"{unknown[0] if unknown else wrt!r}: give distinct names from "
-                                          f"{', '.join(PARAMETERS)}")
+                                          f"{', '.join(PARAMETERS + curve)}")
+    try:    # (a curve parameter by its name or as parameters.<name>; a name that is both is refused)
+        if wrt:
+            resolve_wrt(scene, wrt, "sensitivities")
+    except ValueError as err:     # (a limiter the scene lacks may be a varied one: checked below)
+        if "limiter" not in str(err):
+            raise SceneError("sensitivities", str(err).split(": ", 1)[1]) from None
     varied = {a.field for a in axes}
     for side in ("left", "right"):
         if side in wrt and getattr(scene, side) is None and f"limiters.{side}" not in varied:
@@ -172,6 +183,6 @@ def column_attrs(scene, name: str, quantity_labels: dict) -> dict:
                     r.replace(" ", "_") or "differentiable" for r in REASONS)}
     quantity, p = name[2:].rsplit("_d_", 1)
     q_units = quantity_labels[quantity][1].format(q=unit)
-    p_units = PARAMETER_UNITS[p].format(q=unit)
+    p_units = PARAMETER_UNITS[p].format(q=unit) if p in PARAMETER_UNITS else f"units of {p}"   # (a curve's)
     units = q_units if p_units == "1" else f"({q_units})/({p_units})"
     return {"units": units, "long_name": f"derivative of {quantity} with respect to {p}"}
