@@ -309,3 +309,42 @@ def test_an_estimate_held_on_its_bound_says_so():
     assert result.estimates["mu"] == 0.04 and "mu = 0.04 is at its bound (high)" in result.message
     free = fit(TRUTH.replace(mu=0.03), obs, free=("mu",))
     assert free.estimates["mu"] == pytest.approx(0.05, rel=1e-8) and "bound" not in free.message
+
+
+FLYING = {"name": "fit-bounces", "curve": {"shape": "circle"}, "parameters": {"R": 1.0},
+          "physics": {"mu": 0.1, "restitution": 0.8, "contact": "unilateral", "restitution_curve": 0.3},
+          "initial": {"q": 0.0, "qdot": 7.0}}
+
+
+def test_lift_off_and_landing_times_fit_a_ball_in_a_bowl():
+    # what a microphone hears of a ball in a bowl: it lifts off, lands and bounces (physics.md,
+    # "Sensitivities" 10 differentiates them); 1e-5 s of noise
+    truth = scene_from_dict(FLYING)
+    events = [e for e in simulate(truth, samples=False).events if e.kind.value in ("lift_off", "landing")][:8]
+    rng = np.random.default_rng(27)
+    obs = observed_events(np.array([e.t for e in events]) + rng.normal(0, 1e-5, len(events)),
+                          kinds=[e.kind.value for e in events])
+    result = fit(truth.replace(mu=0.12, qdot0=7.1), obs, free=("mu", "qdot0"), weights=np.full(len(events), 1e5))
+    assert result.status == "converged", result.message
+    for name, value in (("mu", 0.1), ("qdot0", 7.0)):
+        assert abs(result.estimates[name] - value) <= 4 * result.stderr[name], (name, result.estimates, result.stderr)
+
+
+def test_flights_observed_on_a_bilateral_scene_are_refused_naming_the_kind():
+    obs = observed_events([0.5, 1.2], kinds=["lift_off", "landing"])
+    with pytest.raises(ValueError, match=r"observed.kind: landing and lift_off observed, but the scene's contact is "
+                                         r"bilateral .*physics.contact"):
+        fit(scene_from_dict({**FLYING, "physics": {"mu": 0.1, "restitution": 0.8}}), obs, free=("mu",))
+
+
+def test_a_fit_whose_every_trial_run_fails_says_so_instead_of_converged():
+    # the numeric fit's own run refuses a user curve's parameter values that were never prepared: every
+    # trial step fails, and the fit must not call the start a minimum (it was "converged")
+    scene = scene_from_dict({"curve": {"z": "a*(1 - cos(x/b))", "name": "fit-unprepared"},
+                             "parameters": {"a": 0.3, "b": 0.2}, "physics": {"mu": 0.05, "restitution": 0.7},
+                             "limiters": {"left": -0.3, "right": 0.3}, "initial": {"q": 0.0, "qdot": 4.0}})
+    times = [e.t for e in symvib.simulate(scene, samples=False).events if e.kind.value == "impact"][:4]
+    assert len(times) >= 2
+    result = fit(scene.replace(qdot0=4.2), observed_events(times, kinds=["impact"] * len(times)), free=("qdot0", "a"))
+    assert result.status == "runs_failed", result.message
+    assert "not prepared" in result.message and result.estimates["qdot0"] == 4.2

@@ -77,6 +77,7 @@ STATUSES = {
     "no_error_estimate": "converged; as many observations as parameters, so no error estimate without weights",
     "incomplete": "stopped where the model does not make every observed event (see message); try another start",
     "no_events": "the model makes none of the observed events at the start; give another start",
+    "runs_failed": "stopped: the run of every trial step from here failed (see message); try another start or bounds",
 }
 #: Largest ``|correlation|`` of two estimates that still counts as separated.
 IDENTIFIED = 1 - 1e-6
@@ -326,6 +327,10 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
     if not samples and observed.kinds and ("impact" in observed.kinds or "rest_on_limiter" in observed.kinds) \
             and scene.left is None and scene.right is None:
         raise ValueError("observed.kind: impacts observed, but the scene has no limiter to make them")
+    flying = sorted({"lift_off", "landing"} & set(observed.kinds or ())) if not samples else []
+    if flying and scene.contact != "unilateral":
+        raise ValueError(f"observed.kind: {' and '.join(flying)} observed, but the scene's contact is bilateral "
+                         "(a bead on a wire never flies); set physics.contact = \"unilateral\"")
     try:
         w = np.ones(m) if weights is None else np.asarray(weights, dtype=float).ravel()
     except (TypeError, ValueError):
@@ -434,21 +439,26 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
         A = w[:, None] * J
         scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
         g, H = A.T @ (w * r), A.T @ A
+        ran, failure = False, ""
         while True:
             step = np.linalg.lstsq(H + lam * np.diag(scale ** 2), -g, rcond=None)[0]
             trial = np.clip(x + step, lo, hi)
             try:
                 r_new, m_new, jacobian_new = problem.model(problem.at(trial), observed, free, problem.run)
                 new_cost = 0.5 * float(np.sum((w * r_new) ** 2))
-            except ValueError:                      # a run that failed there: as if the cost rose
-                new_cost = math.inf
+                ran = ran or bool(np.any(trial != x))
+            except ValueError as err:               # a run that failed there: as if the cost rose
+                new_cost, failure = math.inf, str(err)
             if new_cost <= cost:
                 break
             lam *= LAMBDA_UP
             if lam > LAMBDA_MAX:
                 break
-        if new_cost > cost:
-            status = "converged"
+        # No step lowers the cost: a minimum; unless every step away from x failed to run (a step
+        # damped to nothing then "succeeds" at x itself): the fit is stuck, not converged.
+        stuck = not ran and bool(failure)
+        if new_cost > cost or (stuck and np.array_equal(trial, x)):
+            status = "runs_failed" if stuck else "converged"
             break
         moved = np.abs(trial - x) <= xtol * (np.abs(x) + xtol)
         J_new, u_new = jacobian_new()
@@ -461,6 +471,8 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
     if matched < len(observed.t):
         status = "incomplete"
     message = STATUSES[status]
+    if status == "runs_failed":
+        message += f"; the last: {failure}"
     if not np.all(usable):
         message += f"; {int(np.sum(~usable))} observation(s) without derivatives left out of the steps"
     if matched < len(observed.t):
