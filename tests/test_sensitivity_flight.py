@@ -189,3 +189,31 @@ def test_a_tangential_landing_and_the_stick_edge_have_no_derivative():
     mu = 1.0 / ((1 + e) * vz)                          # |v_t| = mu (1 + e) |u| exactly
     tau = 2 * vz / G
     assert land(_Floor(), _Scene(mu, e), _flight(1.0, vz), tau, tau) == STICK_EDGE_REASON
+
+
+# --- positions at fixed times in flight (a tracked video of a ball) ---------------------------------
+
+
+def test_positions_in_flight_move_as_a_step_study_of_the_parabola_says():
+    from symvib.numeric.sample_sensitivity import sample_positions, sample_sensitivities
+
+    scene = scene_from_dict(BOUNCES)
+    res = simulate(scene)
+    lift, land1, land2 = (e.t for e in res.events[:3])
+    times = np.array([0.5 * (lift + land1), land1 + 0.3 * (land2 - land1), 0.2 * lift])   # in, in, before
+    sens = sample_sensitivities(res, times, wrt=("mu", "qdot0", "R"), coordinates="xz")
+    assert sens.reasons == ("", "", "")
+    np.testing.assert_allclose(sens.values[:2], np.column_stack(res.dense.position(times[:2])[:2]), rtol=1e-14)
+    for j, target in enumerate(resolve_wrt(scene, ("mu", "qdot0", "R"))):
+        x = parameter_value(scene, target)
+        estimates = []
+        for d in (FIRST_STEP * max(abs(x), 0.1) / 2 ** m for m in range(3)):
+            plus = sample_positions(simulate(with_parameters(scene, [target], [x + d])), times, "xz")
+            minus = sample_positions(simulate(with_parameters(scene, [target], [x - d])), times, "xz")
+            estimates.append((plus - minus) / (2 * d))
+        rich = [(4 * f - c) / 3 for c, f in zip(estimates, estimates[1:])]
+        got = sens.derivatives[:, :, j]
+        err = min(np.max(np.abs(r - got)) for r in rich)
+        assert err <= TOL * max(np.max(np.abs(got)), 1e-3), (target, got, rich)
+    q_in_flight = sample_sensitivities(res, times[:1], wrt="mu", coordinates="q")
+    assert np.isnan(q_in_flight.values[0, 0]) and "in flight" in q_in_flight.reasons[0]

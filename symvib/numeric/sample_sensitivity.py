@@ -14,7 +14,9 @@ kink, and ``Dq`` jumps from ``DL - v_before Dt`` to ``DL - v_after Dt``: a sampl
 there (within ``AT_IMPACT``) has no derivative, and says so.  Coordinates: ``q``; ``x, z`` with
 ``Dx = x'(q) Dq``, ``Dz = z'(q) Dq``; the arc length ``s`` from the initial
 position (as :class:`symvib.numeric.events.Samples`' ``s``), ``s = Integral_{q0}^{q}
-h du``, ``Ds = h(q) Dq - h(q0) Dq0``.
+h du``, ``Ds = h(q) Dq - h(q0) Dq0``.  In flight (a unilateral curve) the particle is on the
+parabola launched at ``t0`` from ``P0`` with ``V0``: ``x, z`` move as ``DP0 + DV0 (t - t0) - V(t)
+Dt0`` (physics.md, "Sensitivities" 10); ``q`` and ``s`` have no value there, and say so.
 
 Examples
 --------
@@ -115,25 +117,74 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
     tangents = interval_tangents(result, wrt, prepared=prepared, through=through)
     sens = tangents.sensitivities
     q, qdot = (np.asarray(a, dtype=float).reshape(-1) for a in dense.state(times))
+    flying = _flying(dense, times)
+    on = ~flying
     Dq, reasons = _position_tangents(result, tangents, times, q, qdot)
     for name in sens.notes:
         Dq[:, sens.wrt.index(name)] = np.nan
-    values, slopes = _coordinates(result, q, coordinates, prepared)
+    values, slopes = _coordinates(result, np.where(on, q, _stand_in_q(result)), coordinates, prepared)
     derivatives = slopes[:, :, None] * Dq[:, None, :]
     targets = resolve_wrt(result.scene, wrt)
     for j, (_, kind, name) in enumerate(targets):
         if kind == "scene" and name == "q0" and coordinates == "s":     # the arc length is measured from q0
             derivatives[:, 0, j] -= _h0(result, prepared)
-        elif kind == "curve" and coordinates != "q":    # the curve itself moves with its parameter
-            derivatives[:, :, j] += _curve_parameter_part(result, q, coordinates, name, prepared)
+        elif kind == "curve" and coordinates != "q" and on.any():    # the curve itself moves with its parameter
+            derivatives[on, :, j] += _curve_parameter_part(result, q[on], coordinates, name, prepared)
+    if flying.any():
+        _in_flight(result, tangents, times, flying, coordinates, values, derivatives, reasons)
     return SampleSensitivities(sens.wrt, times, COORDINATES[coordinates], values, derivatives, tuple(reasons))
 
 
+def _stand_in_q(result) -> float:
+    """A position on the curve to evaluate the coordinates at where a sample has none (in flight)."""
+    return float(result.scene.q0)
+
+
+def _flying(dense, times) -> np.ndarray:
+    """Which samples are in flight (a run with flights' dense output says; others never fly)."""
+    in_flight = getattr(dense, "in_flight", None)
+    if in_flight is None:
+        return np.zeros(len(times), dtype=bool)
+    return np.asarray(in_flight(times), dtype=bool).reshape(-1)
+
+
+def _in_flight(result, tangents, times, flying, coordinates, values, derivatives, reasons) -> None:
+    """The samples in flight, in place: ``x, z`` on the parabola and their derivatives at fixed time
+    from the flight's launch tangents; ``q`` and ``s`` NaN with a reason."""
+    g = float(result.scene.g)
+    starts = np.array([f.t0 for f in tangents.flights])
+    for k in np.flatnonzero(flying).tolist():
+        values[k], derivatives[k] = np.nan, np.nan
+        if coordinates != "xz":
+            reasons[k] = (f"in flight: the particle is off the curve, its {coordinates} has no value "
+                          "(coordinates='xz' has)")
+            continue
+        j = int(np.searchsorted(starts, times[k], side="right")) - 1
+        if j < 0:
+            reasons[k] = reasons[k] or "in a flight after an event without derivatives"
+            continue
+        f, tau = tangents.flights[j], float(times[k]) - tangents.flights[j].t0
+        vz = f.Vz - g * tau
+        values[k] = (f.X0 + f.Vx * tau, f.Z0 + f.Vz * tau - 0.5 * g * tau * tau)
+        derivatives[k, 0] = f.DX0 + f.DVx * tau - f.Vx * f.Dt0
+        derivatives[k, 1] = f.DZ0 + f.DVz * tau - vz * f.Dt0
+        reasons[k] = ""
+
+
 def sample_positions(result, t, coordinates="q", *, prepared=None) -> np.ndarray:
-    """The model's coordinates at times ``t`` (shape (n, len(COORDINATES[coordinates]))), no derivatives."""
+    """The model's coordinates at times ``t`` (shape (n, len(COORDINATES[coordinates]))), no derivatives;
+    in flight ``x, z`` on the parabola, ``q`` and ``s`` NaN."""
     times = _checked(result, t, coordinates)
-    q = np.asarray(result.dense.state(times)[0], dtype=float).reshape(-1)
-    return _coordinates(result, q, coordinates, prepared)[0]
+    dense = result.dense
+    q = np.asarray(dense.state(times)[0], dtype=float).reshape(-1)
+    flying = _flying(dense, times)
+    values = _coordinates(result, np.where(flying, _stand_in_q(result), q), coordinates, prepared)[0]
+    if flying.any():
+        values[flying] = np.nan
+        if coordinates == "xz":
+            x, z, _, _ = dense.position(times[flying])
+            values[flying, 0], values[flying, 1] = x, z
+    return values
 
 
 def _curve_parameter_part(result, q, coordinates, name, prepared) -> np.ndarray:

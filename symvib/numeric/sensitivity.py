@@ -108,10 +108,12 @@ class Leg:
 @dataclass(frozen=True)
 class Tangents:
     """A differentiated run: its :class:`Sensitivities` and the :class:`Leg` of every motion interval up
-    to the first event without derivatives (in time order)."""
+    to the first event without derivatives (in time order), and the flights launched before it
+    (:class:`symvib.numeric.sensitivity_flight.Flight`, in time order; a unilateral curve's)."""
 
     sensitivities: Sensitivities
     legs: tuple
+    flights: tuple = ()
 
 
 def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, through=None) -> Tangents:
@@ -197,10 +199,13 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
                  np.zeros(P), np.zeros(P))
     units = (Dmu, Dk, limiter_D)
     i, broken, first, flight = 0, "", None, None
+    flights = []
     while i <= last and not broken:
         ev = events[i]
         if ev.kind.code != EventCode.LANDING:       # sliding, up to a lift-off or a landing
             i, broken, first, flight = _slide(c, scene, events, i, last, path, units)
+            if flight is not None:
+                flights.append(flight)
             continue
         broken = _not_differentiable(ev, scene, c, EventCode.LANDING)   # physics.md, "Sensitivities" 10
         landed = broken or land(c, scene, flight, ev.t, ev.q)
@@ -211,6 +216,8 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
             column[i] = value
         path.D_landing_loss += landed.D_loss
         flight = landed.bounce
+        if flight is not None:
+            flights.append(flight)
         if flight is None:              # sliding resumes from the landing point
             path.q, path.w, path.Dq, path.Dw = landed.q, landed.w, landed.Dq, landed.Dw
             path.Dt, path.t = landed.Dt, ev.t
@@ -235,7 +242,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
         for column in (T, Q, VB, VA, *final.values()):
             column[..., j] = np.nan
     sens = Sensitivities(wrt, tuple(events), T, Q, VB, VA, tuple(reasons), final, notes)
-    return Tangents(sens, tuple(path.legs))
+    return Tangents(sens, tuple(path.legs), tuple(flights))
 
 
 @dataclass
