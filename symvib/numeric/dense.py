@@ -54,7 +54,7 @@ from symvib.numeric.layout import IntervalColumn
 from symvib.numeric.quadrature import rule
 from symvib.numeric.scenerow import scene_row
 
-__all__ = ["DenseOutput", "NEWTON_MAXITER", "NEWTON_RTOL"]
+__all__ = ["DenseOutput", "checked_times", "NEWTON_MAXITER", "NEWTON_RTOL"]
 
 #: Most iterations of the Newton solve of ``t(q) = t`` (it converges in about 5).
 NEWTON_MAXITER = 60
@@ -62,6 +62,18 @@ NEWTON_MAXITER = 60
 NEWTON_RTOL = 4.0 * np.finfo(float).eps
 #: The two halves of an interval: anchored at its start and at its end.
 START, END = 0, 1
+
+
+def checked_times(t, t_min: float, t_max: float, status: str) -> tuple:
+    """``(times, flat)``: ``t`` as an array and flattened, once every time is finite and in ``[t_min,
+    t_max]`` (else a ValueError naming ``t``, the span and the run's ``status``)."""
+    times = np.asarray(t, dtype=float)
+    flat = times.reshape(-1)
+    outside = ~np.isfinite(flat) | (flat < t_min) | (flat > t_max)
+    if outside.any():
+        raise ValueError(f"t: the state is defined on [{t_min:g}, {t_max:g}] s (status {status}), "
+                         f"got {flat[outside][0]!r}")
+    return times, flat
 
 
 @dataclass(frozen=True)
@@ -154,12 +166,7 @@ class DenseOutput:
         ValueError
             Naming ``t`` when a time is not finite or outside ``[t_min, t_max]``.
         """
-        times = np.asarray(t, dtype=float)
-        flat = times.reshape(-1)
-        outside = ~np.isfinite(flat) | (flat < self.t_min) | (flat > self.t_max)
-        if outside.any():
-            raise ValueError(f"t: the state is defined on [{self.t_min:g}, {self.t_max:g}] s "
-                             f"(status {self.result.status.value}), got {flat[outside][0]!r}")
+        times, flat = checked_times(t, self.t_min, self.t_max, self.result.status.value)
         q = np.full(flat.shape, float(self.result.q_final))
         qdot = np.full(flat.shape, float(self.result.qdot_final))
         inside = flat < float(self.result.t_final)

@@ -37,7 +37,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from symvib.numeric.dense import DenseOutput
+from symvib.numeric.dense import DenseOutput, checked_times
 from symvib.numeric.flight import path
 from symvib.numeric.flight_pieces import Arc, Slide
 from symvib.numeric.layout import StatusCode
@@ -145,13 +145,7 @@ class FlightDense:
         return np.where(past, -1, i)
 
     def _checked(self, t):
-        times = np.asarray(t, dtype=float)
-        flat = times.reshape(-1)
-        outside = ~np.isfinite(flat) | (flat < self.t_min) | (flat > self.t_max)
-        if outside.any():
-            raise ValueError(f"t: the state is defined on [{self.t_min:g}, {self.t_max:g}] s "
-                             f"(status {self.result.status.value}), got {flat[outside][0]!r}")
-        return times, flat
+        return checked_times(t, self.t_min, self.t_max, self.result.status.value)
 
     # -- the state -----------------------------------------------------------------------------------
 
