@@ -125,7 +125,9 @@ class Stretch:
         self.kappa_slope_max = (KAPPA_SAFETY * float(np.max(slope)) if finite.all() and np.all(np.isfinite(slope))
                                 else math.inf)
         # Between samples the curve may bulge out of their box by about a sample's length.
-        step = self.step = float(np.max(np.hypot(np.diff(self.x), np.diff(self.z))))
+        step = self.step = float(np.max(ds))
+        # each sample's longer neighbouring segment: how far the curve near it may come closer than it
+        self.local_step = np.maximum(np.concatenate(([0.0], ds)), np.concatenate((ds, [0.0])))
         self.box = (float(self.x.min()) - step, float(self.x.max()) + step, float(self.z.min()) - step,
                     float(self.z.max()) + step)
 
@@ -173,11 +175,14 @@ class Stretch:
         the side of ``n = (-z', x') / h`` (the particle's)."""
         d2 = (self.x - X) ** 2 + (self.z - Z) ** 2
         # The local minima of the samples' distance about as near as the nearest (within two samples'
-        # length): the one nearest in q to q_near (a curve over several turns has one per turn).
-        reach = (math.sqrt(float(d2.min())) + 2.0 * self.step) ** 2
+        # length, each sample's own and the nearest's: a steep stretch far off has long segments
+        # that must not make its far minima candidates): the one nearest in q to q_near (a curve
+        # over several turns has one per turn).
+        i0 = int(np.argmin(d2))
+        reach = math.sqrt(float(d2[i0])) + 2.0 * np.maximum(self.local_step, self.local_step[i0])
         last = len(self.q) - 1
         pad = np.concatenate(([np.inf], d2, [np.inf]))
-        minima = np.flatnonzero((d2 <= reach) & (d2 <= pad[:-2]) & (d2 <= pad[2:]))
+        minima = np.flatnonzero((d2 <= reach * reach) & (d2 <= pad[:-2]) & (d2 <= pad[2:]))
         i = int(minima[np.argmin(np.abs(self.q[minima] - self.q_near))])
         best = float(d2[i])
         a, b = self.q[max(i - 1, 0)], self.q[min(i + 1, len(self.q) - 1)]

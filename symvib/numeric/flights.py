@@ -167,6 +167,7 @@ def fly(scene, mod, cp, st, t, x0, z0, vx, vz, u, length, n_events, t_err=0.0, l
             return Flown(events, W_l, flights, landings, (t, q_acc, acc.v_after / h_acc), None)
         if law.u_after > 0.0:   # a bounce: the next flight from the landing point
             x0, z0 = xl, zl
+            st.q_near = ld.q
             vx, vz = law.u_after * -tz + law.v_after * tx, law.u_after * tx + law.v_after * tz
             u = law.u_after
         else:
