@@ -287,29 +287,27 @@ def landing(stretch, x0, z0, vx, vz, g, u, length):
                                   "deciding whether the flight lands")
         return stretch.motion(*path(t, x0, z0, vx, vz, g), g)
 
-    def dist(t):
-        return motion(t)[0]
-
     def speed(t):
         return math.hypot(vx, vz - g * t)
 
     v0 = speed(0.0)
     kmax = stretch.kappa_max
+    outside = (math.nan, math.nan, math.nan)
     if u > 0.0 and math.isfinite(kmax):
         t0 = u / (g + 2.0 * kmax * v0 * v0)   # d >= u t - A t^2 / 2 > 0 before 2 u / A
-        d0 = dist(t0) if t0 < t_end else math.nan
+        M0 = motion(t0) if t0 < t_end else outside
     else:   # a lift-off (or no curvature bound): from where the separation is past the graze threshold
         t0 = LIFT_START * max(v0 / g, math.sqrt(length / g))
-        d0 = dist(t0) if t0 < t_end else math.nan
-        while t0 < t_end and abs(d0) <= GRAZE * length:
+        M0 = motion(t0) if t0 < t_end else outside
+        while t0 < t_end and abs(M0[0]) <= GRAZE * length:
             t0 *= 2.0
-            d0 = dist(t0) if t0 < t_end else math.nan
+            M0 = motion(t0) if t0 < t_end else outside
     if not t0 < t_end:
         x, z, _, _ = path(t_end, x0, z0, vx, vz, g)
         return Landing(LEFT_STRETCH, t_end, stretch.nearest(x, z)[0])
-    if d0 <= 0.0:   # into the curve at once (a graze on the wrong side): lands there
+    if M0[0] <= 0.0:   # into the curve at once (a graze on the wrong side): lands there
         return Landing(TOUCHED, t0, stretch.nearest(*path(t0, x0, z0, vx, vz, g)[:2])[0])
-    stack = [(t0, motion(t0), t_end, motion(t_end))]
+    stack = [(t0, M0, t_end, motion(t_end))]
     ks = stretch.kappa_slope_max
     while stack:
         ta, Ma, tb, Mb = stack.pop()

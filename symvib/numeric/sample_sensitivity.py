@@ -122,7 +122,8 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
     Dq, reasons = _position_tangents(result, tangents, times, q, qdot)
     for name in sens.notes:
         Dq[:, sens.wrt.index(name)] = np.nan
-    values, slopes = _coordinates(result, np.where(on, q, _stand_in_q(result)), coordinates, prepared)
+    # (in flight the coordinates are evaluated at q0, a position on the curve, and replaced below)
+    values, slopes = _coordinates(result, np.where(on, q, float(result.scene.q0)), coordinates, prepared)
     derivatives = slopes[:, :, None] * Dq[:, None, :]
     targets = resolve_wrt(result.scene, wrt)
     for j, (_, kind, name) in enumerate(targets):
@@ -133,11 +134,6 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
     if flying.any():
         _in_flight(result, tangents, times, flying, coordinates, values, derivatives, reasons)
     return SampleSensitivities(sens.wrt, times, COORDINATES[coordinates], values, derivatives, tuple(reasons))
-
-
-def _stand_in_q(result) -> float:
-    """A position on the curve to evaluate the coordinates at where a sample has none (in flight)."""
-    return float(result.scene.q0)
 
 
 def _flying(dense, times) -> np.ndarray:
@@ -178,7 +174,7 @@ def sample_positions(result, t, coordinates="q", *, prepared=None) -> np.ndarray
     dense = result.dense
     q = np.asarray(dense.state(times)[0], dtype=float).reshape(-1)
     flying = _flying(dense, times)
-    values = _coordinates(result, np.where(flying, _stand_in_q(result), q), coordinates, prepared)[0]
+    values = _coordinates(result, np.where(flying, float(result.scene.q0), q), coordinates, prepared)[0]
     if flying.any():
         values[flying] = np.nan
         if coordinates == "xz":

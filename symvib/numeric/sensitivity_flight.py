@@ -100,8 +100,9 @@ class Landed(NamedTuple):
 
 
 def _frame(c, q, Dq):
-    """``(x, z, T, n, Dalpha, DP)`` at ``q`` moved by ``Dq``: the point, the unit tangent and normal,
-    and the tangents of the tangent angle and of the point (the curve's parameters included)."""
+    """``(x, z, dx, dz, T, n, Dalpha, DP)`` at ``q`` moved by ``Dq``: the point, ``(x', z')``, the unit
+    tangent and normal, and the tangents of the tangent angle and of the point (the curve's
+    parameters included)."""
     x, z = float(c.x(q)), float(c.z(q))
     dx, dz = float(c.dx(q)), float(c.dz(q))
     h = math.hypot(dx, dz)
@@ -109,14 +110,14 @@ def _frame(c, q, Dq):
     n = np.array([-T[1], T[0]])
     Dalpha = float(c.dalpha(q)) * Dq + c.geometry_dp("alpha", q)[0]
     DP = np.outer(np.array([dx, dz]), Dq) + np.stack([c.geometry_dp("x", q)[0], c.geometry_dp("z", q)[0]])
-    return x, z, T, n, Dalpha, DP
+    return x, z, dx, dz, T, n, Dalpha, DP
 
 
 def launch(c, q, v, Dq, Dv, t, Dt) -> Flight:
     """The flight from a lift-off at ``q`` (time ``t``) with the signed speed ``v = h qdot``, and the
     tangents ``Dq``, ``Dv``, ``Dt`` of the lift-off (``c``: the run's
     :class:`~symvib.numeric.sensitivity_curve.CurveFunctions`)."""
-    x, z, T, n, Dalpha, DP = _frame(c, q, Dq)
+    x, z, _, _, T, n, Dalpha, DP = _frame(c, q, Dq)
     DV = np.outer(T, Dv) + v * np.outer(n, Dalpha)
     return Flight(t, Dt, x, z, v * T[0], v * T[1], DP[0], DP[1], DV[0], DV[1])
 
@@ -150,12 +151,11 @@ def land(c, scene, flight: Flight, t_land: float, q_land: float) -> Landed | str
     g, mu, e = c.g, scene.mu, scene.restitution_curve
     tau = t_land - flight.t0
     Vx, Vz = flight.at(tau, g)
-    x, z, T, n, Dalpha_fixed, DP_fixed = _frame(c, q_land, np.zeros_like(flight.DX0))
+    x, z, dx, dz, T, n, Dalpha_fixed, DP_fixed = _frame(c, q_land, np.zeros_like(flight.DX0))
     u = -T[1] * Vx + T[0] * Vz
     v_t = T[0] * Vx + T[1] * Vz
     if not abs(u) > TANGENTIAL_LANDING * math.hypot(Vx, Vz):
         return TANGENTIAL_LANDING_REASON
-    dx, dz = float(c.dx(q_land)), float(c.dz(q_land))
     # The landing condition differentiated in (q_L, tau); DP_fixed holds (dx/dp, dz/dp) at fixed q.
     rhs_x = flight.DX0 + flight.DVx * tau - DP_fixed[0]
     rhs_z = flight.DZ0 + flight.DVz * tau - DP_fixed[1]
