@@ -87,6 +87,8 @@ LAMBDA_UP, LAMBDA_DOWN = 10.0, 0.3
 LAMBDA_MIN, LAMBDA_MAX = 1e-12, 1e16
 #: Relative step that ends a stage of the continuation before the last (the last uses ``xtol``).
 STAGE_XTOL = 1e-5
+#: Events per free parameter fitted in the continuation's first stage (:func:`_stages`).
+FIRST_STAGE = 2
 
 
 @dataclass(frozen=True)
@@ -392,12 +394,14 @@ def _stages(n_obs: int, n_free: int) -> list:
     """How many observed events each stage of the continuation fits: the first events depend least
     on how far the start is from the answer, so fit them first, then twice as many, ..., then all
     (a fit of every event from a distant start can stop where the model's later events are matched
-    to the wrong observed ones).
+    to the wrong observed ones).  The first stage fits :data:`FIRST_STAGE` times as many events as
+    free parameters: with exactly as many, its minimum is a root (every residual 0), which takes
+    Levenberg-Marquardt many short steps and which the next stage moves away from anyway.
 
-    >>> _stages(20, 4), _stages(3, 2)
-    ([4, 8, 16, 20], [2, 3])
+    >>> _stages(20, 4), _stages(3, 2), _stages(40, 2)
+    ([8, 16, 20], [3], [4, 8, 16, 32, 40])
     """
-    stages, n = [], min(n_obs, max(n_free, 2))
+    stages, n = [], min(n_obs, max(FIRST_STAGE * n_free, 2))
     while n < n_obs:
         stages.append(n)
         n *= 2
