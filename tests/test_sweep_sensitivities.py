@@ -1,6 +1,7 @@
 """Sensitivity columns of a sweep (symvib/numeric/sweep/sensitivity_columns.py): the single-scene
 derivatives per row, a finite difference across neighbouring rows, NaN with a reason code."""
 import json
+import random
 import subprocess
 import sys
 
@@ -9,8 +10,16 @@ import pytest
 
 import symvib
 from symvib.numeric.scene import SceneError, resolve_scene, scene_from_dict
+from symvib.numeric.sensitivity_flight import ACCUMULATION_REASON, STICK_EDGE_REASON, TANGENTIAL_LANDING_REASON
 from symvib.numeric.sweep import load_sweep, make_spec, sweep
-from symvib.numeric.sweep.sensitivity_columns import QUANTITIES, REASONS, column_names
+from symvib.numeric.sweep.sensitivity_columns import (
+    FLIGHT_QUANTITIES,
+    OTHER_REASON,
+    QUANTITIES,
+    REASONS,
+    column_names,
+    reason_code,
+)
 
 BASE = resolve_scene("paper-parabola").replace(k=0.8)
 WRT = ("mu", "k", "qdot0")
@@ -134,3 +143,43 @@ def test_every_sweepable_field_has_a_scene_attribute_for_the_sensitivity_rows():
     from symvib.numeric.sweep.sensitivity_columns import SCENE_ATTRIBUTES
 
     assert set(FIELDS) == set(SCENE_ATTRIBUTES)
+
+
+# --- a sweep of unilateral scenes: the landing loss's derivatives, and why flights have none ---------
+
+def test_a_unilateral_sweep_differentiates_the_landing_loss_as_the_single_scene_does():
+    from test_flight import random_scene
+
+    scene, name = random_scene(random.Random(5), 0)     # a circle: lifts off, lands, slides on to an arrest
+    assert name == "circle"
+    res = sweep(scene, {"qdot": f"{scene.qdot0 * 0.999},{scene.qdot0}"}, backend="python", sensitivities=("mu", "q0"))
+    assert column_names(("mu", "q0"), scene)[-3:] == ["d_landing_loss_d_mu", "d_landing_loss_d_q0",
+                                                      "sensitivity_reason"]
+    assert [c for c in res.columns if c.startswith("d_")] == column_names(("mu", "q0"), scene)[:-1]
+    for row in (0, 1):
+        assert res["landings"][row] >= 1 and res["landing_loss"][row] > 0
+        final = symvib.simulate(scene.replace(qdot0=float(res["initial.qdot"][row]))).sensitivities(
+            wrt=("mu", "q0")).final
+        for quantity in QUANTITIES + FLIGHT_QUANTITIES:
+            for j, p in enumerate(("mu", "q0")):
+                assert res[f"d_{quantity}_d_{p}"][row] == pytest.approx(final[quantity][j], rel=1e-12, abs=1e-15)
+    assert np.all(np.isfinite(res["d_landing_loss_d_mu"])) and np.all(res["sensitivity_reason"] == 0)
+    assert "d_landing_loss_d_mu" not in column_names(("mu",), BASE)       # (a bilateral sweep has none)
+
+
+def test_a_bouncing_ball_accumulation_has_its_own_reason_code_in_a_sweep():
+    bounces = scene_from_dict({"curve": {"shape": "circle"}, "parameters": {"R": 1.0},
+                               "physics": {"mu": 0.1, "restitution": 0.8, "contact": "unilateral",
+                                           "restitution_curve": 0.3},
+                               "initial": {"q": 0.0, "qdot": 7.0}})
+    res = sweep(bounces, {"qdot": "7"}, backend="python", sensitivities=("mu",))
+    assert REASONS[res["sensitivity_reason"][0]] == "a bouncing-ball accumulation"
+    assert np.isnan(res["d_landing_loss_d_mu"][0])
+
+
+@pytest.mark.parametrize("reason, code", [
+    (TANGENTIAL_LANDING_REASON, 11), (STICK_EDGE_REASON, 12), (ACCUMULATION_REASON, 13),
+    ("a Zeno accumulation of impacts (infinitely many events)", 4), ("something new", OTHER_REASON)])
+def test_each_flight_reason_has_its_code_and_old_codes_keep_their_meaning(reason, code):
+    assert reason_code(reason) == code
+    assert REASONS[OTHER_REASON].startswith("another reason") and REASONS[9].endswith("no derivative in qdot0")

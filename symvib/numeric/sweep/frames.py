@@ -114,7 +114,7 @@ def dataset(spec, columns: dict, ident: str, *, store: bool = False):
         data[name] = (dims, columns[name].reshape(shape), attrs)
     for name in flight_columns(scene):
         data[name] = (dims, columns[name].reshape(shape), column_attrs(scene, name))
-    for name in sensitivity_columns(spec.sensitivities):
+    for name in sensitivity_columns(spec.sensitivities, scene):
         data[name] = (dims, columns[name].reshape(shape), sensitivity_attrs(scene, name, COLUMN_LABELS))
     if spec.log_events:
         log = columns["event_log"].reshape(shape + (spec.log_events, EVENT_WIDTH))
@@ -146,7 +146,7 @@ def dataframe(spec, columns: dict, ident: str):
     for name in SUMMARY_COLUMNS + tuple(flight_columns(scene)):
         data[name] = np.asarray(columns[name])
         attrs[name] = column_attrs(scene, name)
-    for name in sensitivity_columns(spec.sensitivities):
+    for name in sensitivity_columns(spec.sensitivities, scene):
         data[name] = np.asarray(columns[name])
         attrs[name] = sensitivity_attrs(scene, name, COLUMN_LABELS)
     data["status"] = pd.Categorical.from_codes(data["status"], categories=list(STATUSES))

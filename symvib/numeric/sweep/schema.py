@@ -83,7 +83,8 @@ def column_names(spec) -> list:
     columns (a unilateral scene's: :mod:`~symvib.numeric.sweep.flights`), the sensitivity columns (when
     asked: :mod:`~symvib.numeric.sweep.sensitivity_columns`), ``event_log``."""
     return (["row"] + [a.field for a in spec.axes] + list(SUMMARY_COLUMNS) + flights.column_names(spec.scene)
-            + sensitivity_columns(getattr(spec, "sensitivities", ())) + (["event_log"] if spec.log_events else []))
+            + sensitivity_columns(getattr(spec, "sensitivities", ()), spec.scene)
+            + (["event_log"] if spec.log_events else []))
 
 
 def column_dtype(name: str) -> np.dtype:

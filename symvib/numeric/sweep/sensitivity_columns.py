@@ -4,7 +4,8 @@
 per scene, the derivatives of the summary columns ``t_final``, ``q_final``,
 ``friction_work`` and ``impact_loss`` with respect to each named parameter,
 ``d_<column>_d_<parameter>`` (``d_t_final_d_mu``: the names of the summary columns and of
-:attr:`symvib.numeric.sensitivity.Sensitivities.final`), and ``sensitivity_reason``, a code
+:attr:`symvib.numeric.sensitivity.Sensitivities.final`; a sweep of unilateral scenes adds
+``landing_loss``'s, :data:`FLIGHT_QUANTITIES`), and ``sensitivity_reason``, a code
 of :data:`REASONS` that says why a row's derivatives are NaN (0: they exist).  A parameter is
 one of :data:`~symvib.numeric.sensitivity.PARAMETERS` or of the curve's, by its name (``p``)
 or as ``parameters.p`` (physics.md, "Sensitivities" 9), as ``Result.sensitivities`` takes it.
@@ -18,6 +19,9 @@ Examples
 --------
 >>> column_names(("mu", "k"))[:3], column_names(("mu",))[-1]
 (['d_t_final_d_mu', 'd_t_final_d_k', 'd_q_final_d_mu'], 'sensitivity_reason')
+>>> from symvib.numeric.scene import resolve_scene
+>>> column_names(("mu",), resolve_scene("paper-parabola").replace(contact="unilateral"))[-2:]
+['d_landing_loss_d_mu', 'sensitivity_reason']
 >>> REASONS[reason_code("a Zeno accumulation of impacts (infinitely many events)")]
 'a Zeno accumulation of impacts'
 """
@@ -31,15 +35,18 @@ from symvib.numeric.scene import SceneError
 from symvib.numeric.sensitivity import PARAMETERS
 from symvib.numeric.sensitivity_curve import CURVE_PREFIX, resolve_wrt
 
-__all__ = ["QUANTITIES", "REASON_COLUMN", "REASONS", "column_names", "check_wrt", "reason_code", "compute",
+__all__ = ["QUANTITIES", "FLIGHT_QUANTITIES", "quantities", "REASON_COLUMN", "REASONS", "OTHER_REASON",
+           "column_names", "check_wrt", "reason_code", "compute",
            "column_attrs", "scene_of_row"]
 
 #: Summary columns whose derivatives a sweep can add (the keys of ``Sensitivities.final``).
 QUANTITIES = ("t_final", "q_final", "friction_work", "impact_loss")
+#: Those a sweep of unilateral scenes adds (its flight column ``landing_loss``).
+FLIGHT_QUANTITIES = ("landing_loss",)
 #: The integer column that says why a row's derivatives are NaN.
 REASON_COLUMN = "sensitivity_reason"
 #: Why a row has no derivatives, by code (0: it has them); matched to the sensitivities' reasons by
-#: the words in :data:`_KEYWORDS`.
+#: the words in :data:`_KEYWORDS`.  The codes are stored in sweep files: new ones are appended.
 REASONS = (
     "",
     "the run did not end at rest (no final state to differentiate)",
@@ -52,9 +59,15 @@ REASONS = (
     "the run failed",
     "the run starts at rest: no derivative in qdot0",
     "another reason (see Result.sensitivities())",
+    "a tangential landing (the flight touches the curve)",
+    "a landing on the edge between sticking and sliding",
+    "a bouncing-ball accumulation",
 )
+#: The code of a reason none of :data:`_KEYWORDS` names.
+OTHER_REASON = 10
 _KEYWORDS = ((2, "friction cone"), (3, "grazing"), (4, "zeno"), (5, "normal force"), (6, "leaves the curve"),
-             (7, "quadrature"), (9, "starts at rest"))
+             (7, "quadrature"), (9, "starts at rest"), (11, "tangential landing"),
+             (12, "between sticking and sliding"), (13, "bouncing-ball accumulation"))
 #: Varied field -> the :class:`~symvib.numeric.scene.Scene` attribute it sets.
 SCENE_ATTRIBUTES = {"initial.q": "q0", "initial.qdot": "qdot0", "physics.mu": "mu", "physics.alpha0": "alpha0",
                     "physics.mu_s": "mu_s", "physics.alpha0_s": "alpha0_s", "physics.restitution": "k",
@@ -64,9 +77,15 @@ SCENE_ATTRIBUTES = {"initial.q": "q0", "initial.qdot": "qdot0", "physics.mu": "m
 PARAMETER_UNITS = {"mu": "1", "k": "1", "qdot0": "{q}/s", "q0": "{q}", "left": "{q}", "right": "{q}"}
 
 
-def column_names(wrt) -> list:
-    """The columns a sweep with sensitivities ``wrt`` adds, in order."""
-    return [f"d_{quantity}_d_{p}" for quantity in QUANTITIES for p in wrt] + ([REASON_COLUMN] if wrt else [])
+def quantities(scene=None) -> tuple:
+    """The summary columns differentiated in a sweep of ``scene``: :data:`QUANTITIES`, and
+    :data:`FLIGHT_QUANTITIES` where its contact is unilateral."""
+    return QUANTITIES + (FLIGHT_QUANTITIES if getattr(scene, "contact", "bilateral") == "unilateral" else ())
+
+
+def column_names(wrt, scene=None) -> list:
+    """The columns a sweep of ``scene`` with sensitivities ``wrt`` adds, in order."""
+    return [f"d_{quantity}_d_{p}" for quantity in quantities(scene) for p in wrt] + ([REASON_COLUMN] if wrt else [])
 
 
 def check_wrt(scene, wrt, axes=()) -> tuple:
@@ -105,7 +124,7 @@ def check_wrt(scene, wrt, axes=()) -> tuple:
 def reason_code(reason: str) -> int:
     """The :data:`REASONS` code of a reason text of :class:`~symvib.numeric.sensitivity.Sensitivities`."""
     text = reason.lower()
-    return next((code for code, word in _KEYWORDS if word in text), len(REASONS) - 1)
+    return next((code for code, word in _KEYWORDS if word in text), OTHER_REASON)
 
 
 def scene_of_row(scene, axes, values, i: int):
@@ -137,7 +156,8 @@ def compute(spec, values, status, backend: str = "auto") -> dict:
 
     wrt = spec.sensitivities
     n = len(status)
-    out = {name: np.full(n, np.nan) for name in column_names(wrt)}
+    differentiated = quantities(spec.scene)
+    out = {name: np.full(n, np.nan) for name in column_names(wrt, spec.scene)}
     out[REASON_COLUMN] = np.zeros(n, dtype=np.int64)
     prepared = prepared_of(spec.scene)
     for i in range(n):
@@ -152,17 +172,17 @@ def compute(spec, values, status, backend: str = "auto") -> dict:
             out[REASON_COLUMN][i] = 8
             continue
         sens = sensitivities(result, wrt, prepared=prepared)
-        for quantity in QUANTITIES:
+        for quantity in differentiated:
             for j, p in enumerate(wrt):
                 out[f"d_{quantity}_d_{p}"][i] = sens.final[quantity][j]
-        out[REASON_COLUMN][i] = _row_reason(sens, result)
+        out[REASON_COLUMN][i] = _row_reason(sens, result, differentiated)
     return out
 
 
-def _row_reason(sens, result) -> int:
-    """Why a row's derivatives are NaN: its first event without them, else a start at rest, else the
-    run's end; 0 where every derivative is a number."""
-    finals = np.concatenate([sens.final[q] for q in QUANTITIES])
+def _row_reason(sens, result, differentiated=QUANTITIES) -> int:
+    """Why a row's derivatives (of the columns ``differentiated``) are NaN: its first event without
+    them, else a start at rest, else the run's end; 0 where every derivative is a number."""
+    finals = np.concatenate([sens.final[q] for q in differentiated])
     if np.all(np.isfinite(finals)):
         return 0
     first = next((why for why in sens.reasons if why), "")
@@ -170,7 +190,7 @@ def _row_reason(sens, result) -> int:
         return reason_code(first)
     if sens.notes:
         return reason_code(next(iter(sens.notes.values())))
-    return 1 if result.status.value not in ("arrested", "resting_on_limiter") else len(REASONS) - 1
+    return 1 if result.status.value not in ("arrested", "resting_on_limiter") else OTHER_REASON
 
 
 def column_attrs(scene, name: str, quantity_labels: dict) -> dict:

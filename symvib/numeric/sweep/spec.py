@@ -140,7 +140,7 @@ class SweepSpec:
         """Bytes of the columns of one full chunk (row, varied fields, summary, flights, sensitivities,
         event log)."""
         per_row = (1 + len(self.axes) + len(SUMMARY_COLUMNS) + len(flight_columns(self.scene))
-                   + len(sensitivity_columns(self.sensitivities)) + EVENT_WIDTH * self.log_events) * ITEM
+                   + len(sensitivity_columns(self.sensitivities, self.scene)) + EVENT_WIDTH * self.log_events) * ITEM
         return min(self.chunk, self.count) * per_row
 
     def scalars(self, values, rows=None) -> tuple:
