@@ -325,3 +325,19 @@ def test_a_sweep_refuses_a_user_curve_with_a_singular_point_in_its_domain(tmp_pa
     assert 0.3 < float(lo) < 0.3 + 1e-9 and hi == "oo"
     declared = scene.replace(shape=dataclasses.replace(scene.shape, domain=(lo, hi)))
     _refuse_singular_domain(declared, prepare(declared))  # accepted
+
+
+@pytest.mark.parametrize("length", [1.0, 1e-3, 1e-6, 1e-9])
+def test_a_smooth_minimum_of_h_far_below_the_scan_grid_is_not_a_cusp(length):
+    # A graph's h = sqrt(1 + z'^2) >= 1 has no cusp; at micrometres the grid (q_scale = 1) sees h a
+    # million times its minimum next to each minimum, which was taken for a cusp (initial.q refused).
+    c = graph("a*((x/b)**2 - 1)**2", params=("a", "b"))
+    r = regular_interval(c, {"a": 0.125 * length, "b": length}, -0.7 * length, (-INF, INF))
+    assert (r.lo, r.hi) == (-INF, INF), r
+
+
+@pytest.mark.parametrize("length", [1.0, 1e-3])
+def test_a_cusp_at_a_small_length_scale_still_bounds_the_interval(length):
+    c = parametric("q**3/L**2", "q**2/L", params=("L",))      # the semicubical cusp at 0, at length L
+    r = regular_interval(c, {"L": length}, 0.5 * length, (-INF, INF))
+    assert 0.0 <= r.lo <= 1e-2 * length and r.hi == INF and r.lo_reason == "h is zero (a cusp)", r

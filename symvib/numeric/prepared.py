@@ -42,8 +42,9 @@ __all__ = ["Prepared", "NotPrepared", "prepared_of", "prepared_from_pieces", "ne
 
 #: Suffix of the record of a module's singular pieces, beside the module in the kernel cache.
 RECORD_SUFFIX = ".regular.json"
-#: Version of the record's layout (a record of another is searched again).
-RECORD_FORMAT = 1
+#: Version of the record (a record of another is searched again): its layout, and 2 since a smooth
+#: minimum of ``h`` far below the scan grid's spacing is no longer taken for a cusp.
+RECORD_FORMAT = 2
 #: Most parameter sets a record keeps (the oldest go first): a sweep of a pole's position
 #: does not grow it without bound.
 MAX_RECORD_ENTRIES = 256

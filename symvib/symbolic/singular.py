@@ -70,6 +70,12 @@ CUSP_RTOL = 1e-6
 #: (0.58 for ``p = 1/2``), while a constant ``h`` (a line, a circle: every point a local minimum
 #: within rounding) is not searched 4000 times.
 CUSP_DIP = 0.9
+#: Steps between the probes of :func:`_levels_off` (each this many times closer to the minimum than
+#: the last), and how close the last one comes: this many rounding units of ``q``.  At a cusp
+#: ``h ~ c |q - q*|**p`` (``p >= 1/2``) is then still 30 or more times its value at the minimum.
+LEVEL_STEP, LEVEL_FLOOR = 10.0, 1e3
+#: ``h`` within this factor of its value at the minimum: it has levelled off (a smooth minimum).
+LEVEL_RATIO = 2.0
 #: Functions of the geometry searched symbolically (the others only numerically: SymPy is slow on them).
 SYMBOLIC_LABELS = ("x", "z", "x'", "z'")
 
@@ -206,7 +212,7 @@ def _poles(labels, fns, grid, flags) -> list:
                 (np.minimum(np.abs(ends_a), np.abs(ends_b)) > POLE_RATIO * size)
         pieces += [(float(a[i]), float(b[i]), label, NOT_FINITE) for i in np.flatnonzero(pole)]
         if label == "h":
-            pieces += _cusps(fn, grid, v, ok)
+            pieces += _cusps(fn, grid, v, ok, _speed(labels, fns))
     return pieces
 
 
@@ -233,27 +239,46 @@ def _bisect_sign_changes(fn, a: np.ndarray, b: np.ndarray, fa: np.ndarray) -> tu
     return a, b
 
 
-def _cusps(fn, grid, v, ok) -> list:
-    """Points where ``h`` has a local minimum that reaches 0 (cusps), by golden-section search."""
+def _speed(labels, fns):
+    """``hypot(x', z')`` from the components (no rounding floor near a cusp, where ``h`` written as
+    the square root of a difference keeps about ``sqrt(eps)``), or None without them."""
+    named = dict(zip(labels, fns))
+    if "x'" not in named or "z'" not in named:
+        return None
+    return lambda q: np.hypot(_real(named["x'"], q), _real(named["z'"], q))
+
+
+def _golden_minimum(fn, a: float, b: float) -> float:
+    """A local minimum of ``fn`` in ``[a, b]`` by golden-section search, to adjacent doubles."""
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    for _ in range(BISECT_STEPS * 2):
+        c, d = b - ratio * (b - a), a + ratio * (b - a)
+        if not a < c < d < b:
+            break
+        fc, fd = _real(fn, np.array([c, d]))
+        if fc <= fd:
+            b = d
+        else:
+            a = c
+    return 0.5 * (a + b)
+
+
+def _cusps(fn, grid, v, ok, speed=None) -> list:
+    """Points where ``h`` has a local minimum that reaches 0 (cusps), by golden-section search; with
+    ``speed`` (``h`` from its components) a minimum where the speed levels off above 0 is none
+    (:func:`_levels_off`)."""
     out = []
     inside = (ok[:-2] & ok[1:-1] & ok[2:] & (v[1:-1] <= v[:-2]) & (v[1:-1] <= v[2:])
               & (v[1:-1] <= CUSP_DIP * np.maximum(v[:-2], v[2:])))
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
     for j in np.flatnonzero(inside) + 1:
-        a, b = grid[j - 1], grid[j + 1]
-        for _ in range(BISECT_STEPS * 2):
-            c, d = b - ratio * (b - a), a + ratio * (b - a)
-            if not a < c < d < b:
-                break
-            fc, fd = _real(fn, np.array([c, d]))
-            if fc <= fd:
-                b = d
-            else:
-                a = c
-        m = 0.5 * (a + b)
+        m = _golden_minimum(fn, grid[j - 1], grid[j + 1])
         small = CUSP_RTOL * max(v[j - 1], v[j + 1])
         if abs(_real(fn, np.array([m]))[0]) > small:
             continue
+        if speed is not None:
+            m_speed = _golden_minimum(speed, grid[j - 1], grid[j + 1])
+            if _levels_off(speed, m_speed, abs(speed(np.array([m_speed]))[0]), grid[j + 1] - grid[j]):
+                continue
         # h is at rounding level on a small interval around the cusp: keep all of it.
         edges = []
         for far in (grid[j - 1], grid[j + 1]):
@@ -269,6 +294,27 @@ def _cusps(fn, grid, v, ok) -> list:
             edges.append(far)
         out.append((float(edges[0]), float(edges[1]), "h", CUSP))
     return out
+
+
+def _levels_off(fn, m: float, h_m: float, spacing: float) -> bool:
+    """Whether the speed ``fn`` comes within :data:`LEVEL_RATIO` of its minimum ``h_m`` (at ``m``) on
+    both sides somewhere between ``spacing`` and :data:`LEVEL_FLOOR` rounding units of ``m``: a
+    smooth minimum above 0, not a cusp.
+
+    The grid's test (``h_m`` far below ``h`` at the neighbouring grid points) cannot tell the two
+    apart where ``h`` varies on a length far below the grid's spacing: a user curve whose
+    parameters are micrometres, scanned with ``q_scale = 1``, has ``h`` at the grid points a
+    million times its value at a minimum of ``h = sqrt(1 + z'^2) >= 1``.  Near a cusp the speed
+    from its components keeps falling towards ``h_m`` as the probes close in, down to rounding.
+    """
+    floor = LEVEL_FLOOR * np.spacing(max(1.0, abs(m)))
+    step = spacing / LEVEL_STEP
+    while step >= floor:
+        around = np.abs(_real(fn, np.array([m - step, m + step])))
+        if np.all(around <= LEVEL_RATIO * h_m):
+            return True
+        step /= LEVEL_STEP
+    return False
 
 
 def _corners(items, qsym, labels, fns, lo: float, hi: float) -> list:
