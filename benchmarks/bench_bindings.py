@@ -51,11 +51,11 @@ import functools, json, sys, time, warnings
 warnings.simplefilter("ignore")
 sys.path.insert(0, {root!r})
 from symvib.checks.corpus import entry
-from symvib.numeric import driver
+from symvib.numeric import backends, driver
 from symvib.numeric.engine.bind import bind
 from symvib.numeric.scene import scene_from_dict
 from symvib.prepare import prepare
-driver.bind = functools.partial(bind, shared={shared!r})
+backends.bind = functools.partial(bind, shared={shared!r})
 out = {{}}
 for name in {names!r}:
     scene = scene_from_dict(entry(name).scene())
@@ -73,10 +73,10 @@ warnings.simplefilter("ignore")
 sys.path.insert(0, {root!r})
 import numba, numpy as np
 numba.set_num_threads(1)
-from symvib.numeric import driver
+from symvib.numeric import backends, driver
 from symvib.numeric.engine.bind import bind
 from symvib.numeric.scene import load_scene
-driver.bind = functools.partial(bind, shared={shared!r})
+backends.bind = functools.partial(bind, shared={shared!r})
 scene = load_scene({root!r} + "/symvib/scenes/paper-parabola.toml")
 {grid}times, events = [], 0
 for _ in range({rounds}):

@@ -5,7 +5,7 @@ Run from the project folder (numba recommended)::
     python benchmarks/bench_samples.py [--max-events 32000]
 
 For a frictionless, ideally elastic parabola scene bounded by ``max_events``
-(1k, 2k, ... events), one run logs its intervals; then ``driver._samples``
+(1k, 2k, ... events), one run logs its intervals; then ``run_samples.samples_of``
 (one pass of the engine, one stable sort) builds the samples from the log at the
 default density.  The time per event should stay flat as the events double.
 (The former quadratic code, ``nodes[index == i]`` per interval, took 10-100 times
@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
-from symvib.numeric import driver  # noqa: E402
+from symvib.numeric import driver, run_samples  # noqa: E402
 from symvib.numeric.engine import bind  # noqa: E402
 from symvib.numeric.kernels import load  # noqa: E402
 from symvib.numeric.scene import resolve_scene as _resolve_scene  # noqa: E402
@@ -46,7 +46,7 @@ def main(argv=None) -> int:
         out = eng.simulate(cp, row, R, True)
         ni, ivs = out.n_intervals, out.intervals
         start = time.perf_counter()
-        S = driver._samples(eng, cp, row, ivs, ni, R, sc, mod, pieces)
+        S = run_samples.samples_of(eng, cp, row, ivs, ni, R, sc, mod, pieces)
         elapsed = time.perf_counter() - start
         print(f"{n:>8} {len(S.t):>10} {elapsed:>10.3f} {1e6 * elapsed / n:>10.1f}")
         n *= 2

@@ -4,7 +4,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symvib.numeric.driver import backend_available, simulate
+from symvib.numeric.backends import backend_available
+from symvib.numeric.driver import simulate
 from symvib.numeric.scene import load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "symvib" / "scenes"
@@ -63,13 +64,13 @@ def test_the_shared_engine_gives_the_events_of_the_specialized_one():
 
 
 def test_the_first_numba_run_leaves_its_marker_and_auto_then_takes_it(tmp_path, monkeypatch):
-    from symvib.numeric import driver
+    from symvib.numeric import backends
     from symvib.numeric.engine.bind import is_compiled
     from symvib.numeric.kernels import load
 
     monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
     monkeypatch.delenv("SYMVIB_BACKEND", raising=False)
-    monkeypatch.setattr(driver, "_BOUND", {})  # engines bound under another cache folder
+    monkeypatch.setattr(backends, "_BOUND", {})  # engines bound under another cache folder
     scene = load_scene(SCENES / "paper-circle-7.toml")
     assert simulate(scene, samples=False).stats["backend"] == "python"
     assert not is_compiled(load(scene.shape))

@@ -26,7 +26,7 @@ import math
 import pytest
 
 from symvib.checks.corpus import CORPUS, entry
-from symvib.numeric.driver import backend_available
+from symvib.numeric.backends import backend_available
 from symvib.symbolic.integrals import ROUTE_SECONDS
 
 #: Seconds (curve, regular interval, derive + generate, a plain-Python run; one warm process, idle)
@@ -153,12 +153,12 @@ def _parameter_count(e):
 def test_the_compiled_engine_gives_the_events_of_the_plain_one(count, cache, monkeypatch):
     """Every entry with ``count`` parameters on numba (the engine shared by them, one compile), against
     the plain engine; the failures of all of them in one message."""
-    from symvib.numeric import driver
+    from symvib.numeric import backends, driver
     from symvib.numeric.engine.bind import bind
 
     # simulate() on numba with the engine compiled once per number of parameters, not per curve.
-    monkeypatch.setattr(driver, "bind", functools.partial(bind, shared=True))
-    monkeypatch.setattr(driver, "_BOUND", {})
+    monkeypatch.setattr(backends, "bind", functools.partial(bind, shared=True))
+    monkeypatch.setattr(backends, "_BOUND", {})
     failures = []
     for e in (e for e in CORPUS if _parameter_count(e) == count):
         _kernels(e.name)

@@ -13,7 +13,7 @@ import textwrap
 
 import pytest
 
-from symvib.numeric.driver import backend_available
+from symvib.numeric.backends import backend_available
 
 pytestmark = [pytest.mark.slow,
               pytest.mark.skipif(not backend_available("numba"), reason="numba is not installed")]

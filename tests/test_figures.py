@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from symvib import simulate
-from symvib.numeric import driver
+from symvib.numeric import driver, run_samples
 from symvib.numeric.events import EventKind
 from symvib.numeric.figures import FIGURE_NAMES, equilibrium_arcs, run_figures
 from symvib.numeric.kernels import load
@@ -123,7 +123,7 @@ def test_a_long_run_keeps_one_piece_per_interval_by_default(monkeypatch):
     """Samples grow linearly with the events, at fewer per interval past SAMPLE_BUDGET (issue 15:
     100,000 events with samples in seconds); an explicit density is kept."""
     full = _run("paper-circle-7", HIGH_K).samples
-    monkeypatch.setattr(driver, "SAMPLE_BUDGET", 10)
+    monkeypatch.setattr(run_samples, "SAMPLE_BUDGET", 10)
     thin = _run("paper-circle-7", HIGH_K).samples
     asked = _run("paper-circle-7", HIGH_K, samples_per_interval=driver.SAMPLES_PER_INTERVAL).samples
     per_piece = 2 * driver.plain_nodes(driver.NODES) + 1
@@ -134,7 +134,7 @@ def test_a_long_run_keeps_one_piece_per_interval_by_default(monkeypatch):
 
 
 def test_too_many_samples_are_refused_with_the_field_named(monkeypatch):
-    monkeypatch.setattr(driver, "MAX_SAMPLES", 100)
+    monkeypatch.setattr(run_samples, "MAX_SAMPLES", 100)
     result = _run("paper-circle-7", HIGH_K)
     assert result.samples is None
     assert "samples_per_interval" in result.error and "max_events" in result.error

@@ -18,7 +18,7 @@ from types import SimpleNamespace
 import pytest
 import sympy as sp
 
-from symvib.numeric import driver
+from symvib.numeric import backends, driver
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.symbolic import budget
 
@@ -117,13 +117,13 @@ def test_numba_warnings_stay_quiet_and_an_uncacheable_engine_is_forgotten(tmp_pa
     from numba.core.errors import NumbaWarning
 
     bind = importlib.import_module("symvib.numeric.engine.bind")  # the module (the package exports a function)
-    markers = {entry: tmp_path / entry for entry in driver.COMPILED_ENTRIES}
+    markers = {entry: tmp_path / entry for entry in backends.COMPILED_ENTRIES}
     monkeypatch.setattr(bind, "compiled_marker", lambda mod, entry: markers[entry])
     for path in markers.values():
         path.touch()
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        with driver.quiet_compiler(object(), "numba"):
+        with backends.quiet_compiler(object(), "numba"):
             warnings.warn("Cannot cache compiled function 'simulate_bound' as it uses dynamic globals",
                           NumbaWarning, stacklevel=1)
             warnings.warn("something else", UserWarning, stacklevel=1)

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from symvib.numeric import tiered
-from symvib.numeric.driver import backend_available
+from symvib.numeric.backends import backend_available
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -156,11 +156,11 @@ def test_an_opt_out_or_an_explicit_backend_starts_no_child(tmp_path, how):
 #: without writing numba's cache, one that never ends; and what the warning says of each.
 FAILING_CHILDREN = {
     "exits-1": ("def child(parent, module, call, send):\n    sys.exit(1)\n", "ended with status 1"),
-    "raises": ("from symvib.numeric import driver\nbound = driver.bound_engine\n"
+    "raises": ("from symvib.numeric import backends\nbound = backends.bound_engine\n"
                "def no_numba(mod, backend):\n"
                "    if backend == 'numba':\n        raise MemoryError('out of memory')\n"
                "    return bound(mod, backend)\n"
-               "driver.bound_engine = no_numba\nchild = tiered._compile\n",
+               "backends.bound_engine = no_numba\nchild = tiered._compile\n",
                "MemoryError: out of memory"),
     "no-cache": ("def child(parent, module, call, send):\n    pass\n", "numba could not write"),
     # a child that never ends (a lock held at the fork, a stuck compile): killed after TIER_TIMEOUT
@@ -214,7 +214,7 @@ def test_turned_off_the_tier_leaves_auto_to_the_disk_cache(tmp_path, monkeypatch
     # another process compiled meanwhile.
     import importlib
 
-    from symvib.numeric import driver, tiered
+    from symvib.numeric import backends, driver, tiered
     from symvib.numeric.scene import resolve_scene
 
     bind_module = importlib.import_module("symvib.numeric.engine.bind")   # (the package's `bind` is the function)
@@ -224,7 +224,7 @@ def test_turned_off_the_tier_leaves_auto_to_the_disk_cache(tmp_path, monkeypatch
     monkeypatch.delenv("SYMVIB_BACKEND", raising=False)
     monkeypatch.setattr(tiered, "TIER_CALLS", 2)
     monkeypatch.setattr(tiered, "TIER_SECONDS", 0.0)
-    monkeypatch.setattr(driver, "_BOUND", {})
+    monkeypatch.setattr(backends, "_BOUND", {})
     scene = resolve_scene("paper-parabola")
     results = [driver.simulate(scene, samples=False) for _ in range(4)]
     assert {r.stats["backend"] for r in results} == {"python"} and not tiered.children_of_tiers()

@@ -16,7 +16,7 @@ import pytest
 from symvib.codegen import generate as codegen
 from symvib.expr import ExpressionError
 from symvib.numeric import kernels
-from symvib.numeric.driver import backend_available
+from symvib.numeric.backends import backend_available
 from symvib.prepare import load_kernels
 from symvib.symbolic.curve import CurveError
 

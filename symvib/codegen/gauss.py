@@ -29,7 +29,7 @@ __all__ = ["rule_mp", "table_text", "write_table", "table_problems", "TABULATED"
 
 #: Node counts written to ``generated/gauss_rules.json`` (the driver's default
 #: 16, the benchmark's settings, the 3/4 of them that panels off a root take
-#: (:func:`symvib.numeric.driver.plain_nodes`), and a few more).
+#: (:func:`symvib.numeric.quadrature.plain_nodes`), and a few more).
 TABULATED = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 15, 16, 18, 20, 24, 32)
 #: Stem of the table's former Python module (:func:`write_table` removes one it finds,
 #: :func:`table_problems` names it).

@@ -22,6 +22,7 @@ import numpy as np
 
 from symvib.numeric.drag_phase import pieces
 from symvib.numeric.events import Samples
+from symvib.numeric.run_samples import column
 
 __all__ = ["DragSamples", "samples"]
 
@@ -67,13 +68,13 @@ def samples(run, scene, mod, cp) -> DragSamples:
     m, mu = scene.m, scene.mu
     speed = np.sqrt(np.maximum(w, 0.0))
     v = sigma * speed
-    h = _column(mod.h(q, *cp), q)
-    z = _column(mod.z(q, *cp), q)
+    h = column(mod.h(q, *cp), q)
+    z = column(mod.z(q, *cp), q)
     Ep = m * scene.g * z
     friction = mu * m * np.abs(N)
     return DragSamples(t=a["t"], q=q, qdot=v / h, F_N=m * N, P_mu=-friction * speed, Ek=0.5 * m * w, Ep=Ep,
                        E=0.5 * m * w + Ep, interval=a["interval"].astype(int), branch=a["branch"].astype(int),
-                       x=_column(mod.x(q, *cp), q), z=z, s=a["s"], path=a["path"], v=v, F_mu=-sigma * friction,
+                       x=column(mod.x(q, *cp), q), z=z, s=a["s"], path=a["path"], v=v, F_mu=-sigma * friction,
                        W_mu=m * a["Wf"], W_impacts=a["Wimp"], W_drag=m * a["Wd"])
 
 
@@ -92,8 +93,3 @@ def _point(cols, t, q, w, mod, cp, g, Wf, Wd, Wimp, path, path0, s_arc, iv, i):
     h = float(np.asarray(mod.h(q, *cp)))
     N = float(np.asarray(mod.kappa(q, *cp))) * w + g * float(np.asarray(mod.dx(q, *cp))) / h
     _extend(cols, [t], [q], [w], [N], [Wf], [Wd], [path], path0, iv, i, s_arc)
-
-
-def _column(values, like) -> np.ndarray:
-    """A kernel's values as a float array of ``like``'s shape (a constant kernel returns a scalar)."""
-    return np.array(np.broadcast_to(values, like.shape), dtype=float)

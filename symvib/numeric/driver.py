@@ -41,32 +41,48 @@ True
 """
 from __future__ import annotations
 
-import importlib.util
 import math
-import os
 import time
-from contextlib import contextmanager, nullcontext
+from contextlib import nullcontext
 from functools import lru_cache, partial
 
 import numpy as np
 
 from symvib.numeric import tiered
-from symvib.numeric.engine import bind
+from symvib.numeric.backends import (
+                                     BACKEND_ENV,
+                                     backend_available,
+                                     bound_engine,
+                                     compile_by_running,
+                                     quiet_compiler,
+                                     resolve_backend,
+                                     run_backend,
+)
 from symvib.numeric.engine.state import Rules
-from symvib.numeric.events import EnergyBudget, Event, Result, Samples, Status, ZenoInfo, kind_of, status_of
-from symvib.numeric.kernels import load
+from symvib.numeric.events import EnergyBudget, Event, Result, Status, ZenoInfo, kind_of, status_of
 from symvib.numeric.layout import EventCode, EventColumn, SceneRow, StatusCode, Summary
 from symvib.numeric.prepared import Prepared, prepared_of
-from symvib.numeric.quadrature import rule
+from symvib.numeric.quadrature import plain_nodes, rule, tail_rows
+from symvib.numeric.run_samples import (
+                                        MAX_SAMPLES_PER_INTERVAL,
+                                        SAMPLE_BUDGET,
+                                        SAMPLES_PER_INTERVAL,
+                                        dense_output,
+                                        lazy_samples,
+                                        no_samples,
+                                        sample_engine,
+                                        sample_pieces,
+                                        sample_plan,
+                                        stretch_samples,
+)
 from symvib.numeric.scenerow import scene_row
-from symvib.numeric.trusted import BUDGET_RTOL, checked_status
-from symvib.shapes import Shape
+from symvib.numeric.trusted import BUDGET_RTOL, checked_status, math_error
 
 __all__ = ["simulate", "NODES", "MAX_F_PANELS", "check_panels", "quiet_compiler",
            "RTOL", "ATOL", "check_tolerances", "SAMPLES_PER_INTERVAL", "SAMPLE_BUDGET",
            "sample_pieces",
            "backend_available", "resolve_backend", "run_backend", "checked_status", "compile_by_running",
-           "guarded_sweep", "check_wall_time", "DEFAULT_WALL_TIME",
+           "guarded_sweep", "check_wall_time", "DEFAULT_WALL_TIME", "BACKEND_ENV",
            "BUDGET_RTOL", "scene_row", "sweep_function", "rules"]
 
 #: Gauss-Legendre nodes per quadrature panel (a panel's accuracy; the tolerance decides how many panels).
@@ -79,15 +95,6 @@ RTOL = 1e-12
 ATOL = 0.0
 #: Smallest rtol a run may ask for: a few rounding errors of a sum of quadrature terms.
 MIN_RTOL = 1e-14
-#: Samples per motion interval (at least) by default: smooth curves of F_N and P_mu.
-SAMPLES_PER_INTERVAL = 96
-#: Most samples per motion interval a run may ask for (memory: 80 bytes per sample).
-MAX_SAMPLES_PER_INTERVAL = 100_000
-#: Samples a run keeps by default at most at :data:`SAMPLES_PER_INTERVAL` (above, one piece per
-#: interval): 1e6 samples are about 150 MB and a second to compute.
-SAMPLE_BUDGET = 1_000_000
-#: Most samples a run computes (about 1.5 GB); a run that would pass it gets no samples and says why.
-MAX_SAMPLES = 10_000_000
 #: Most Gauss-Legendre panels one evaluation of a numeric ``F_sigma`` may take (``|q - Q_REF| / (PANEL
 #: * q_scale)`` at the start and the limiters): a run evaluates it thousands of times, so a curve
 #: whose ``q_scale`` is tiny against its span (``q_scale = "1e-7"``: 1e6-1e7 panels) is refused up front.
@@ -102,122 +109,8 @@ DEFAULT_WALL_TIME = 40.0
 #: The plain engine's time per event, about (seconds; the message of a run that reached its
 #: ``wall_time``): 0.5 ms on the paper's parabola, 100 to 200 times the compiled engine's.
 PLAIN_SECONDS_PER_EVENT = 5e-4
-#: Environment variable that forces a backend ("numba" or "python").
-BACKEND_ENV = "SYMVIB_BACKEND"
-#: (kernels, bound engine) by the identity of the kernels (a module, or a prepared view) and the backend.
-_BOUND: dict = {}
 #: Kernels (by identity) whose compiled engine has run in this process: it compiles nothing more.
 _RAN_COMPILED: dict = {}
-#: Kernels whose compiled entry :func:`run_backend` found on disk, by (identity, entry, kernel cache).
-_ON_DISK: dict = {}
-
-
-def backend_available(name: str) -> bool:
-    """Whether a backend can run here (``"python"`` always can)."""
-    if name == "python":
-        return True
-    if name == "numba":
-        # Found, not imported: importing numba takes a few tenths of a second a plain run does not need.
-        return importlib.util.find_spec("numba") is not None
-    raise ValueError(f"unknown backend {name!r}; use 'numba', 'python' or 'auto'")
-
-
-def resolve_backend(backend: str) -> str:
-    """The backend a run uses: ``"numba"`` or ``"python"`` (``"auto"``: numba when installed,
-    unless ``$SYMVIB_BACKEND`` says otherwise)."""
-    backend = os.environ.get(BACKEND_ENV, backend) if backend == "auto" else backend
-    if backend == "auto":
-        return "numba" if backend_available("numba") else "python"
-    if not backend_available(backend):
-        raise ValueError(f"backend {backend!r} is not available here (pip install numba: symvib depends on it; "
-                         "where numba cannot be installed the plain engine runs)")
-    return backend
-
-
-def _kernels(curve):
-    """The kernel module of ``curve``: a module (or a prepared view) as it is, a shape's from disk."""
-    return load(curve) if isinstance(curve, (Shape, str)) else curve
-
-
-def bound_engine(curve, backend: str = "auto"):
-    """``(kernel module, engine)`` of a curve's kernels (a module, a prepared view, or a shape whose
-    module is on disk) on a backend (:func:`symvib.numeric.engine.bind`), cached."""
-    mod = _kernels(curve)
-    entry = _BOUND.get((id(mod), backend))
-    if entry is None or entry[0] is not mod or backend == "auto" and os.environ.get(BACKEND_ENV):
-        entry = (mod, bind(mod, resolve_backend(backend)))
-        _BOUND[(id(mod), backend)] = entry
-    return entry
-
-
-def run_backend(curve, backend: str = "auto", entry: str = "simulate_bound") -> str:
-    """The backend one run of ``shape`` takes: a single scene never waits for a compiler.
-
-    ``"auto"`` is numba only where the curve's compiled ``entry`` (``"simulate_bound"``
-    for a run, ``"sample_bound"`` for its samples) is already on disk (compiled by an
-    earlier ``backend="numba"`` run; :func:`symvib.numeric.engine.bind.is_compiled`),
-    and the plain-Python engine otherwise (milliseconds per paper scene, where a
-    first compilation takes seconds: docs/benchmarks.md, "The driver and first
-    calls").  ``$SYMVIB_BACKEND`` and an explicit backend are obeyed.  Sweeps compile (:func:`sweep_function`).
-    A process that runs a curve's plain engine many times compiles it in a child process and
-    then takes it (:mod:`symvib.numeric.tiered`).
-    """
-    if backend != "auto" or os.environ.get(BACKEND_ENV):
-        return resolve_backend(backend)
-    if not backend_available("numba"):
-        return "python"
-    from symvib.numeric.engine.bind import is_compiled
-
-    mod = _kernels(curve)
-    if entry == "simulate_bound":   # a background compile started by this process decides (tiered.ready)
-        compiled = tiered.ready(mod)
-        if compiled is not None:
-            return "numba" if compiled else "python"
-    # Found on disk once, taken without asking the disk again (the cache folder's trust check and
-    # the marker cost as much as a compiled run); by the kernel cache folder, which a test may change.
-    key = (id(mod), entry, os.environ.get("SYMVIB_CACHE"))
-    if _ON_DISK.get(key) is mod:
-        return "numba"
-    if not is_compiled(mod, entry):
-        return "python"
-    _ON_DISK[key] = mod
-    return "numba"
-
-
-#: Entries of the compiled engine whose disk-cache markers :func:`quiet_compiler` removes.
-COMPILED_ENTRIES = ("simulate_bound", "sample_bound")
-#: What numba says when it compiles a function it cannot store in its disk cache.
-UNCACHEABLE = "cannot cache"
-
-
-@contextmanager
-def quiet_compiler(mod, backend: str):
-    """No NumbaWarning reaches the user; a curve whose engine numba cannot cache is not taken by ``auto`` again.
-
-    numba warns (NumbaWarning blocks on stderr) when it compiles a function it cannot
-    store on disk; such an engine compiles anew in every process (10.9 s against 1.1 s
-    for the plain engine), so the markers that make ``auto`` take it
-    (:func:`symvib.numeric.engine.bind.is_compiled`) are removed: later runs take the
-    plain engine, silently.  The run at hand has paid the compilation and uses it.
-    """
-    if backend != "numba":
-        yield
-        return
-    import warnings
-
-    from numba.core.errors import NumbaWarning
-
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", NumbaWarning)
-        yield
-    if any(UNCACHEABLE in str(w.message).lower() for w in caught if issubclass(w.category, NumbaWarning)):
-        from symvib.numeric.engine.bind import compiled_marker
-
-        for entry in COMPILED_ENTRIES:
-            compiled_marker(mod, entry).unlink(missing_ok=True)
-    for w in caught:  # the others (not numba's) as they were
-        if not issubclass(w.category, NumbaWarning):
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def check_wall_time(wall_time, name: str = "wall_time") -> float | None:
@@ -334,7 +227,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):   # the status says it
                 return simulate_drag(scene, prep, rtol=rtol, atol=atol, wall_time=wall_time, samples=samples)
         except (ArithmeticError, ValueError) as exc:
-            if not _math_error(exc):
+            if not math_error(exc):
                 raise
             return _non_finite(scene, exc)
     requested, backend = backend, run_backend(prep.kernels, backend)
@@ -352,7 +245,7 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet:
             out = eng.simulate(cp, row, R, samples)  # the status says what overflowed
     except (ArithmeticError, ValueError) as exc:
-        if not _math_error(exc):
+        if not math_error(exc):
             raise
         return _non_finite(scene, exc)
     if backend == "numba":
@@ -367,13 +260,13 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
 
         sampling = None
         if samples:   # each sliding stretch sampled as any run is (physics.md, "Flight and landing")
-            sampling = Sampling(partial(_stretch_samples, partial(_sample_engine, mod, requested, backend), cp, R,
-                                        scene, mod), partial(_sample_plan, spi, nodes, samples_per_interval is None),
+            sampling = Sampling(partial(stretch_samples, partial(sample_engine, mod, requested, backend), cp, R,
+                                        scene, mod), partial(sample_plan, spi, nodes, samples_per_interval is None),
                                 2 * plain_nodes(nodes) + 1)
         try:
             return result_with_flights(scene, prep, mod, eng, cp, row, R, out, backend, sampling)
         except (ArithmeticError, ValueError) as exc:
-            if not _math_error(exc):
+            if not math_error(exc):
                 raise
             return _non_finite(scene, exc)
     # A run into a singular point (the end of a narrowed domain) ends left_domain there, or, where the
@@ -398,13 +291,13 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
     budget = EnergyBudget(float(out.E0), float(out.E_final), float(out.W_friction), float(out.W_impacts))
     sampler = interpolant = None
     if samples and status != StatusCode.NON_FINITE:
-        pieces, too_many = _sample_plan(spi, nodes, samples_per_interval is None, int(out.n_intervals))
+        pieces, too_many = sample_plan(spi, nodes, samples_per_interval is None, int(out.n_intervals))
         if too_many:
-            sampler = partial(_no_samples, too_many)
+            sampler = partial(no_samples, too_many)
         else:
-            sampler = partial(_lazy_samples, partial(_sample_engine, mod, requested, backend), cp, row,
+            sampler = partial(lazy_samples, partial(sample_engine, mod, requested, backend), cp, row,
                               out.intervals, out.n_intervals, R, scene, mod, pieces)
-        interpolant = partial(_dense, mod, cp, out.intervals[:out.n_intervals], R)
+        interpolant = partial(dense_output, mod, cp, out.intervals[:out.n_intervals], R)
     stats = {"intervals": int(out.n_intervals) if samples else None, "backend": backend, "t_err": float(out.t_err),
              "domain": (prep.domain.lo, prep.domain.hi)}   # the run's (narrowed next to a singular point)
     if status == StatusCode.TOLERANCE_NOT_MET:
@@ -437,85 +330,6 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
                   zeno=zinfo, stats=stats)
 
 
-def compile_by_running(mod, cp, row, R, samples):
-    """Compile ``mod``'s engine by running it once on a run's arguments (a background compile's
-    job, :mod:`symvib.numeric.tiered`): numba compiles at the first call and writes its disk cache;
-    a cache it cannot write removes the marker (:func:`quiet_compiler`)."""
-    mod, eng = bound_engine(mod, "numba")
-    with quiet_compiler(mod, "numba"):
-        return eng.simulate(cp, row, R, samples)
-
-
-def _dense(mod, cp, ivs, R, result):
-    """The dense output of ``result`` (:class:`symvib.numeric.dense.DenseOutput`) from its interval log."""
-    from symvib.numeric.dense import DenseOutput
-
-    return DenseOutput(result, mod, cp, ivs, R)
-
-
-def _sample_plan(spi: int, nodes: int, default: bool, n_intervals: int):
-    """``(pieces, None)``: the pieces each of ``n_intervals`` logged intervals is sampled in (one where
-    the default ``spi`` would pass :data:`SAMPLE_BUDGET`), or ``(None, message)`` where the samples
-    would pass :data:`MAX_SAMPLES`."""
-    pieces = sample_pieces(spi, nodes)
-    if default and n_intervals * spi > SAMPLE_BUDGET:
-        pieces = 1
-    wanted = n_intervals * pieces * (2 * plain_nodes(nodes) + 1)
-    if wanted > MAX_SAMPLES:
-        return None, (f"samples: {n_intervals:,} intervals at samples_per_interval {spi} would give about "
-                      f"{wanted:,} samples, more than {MAX_SAMPLES:,}; ask for fewer (samples_per_interval) or a "
-                      "shorter run (run.max_events)")
-    return pieces, None
-
-
-def _stretch_samples(engine_of, cp, R, scene, mod, row, ivs, ni, pieces):
-    """The samples of one sliding stretch of a run with flights (``row`` its start): as
-    :func:`_lazy_samples` (:class:`symvib.numeric.flight_samples.Sampling`)."""
-    return _lazy_samples(engine_of, cp, row, ivs, ni, R, scene, mod, pieces)
-
-
-def _no_samples(message):
-    """``(None, message)``: a run whose samples would be too many (:data:`MAX_SAMPLES`)."""
-    return None, message
-
-
-def _sample_engine(mod, requested: str, backend: str):
-    """The engine that computes the samples of a run on ``backend`` (asked for as ``requested``).
-
-    The run's own, except where ``"auto"`` took the compiled engine and its samples
-    entry is not compiled yet: the plain engine then computes the samples from the
-    run's interval log (the same quadrature; a run never waits for a compiler).
-    """
-    if backend == "numba" and requested == "auto":
-        backend = run_backend(mod, requested, "sample_bound")
-    return bound_engine(mod, backend)[1]
-
-
-def _lazy_samples(engine_of, cp, row, ivs, ni, R, scene, mod, pieces):
-    """``(samples, None)``, or ``(None, message)`` where the plain-Python engine overflowed;
-    ``engine_of()`` gives the engine (:func:`_sample_engine`)."""
-    eng = engine_of()
-    try:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), quiet_compiler(mod, "numba"):
-            return _samples(eng, cp, row, ivs, ni, R, scene, mod, pieces), None
-    except (ArithmeticError, ValueError) as exc:
-        if not _math_error(exc):
-            raise
-        return None, f"{type(exc).__name__}: {exc}"
-
-
-#: Messages of the exceptions Python's ``math`` raises where compiled code returns inf or NaN.
-_MATH_MESSAGES = ("math range error", "math domain error", "float division by zero", "division by zero",
-                  "Numerical result out of range", "float modulo", "integer division or modulo by zero")
-
-
-def _math_error(exc: BaseException) -> bool:
-    """Whether ``exc`` is a floating-point failure of the plain-Python engine (not a bug)."""
-    if isinstance(exc, ArithmeticError):
-        return True  # OverflowError, ZeroDivisionError, FloatingPointError
-    return isinstance(exc, ValueError) and any(m in str(exc) for m in _MATH_MESSAGES)
-
-
 def _non_finite(scene, exc: BaseException) -> Result:
     """The result of a run the plain-Python engine stopped by an overflow (status ``non_finite``).
 
@@ -543,7 +357,7 @@ def guarded_sweep(sweep_fn):
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # the status says it
                 out, logs = sweep_fn(scal_rows, cp_rows, R, max_log)
         except (ArithmeticError, ValueError) as exc:
-            if not _math_error(exc):
+            if not math_error(exc):
                 raise
             if len(scal_rows) == 1:
                 out = np.full((1, len(Summary)), np.nan)
@@ -621,28 +435,6 @@ def _singular_end(prep: Prepared, scene, q: float):
     return None
 
 
-def plain_nodes(nodes: int) -> int:
-    """Nodes of a panel that does not start on a root, for ``nodes`` on one that does.
-
-    A panel that starts on a turning point (in the variable ``r``, ``q = q* -+ r^2``)
-    has the interval's other end, possibly another turning point, at ``r = sqrt(L)``
-    while it spans ``[0, sqrt(L/2)]``: the Bernstein ellipse of that branch point has
-    ``rho = 3.4``, and ``nodes`` Gauss points leave an error of about ``rho^(-2 nodes)``.
-    Every other panel is at least 2.6 of its half-widths from the nearest
-    (virtual) root (3 for a panel in ``q``, 2.66 for the last of a graded run in
-    ``r``), so ``rho >= 5.1`` and ``3/4`` of the nodes reach the same error
-    (16 -> 12: ``5.1^-24 = 1e-17`` against ``3.4^-32 = 1e-17``).
-    ``tests/test_quadrature.py`` checks 29 turning points against the
-    30-digit reference to 2e-14 at 16 and at 32 nodes.
-
-    Examples
-    --------
-    >>> plain_nodes(16), plain_nodes(12), plain_nodes(2)
-    (12, 9, 2)
-    """
-    return max(1, -(-3 * nodes // 4))
-
-
 @lru_cache(maxsize=8)
 def rules(nodes: int, rtol: float = RTOL, atol: float = ATOL) -> Rules:
     """The quadrature rules and tolerances the engine takes (:class:`symvib.numeric.engine.state.Rules`;
@@ -659,74 +451,3 @@ def rules(nodes: int, rtol: float = RTOL, atol: float = ATOL) -> Rules:
         r.x, r.weights, r.cumulative.T, r.cumulative_weighted.T, p.x, p.weights, p.cumulative.T,
         tail_rows(r.x, r.weights).ravel(), tail_rows(p.x, p.weights).ravel()))
     return Rules(*arrays, float(rtol), float(atol))
-
-
-def tail_rows(x, weights) -> np.ndarray:
-    """Rows ``E_k`` with ``E_k @ f = a_k``, the Legendre coefficient of degree ``k`` of the interpolant
-    of ``f`` at the Gauss-Legendre nodes ``x``, for ``k = n-1, n-2, n-3, n-4`` (``a_k = (2k + 1)/2
-    sum_j w_j P_k(x_j) f_j``, exact for the interpolant by the rule's exactness to degree ``2n - 1``);
-    degrees below 0 give zero rows.
-
-    Examples
-    --------
-    >>> from symvib.numeric.quadrature import rule
-    >>> r = rule(6)
-    >>> E = tail_rows(r.x, r.weights)
-    >>> bool(abs(E[0] @ r.x ** 5 - 8 / 63) < 1e-15)        # x^5 = (8/63) P_5 + lower degrees
-    True
-    """
-    n = len(x)
-    out = np.zeros((4, n))
-    for row in range(4):
-        k = n - 1 - row
-        if k >= 0:
-            unit = np.zeros(k + 1)
-            unit[k] = 1.0
-            out[row] = (2 * k + 1) / 2 * np.asarray(weights) * np.polynomial.legendre.legval(np.asarray(x), unit)
-    return out
-
-
-def sample_pieces(samples_per_interval: int, nodes: int) -> int:
-    """Pieces each logged interval is cut into so that a motion interval has at least
-    ``samples_per_interval`` samples (a piece gives at least two plain panels' nodes and its end).
-
-    Examples
-    --------
-    >>> sample_pieces(SAMPLES_PER_INTERVAL, NODES), sample_pieces(1, NODES), sample_pieces(1000, NODES)
-    (4, 1, 40)
-    """
-    per_piece = 2 * plain_nodes(nodes) + 1
-    return max(1, -(-int(samples_per_interval) // per_piece))
-
-
-def _samples(eng, cp, row, ivs, ni, R, scene, mod, pieces: int = 1) -> Samples:
-    """The samples of the logged intervals (:func:`symvib.numeric.engine.timing.samples`), in time
-    order, with the derived columns of :class:`Samples`.
-
-    Linear in the number of intervals: one stable sort by (interval, time).
-    """
-    from symvib.numeric.engine.timing import SampleColumn as C
-
-    nodes, index = eng.samples(cp, row, R, np.ascontiguousarray(ivs), ni, pieces)
-    if not len(index):
-        return Samples.empty()
-    order = np.lexsort((nodes[:, C.t], index))  # stable: ties keep the engine's order
-    nodes, index = nodes[order], index[order]
-    t, q, w, N = nodes[:, C.t], nodes[:, C.q], nodes[:, C.w], nodes[:, C.N]
-    sigma = nodes[:, C.sigma]
-    m, mu = scene.m, scene.mu
-    speed = np.sqrt(np.maximum(w, 0.0))
-    v = sigma * speed
-    z = _column(mod.z(q, *cp), q)
-    Ep = m * scene.g * z
-    friction = mu * m * np.abs(N)  # |F_mu|
-    return Samples(t=t, q=q, qdot=v / mod.h(q, *cp), F_N=m * N, P_mu=-friction * speed,
-                   Ek=0.5 * m * w, Ep=Ep, E=0.5 * m * w + Ep, interval=index.astype(int),
-                   branch=nodes[:, C.branch].astype(int), x=_column(mod.x(q, *cp), q), z=z,
-                   s=nodes[:, C.s].copy(), path=nodes[:, C.path].copy(), v=v, F_mu=-sigma * friction,
-                   W_mu=m * nodes[:, C.W], W_impacts=m * nodes[:, C.W_impacts])
-
-
-def _column(values, like) -> np.ndarray:
-    """A kernel's values as a float array of ``like``'s shape (a constant kernel returns a scalar)."""
-    return np.array(np.broadcast_to(values, like.shape), dtype=float)

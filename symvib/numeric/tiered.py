@@ -1,7 +1,7 @@
 """The tiered engine: a curve a process runs many times is compiled in the background.
 
 A run on ``backend="auto"`` takes the compiled engine where numba's disk cache holds it
-already and the plain-Python engine otherwise (:func:`symvib.numeric.driver.run_backend`):
+already and the plain-Python engine otherwise (:func:`symvib.numeric.backends.run_backend`):
 a single run never waits for a compiler.  A loop of runs of one curve (an optimizer, a Monte
 Carlo study) would then stay on the plain engine, 20 to 50 times slower than the compiled
 one.  So once a process has run a curve's plain engine :data:`TIER_CALLS` times for at least
@@ -135,7 +135,7 @@ def ran(module, seconds: float, label: str, call) -> None:
     child once the thresholds are passed.
 
     ``call()`` runs the curve's compiled engine once on the run's arguments (the driver's
-    :func:`~symvib.numeric.driver.compile_by_running`): the child compiles by calling it so
+    :func:`~symvib.numeric.backends.compile_by_running`): the child compiles by calling it so
     (numba compiles a function at its first call, then marks it cached).
     """
     tier = _tier(module, label)

@@ -14,7 +14,7 @@ import numpy as np
 
 from symvib.numeric.layout import ERROR_CODES, StatusCode
 
-__all__ = ["BUDGET_RTOL", "checked_status"]
+__all__ = ["BUDGET_RTOL", "checked_status", "MATH_MESSAGES", "math_error"]
 
 #: Largest relative residual of the energy budget (physics.md, "Energies") a trusted run may
 #: end with: ``|E0 - E_final - W_friction - W_impacts|`` over the largest of those four
@@ -68,3 +68,15 @@ def checked_status(status, t_final, q_final, qdot_final, E0, E_final, friction_w
     out = np.where(~finite, StatusCode.NON_FINITE, np.where(closes | np.isin(code, ERROR_CODES), code,
                                                        StatusCode.ENERGY_BUDGET_MISMATCH))
     return out.astype(np.int64)
+
+
+#: Messages of the exceptions Python's ``math`` raises where compiled code returns inf or NaN.
+MATH_MESSAGES = ("math range error", "math domain error", "float division by zero", "division by zero",
+                  "Numerical result out of range", "float modulo", "integer division or modulo by zero")
+
+
+def math_error(exc: BaseException) -> bool:
+    """Whether ``exc`` is a floating-point failure of the plain-Python engine (not a bug)."""
+    if isinstance(exc, ArithmeticError):
+        return True  # OverflowError, ZeroDivisionError, FloatingPointError
+    return isinstance(exc, ValueError) and any(m in str(exc) for m in MATH_MESSAGES)

@@ -97,8 +97,8 @@ def driver_backend() -> str:
     Returns
     -------
     str
-        :func:`symvib.numeric.driver.resolve_backend` of ``"auto"``.
+        :func:`symvib.numeric.backends.resolve_backend` of ``"auto"``.
     """
-    from symvib.numeric.driver import resolve_backend
+    from symvib.numeric.backends import resolve_backend
 
     return resolve_backend("auto")

@@ -134,7 +134,7 @@ def follow_rows(spec, values, columns: dict, log, backend: str = "auto") -> dict
         followed rows; None when no events are logged.
     backend : {"auto", "numba", "python"}
         The sweep's backend: the followed rows' sliding stretches run on it (``"auto"`` as the
-        sweep resolves it, :func:`~symvib.numeric.driver.resolve_backend`; on numba the curve's
+        sweep resolves it, :func:`~symvib.numeric.backends.resolve_backend`; on numba the curve's
         single-scene engine is compiled too, once, and cached as the sweep's is).
 
     Returns
@@ -147,7 +147,8 @@ def follow_rows(spec, values, columns: dict, log, backend: str = "auto") -> dict
     SceneError
         Where the driver refuses a row's run (naming the field), with ``(sweep row N)`` appended.
     """
-    from symvib.numeric.driver import resolve_backend, simulate
+    from symvib.numeric.backends import resolve_backend
+    from symvib.numeric.driver import simulate
     from symvib.numeric.prepared import prepared_of
     from symvib.numeric.scene import SceneError
 

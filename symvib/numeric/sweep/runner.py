@@ -168,7 +168,7 @@ def sweep(scene: Scene, vary: dict, *, random: int | None = None, seed: int = 0,
 
 def _say_slow_path(backend: str) -> None:
     """Before a sweep on the plain-Python engine computes: say so, and the remedy (one line, stderr)."""
-    from symvib.numeric.driver import resolve_backend
+    from symvib.numeric.backends import resolve_backend
 
     if resolve_backend(backend) == "python":
         why = "as asked" if backend == "python" else "numba is not installed"
