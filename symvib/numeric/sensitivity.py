@@ -57,6 +57,7 @@ import numpy as np
 from symvib.kernelformat import KernelError
 from symvib.numeric.layout import EventCode, StatusCode
 from symvib.numeric.sensitivity_batch import MAX_PANELS, NODES, end_integrals, time_derivatives
+from symvib.numeric.sensitivity_compiled import quadratures_for
 from symvib.numeric.sensitivity_curve import PARAMETERS, CurveFunctions, resolve_wrt
 from symvib.numeric.sensitivity_flight import land, landing_reason, launch
 from symvib.numeric.sensitivity_interval import Interval
@@ -172,6 +173,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
 
         jets = lambda: load_jets(scene.shape)  # noqa: E731 - loaded only if needed
     c = CurveFunctions(kernels, scene, targets, jets)
+    c.quadratures = quadratures_for(result, kernels, c)      # (a run of the compiled engine: compiled levels)
     P = len(wrt)
     unit = {name: np.zeros(P) for name in PARAMETERS}
     for j, (_, kind, p) in enumerate(targets):
