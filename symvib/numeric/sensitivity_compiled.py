@@ -34,6 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from symvib.numeric.layout import EventCode
 from symvib.numeric.sensitivity_batch import (
     ACCEPT,
     BATCH_PANELS,
@@ -46,8 +47,8 @@ from symvib.numeric.sensitivity_batch import (
     theta_level,
 )
 
-__all__ = ["SensitivityKernels", "Quadratures", "quadratures_for", "quadratures", "level_tables", "LEVELS",
-           "BATCH_LEVELS", "ENTRIES"]
+__all__ = ["SensitivityKernels", "Quadratures", "quadratures_for", "quadratures", "level_tables",
+           "event_tangents", "event_tangents_kernel", "LEVELS", "BATCH_LEVELS", "ENTRIES", "INTERVAL_SCALARS"]
 
 #: Levels of the time derivative's refinement (``2, 4, ..., MAX_PANELS`` panels).
 LEVELS = int(round(math.log2(MAX_PANELS)))
@@ -257,6 +258,68 @@ def end_integrals_kernel(s, anchor, D, first_pieces, max_pieces, mu, cp, xg, wg,
     return out
 
 
+#: Columns of the interval scalars :func:`event_tangents_kernel` reads (each interval's, from :func:`_plan`).
+INTERVAL_SCALARS = ("s", "E_a", "G_a", "alpha_a", "dalpha_a", "f_a", "f_e", "G_e", "alpha_e", "dalpha_e", "E_e")
+#: Event codes :func:`event_tangents_kernel` reads (:class:`symvib.numeric.layout.EventCode`).
+IMPACT_CODE = EventCode.IMPACT.value
+
+
+def event_tangents_kernel(is_impact, turning, moving, sigma_in, w_minus, scalars, I_p_e, limiter, mu, g, k, m, Dmu,
+                          Dk, Dq_a0, Dw_a0):
+    """Pass 3 of :func:`symvib.numeric.sensitivity._slide` (the tangents of the events' positions and speeds,
+    event by event) for events without a sign change of ``N`` or a lift-off, and without curve parameters:
+    the same operations in the same order as :meth:`~symvib.numeric.sensitivity_interval.Interval.set_start`,
+    ``set_end``, ``end_state`` and the loop's own (one row per event; ``moving``: an interval leads to it,
+    whose :data:`INTERVAL_SCALARS` are ``scalars``' row; ``limiter``: ``D(limiter)`` where it ends on one).
+
+    Returns the rows ``Dq_a, Dw_a, DG_a, A, Dq_e, DG_e, Dv_minus, Dv_plus`` (shape (8, n, P)) and the
+    tangents of the impact loss and of ``w`` after the last event (shape (2, P)).
+    """
+    n, P = scalars.shape[0], Dmu.shape[0]
+    rows = np.zeros((8, n, P))
+    tail = np.zeros((2, P))
+    Dq_a, Dw_a = Dq_a0.copy(), Dw_a0.copy()
+    for j in range(n):
+        Dq_e, Dw_minus = rows[4, j], np.zeros(P)
+        rows[0, j], rows[1, j] = Dq_a, Dw_a
+        if not moving[j]:                   # (a rest test at the start: no motion in between)
+            Dq_e[:] = Dq_a
+            Dw_minus[:] = Dw_a
+        else:
+            s, E_a, G_a, alpha_a, dalpha_a = scalars[j, 0], scalars[j, 1], scalars[j, 2], scalars[j, 3], scalars[j, 4]
+            f_a, f_e, G_e, alpha_e, dalpha_e, E_e = (scalars[j, 5], scalars[j, 6], scalars[j, 7], scalars[j, 8],
+                                                     scalars[j, 9], scalars[j, 10])
+            for p in range(P):           # Interval.set_start
+                moved = alpha_a * Dmu[p] + mu * dalpha_a * Dq_a[p]
+                rows[2, j, p] = Dw_a[p] * E_a + G_a * 2 * s * moved
+                rows[3, j, p] = rows[2, j, p] + 2 * g * f_a * Dq_a[p]
+            for p in range(P):
+                fixed_q = rows[3, j, p] - 2 * g * I_p_e[j, p]          # Interval.dG_fixed_q_end
+                if turning[j]:
+                    Dq_e[p] = fixed_q / (2 * g * f_e)
+                else:
+                    Dq_e[p] = limiter[j, p]
+                    rows[5, j, p] = fixed_q - 2 * g * f_e * Dq_e[p]      # Interval.set_end
+                    moved = alpha_e * Dmu[p] + mu * dalpha_e * Dq_e[p]   # Interval.end_state
+                    Dw_minus[p] = (rows[5, j, p] - G_e * 2 * s * moved) / E_e
+        root = math.sqrt(w_minus[j]) if w_minus[j] > 0 else 0.0
+        v_minus = sigma_in[j] * math.sqrt(max(w_minus[j], 0.0))
+        Dw_plus = np.empty(P)
+        for p in range(P):
+            Dv_minus = sigma_in[j] * Dw_minus[p] / (2 * root) if w_minus[j] > 0 else 0.0
+            rows[6, j, p] = Dv_minus
+            if is_impact[j]:
+                Dw_plus[p] = 2 * k * Dk[p] * w_minus[j] + k * k * Dw_minus[p]
+                rows[7, j, p] = -(Dk[p] * v_minus + k * Dv_minus)
+                tail[0, p] = tail[0, p] + m / 2 * (-2 * k * Dk[p] * w_minus[j] + (1 - k * k) * Dw_minus[p])
+            else:
+                Dw_plus[p] = Dw_minus[p]
+                rows[7, j, p] = 0.0 if turning[j] else Dv_minus
+        Dq_a, Dw_a = Dq_e, Dw_plus
+    tail[1] = Dw_a
+    return rows, tail
+
+
 # --- binding (Python) ----------------------------------------------------------------------------
 @cache
 def level_tables():
@@ -284,13 +347,18 @@ class Quadratures:
 
     def time_derivatives(self, c, ends):
         """:func:`symvib.numeric.sensitivity_batch.time_derivatives` (the same arguments and result)."""
-        scalars = np.ascontiguousarray(np.column_stack(
-            [np.asarray(ends[name], dtype=float) for name in ("s", "q_a", "q_e", "G_a", "G_e", "f_a", "f_e")]))
-        tangents = np.ascontiguousarray(np.stack([ends[name] for name in ("Dq_a", "Dq_e", "DG_a", "DG_e")]),
-                                        dtype=float)
+        scalars = np.column_stack(
+            [np.asarray(ends[name], dtype=float) for name in ("s", "q_a", "q_e", "G_a", "G_e", "f_a", "f_e")])
+        return self.time_derivatives_arrays(c, scalars, np.stack([ends[name] for name in ("Dq_a", "Dq_e", "DG_a",
+                                                                                           "DG_e")]))
+
+    def time_derivatives_arrays(self, c, scalars, tangents):
+        """:meth:`time_derivatives` of the intervals ``scalars`` (shape (M, 7): ``s, q_a, q_e, G_a, G_e, f_a,
+        f_e``) with the tangents ``tangents`` (shape (4, M, P): ``Dq_a, Dq_e, DG_a, DG_e``)."""
         return self._entries["time_derivatives_kernel"](
-            scalars, tangents, float(c.mu), float(c.g), np.ascontiguousarray(c.Dmu, dtype=float),
-            bool(c.f_depends), self._cp, *level_tables(), BATCH_LEVELS, LEVELS, RTOL, ACCEPT)
+            np.ascontiguousarray(scalars, dtype=float), np.ascontiguousarray(tangents, dtype=float), float(c.mu),
+            float(c.g), np.ascontiguousarray(c.Dmu, dtype=float), bool(c.f_depends), self._cp, *level_tables(),
+            BATCH_LEVELS, LEVELS, RTOL, ACCEPT)
 
     def end_integrals(self, c, s, anchor, D, max_pieces):
         """:func:`symvib.numeric.sensitivity_batch.end_integrals` (the same arguments and result)."""
@@ -371,3 +439,14 @@ def quadratures(module) -> dict:
     flush_if_stale(compiled.values(), cache_dir() / "engines" / f"sensitivity-{_digest()}-{tag}")
     module._symvib_sensitivity_quadratures = compiled
     return compiled
+
+
+@cache
+def event_tangents():
+    """:func:`event_tangents_kernel` compiled (it calls no kernel of the curve: one compiled function for all
+    curves, cached on disk)."""
+    import numba
+
+    from symvib.numeric.engine.bind import ERRORS
+
+    return numba.njit(cache=True, **ERRORS)(event_tangents_kernel)
