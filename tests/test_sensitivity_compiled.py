@@ -10,6 +10,7 @@ import pytest
 
 import symvib
 from symvib.numeric import sensitivity, sensitivity_batch, sensitivity_compiled
+from symvib.numeric.layout import EventCode
 from symvib.numeric.prepared import prepared_of
 from symvib.numeric.scene import resolve_scene, scene_from_dict
 from symvib.numeric.sensitivity import PARAMETERS, interval_tangents
@@ -144,3 +145,23 @@ def test_only_runs_of_the_compiled_engine_without_curve_parameters_take_them():
     assert quadratures_for(numba_run, kernels, curve) is None          # curve parameters: NumPy's path
     view = SimpleNamespace(PARAMS=kernels.PARAMS)                       # (a prepared view: no file)
     assert quadratures_for(numba_run, view, plain) is None
+
+
+@pytest.mark.parametrize("name", ["paper-parabola", "paper-circle-7"])
+def test_the_compiled_pass_over_events_is_the_python_loop_bit_for_bit(name, monkeypatch):
+    scene = resolve_scene(name).replace(k=0.8)
+    res = _run(scene)
+    kernels = prepared_of(scene).kernels
+    wrt = _scene_wrt(scene)
+    monkeypatch.setattr(sensitivity, "quadratures_for", lambda result, k, c: Quadratures(quadratures(kernels), c._cp))
+    fast = interval_tangents(res, wrt)
+    monkeypatch.setattr(sensitivity, "JETS_EVENTS", tuple(EventCode))     # (every event: the Python loop)
+    slow = interval_tangents(res, wrt)
+    f, s = fast.sensitivities, slow.sensitivities
+    for a, b in ((f.t, s.t), (f.q, s.q), (f.v_before, s.v_before), (f.v_after, s.v_after), *(
+            (f.final[k], s.final[k]) for k in s.final)):
+        assert np.array_equal(a, b, equal_nan=True)
+    assert len(fast.legs) == len(slow.legs) > 3
+    for a, b in zip(fast.legs, slow.legs):
+        for field in ("Dq_a", "Dw_a", "DG_a", "A", "Dq_e", "DG_e"):
+            assert np.array_equal(getattr(a.interval, field), getattr(b.interval, field))

@@ -440,10 +440,12 @@ def _plan(events, start, last, scene, c, q_a, w_a):
     at = np.array([q_a] + [ev.q for ev in segment])
     middle = at[:-1] + (at[1:] - at[:-1]) / 2
     both, n = np.concatenate((at, middle)), len(at)      # (alpha and F_s at both in one call each)
-    alpha, dalpha = c.alpha(both), c.dalpha(at)
-    alpha, alpha_mid = alpha[:n], alpha[n:]
-    F = {s: c.F(s, both) for s in (1, -1)}
-    f = {s: c.f(s, at) for s in (1, -1)}
+    alpha_at, dalpha_at = c.alpha(both), c.dalpha(at)
+    # (as lists of floats, read one by one below: the same values, without NumPy's scalars)
+    alpha, alpha_mid, middle = alpha_at[:n].tolist(), alpha_at[n:].tolist(), middle.tolist()
+    dalpha = dalpha_at.tolist()
+    F = {s: c.F(s, both).tolist() for s in (1, -1)}
+    f = {s: c.f(s, at).tolist() for s in (1, -1)}
     F, F_mid = {s: v[:n] for s, v in F.items()}, {s: v[n:] for s, v in F.items()}
     for j, ev in enumerate(segment):
         i, kind = start + j, ev.kind.code
@@ -456,8 +458,8 @@ def _plan(events, start, last, scene, c, q_a, w_a):
         else:
             sigma = 1 if ev.q > q_a else -1
             s = _branch(c, w_a, sigma, middle[j], (alpha[j], alpha_mid[j], F[sigma][j], F_mid[sigma][j]))
-            ends = (float(alpha[j]), float(dalpha[j]), float(f[s][j]), float(f[s][j + 1]), F[s][j], F[s][j + 1],
-                    alpha[j + 1:j + 2], dalpha[j + 1:j + 2])
+            ends = (alpha[j], dalpha[j], f[s][j], f[s][j + 1], F[s][j], F[s][j + 1], alpha_at[j + 1:j + 2],
+                    dalpha_at[j + 1:j + 2])
             iv = Interval(c, q_a, w_a, ev.q, s, turning, I_p_e=0.0, ends=ends)
             w_minus = 0.0 if turning else float((iv.G_e / iv.E_e)[0])
         plan.append((i, ev, kind, turning, iv, w_minus))
