@@ -94,7 +94,7 @@ def _f_df(K, s, q, mu, cp):
 def _df_dmu(K, s, q, mu, cp):
     """``d F_s' / d mu`` at fixed ``q`` (:meth:`symvib.numeric.sensitivity_curve.CurveFunctions.df_dmu`)."""
     alpha, dx = K.alpha(q, *cp), K.dx(q, *cp)
-    E = np.exp(2 * s * mu * alpha)
+    E = math.exp(2 * s * mu * alpha)
     return E * (2 * s * alpha * (K.dz(q, *cp) + s * mu * dx) + s * dx)
 
 
@@ -146,9 +146,9 @@ def _level(K, m, k, ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n
             q = q_a + delta * u if u <= 0.5 else q_e - delta * d
             alpha, dalpha = K.alpha(q, *cp), K.dalpha(q, *cp)
             h, dh = K.h(q, *cp), K.dh(q, *cp)
-            E = np.exp(2 * s * mu * alpha)
+            E = math.exp(2 * s * mu * alpha)
             w = G / E
-            root = np.sqrt(w)
+            root = math.sqrt(w) if w >= 0 else math.nan
             signed = x if from_start else -x
             for p in range(P):
                 Dq = (1 - u) * Dq_a[p] + u * Dq_e[p]
@@ -168,7 +168,7 @@ def _step(m, out, previous, cur, mag, best, best_gap, rtol):
     P = cur.shape[0]
     finite, gap, any_nan = True, -math.inf, False
     for p in range(P):
-        if not np.isfinite(cur[p]):
+        if not math.isfinite(cur[p]):
             finite = False
         v = abs(cur[p] - previous[m, p]) / _nan_max(mag[p], TINY)
         if v != v:
@@ -178,14 +178,17 @@ def _step(m, out, previous, cur, mag, best, best_gap, rtol):
     if any_nan:               # (np.max: NaN if any is)
         gap = math.nan
     converged = finite and gap <= rtol
-    if converged:
-        out[m] = cur
-    if finite and not converged and gap < best_gap[m]:
-        best[m] = previous[m]
+    better = finite and not converged and gap < best_gap[m]
+    for p in range(P):       # (element by element: compiles faster than numba's array assignment)
+        if converged:
+            out[m, p] = cur[p]
+        if better:
+            best[m, p] = previous[m, p]
+        previous[m, p] = cur[p]
+    if better:
         best_gap[m] = gap
     if not finite:
         best_gap[m] = math.inf
-    previous[m] = cur
     return finite and not converged
 
 
@@ -195,14 +198,19 @@ def time_derivatives_kernel(ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, 
     ``s, q_a, q_e, G_a, G_e, f_a, f_e``) with the tangents ``tangents`` (shape (4, M, P): ``Dq_a, Dq_e,
     DG_a, DG_e``); the levels' nodes from :func:`level_tables`."""
     M, P = tangents.shape[1], tangents.shape[2]
-    out = np.full((M, P), np.nan)
-    previous = np.empty((M, P))
-    best, best_gap = np.full((M, P), np.nan), np.full(M, math.inf)
-    refining = np.zeros(M, dtype=np.bool_)
+    out, previous, best = np.empty((M, P)), np.empty((M, P)), np.empty((M, P))
+    best_gap, refining = np.empty(M), np.empty(M, dtype=np.bool_)
+    for m in range(M):
+        best_gap[m] = math.inf
+        for p in range(P):
+            out[m, p] = math.nan
+            best[m, p] = math.nan
     cur, mag = np.empty(P), np.empty(P)
     for m in range(M):           # the levels up to BATCH_PANELS: no interval's failure ends another's
-        _level(SK, m, 0, ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n_start, offsets, xg, wg,
-               previous[m], mag)
+        _level(SK, m, 0, ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n_start, offsets, xg, wg, cur,
+               mag)
+        for p in range(P):
+            previous[m, p] = cur[p]
         on = True
         k = 0
         while on and k + 1 < batch_levels:
@@ -220,9 +228,12 @@ def time_derivatives_kernel(ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, 
             _level(SK, m, k, ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n_start, offsets, xg, wg, cur,
                    mag)
             on = _step(m, out, previous, cur, mag, best, best_gap, rtol)
-        if on and best_gap[m] <= accept:
-            out[m] = best[m]
-        if not np.all(np.isfinite(out[m])):
+        finite = True
+        for p in range(P):
+            if on and best_gap[m] <= accept:
+                out[m, p] = best[m, p]
+            finite = finite and math.isfinite(out[m, p])
+        if not finite:
             break
     return out
 
@@ -278,13 +289,17 @@ def event_tangents_kernel(is_impact, turning, moving, sigma_in, w_minus, scalars
     n, P = scalars.shape[0], Dmu.shape[0]
     rows = np.zeros((8, n, P))
     tail = np.zeros((2, P))
-    Dq_a, Dw_a = Dq_a0.copy(), Dw_a0.copy()
+    Dq_a, Dw_a, Dw_minus = np.empty(P), np.empty(P), np.empty(P)
+    for p in range(P):      # (element by element here: compiles faster than numba's array assignment)
+        Dq_a[p], Dw_a[p] = Dq_a0[p], Dw_a0[p]
     for j in range(n):
-        Dq_e, Dw_minus = rows[4, j], np.zeros(P)
-        rows[0, j], rows[1, j] = Dq_a, Dw_a
+        Dq_e = rows[4, j]
+        for p in range(P):
+            rows[0, j, p], rows[1, j, p] = Dq_a[p], Dw_a[p]
+            Dw_minus[p] = 0.0
         if not moving[j]:                   # (a rest test at the start: no motion in between)
-            Dq_e[:] = Dq_a
-            Dw_minus[:] = Dw_a
+            for p in range(P):
+                Dq_e[p], Dw_minus[p] = Dq_a[p], Dw_a[p]
         else:
             s, E_a, G_a, alpha_a, dalpha_a = scalars[j, 0], scalars[j, 1], scalars[j, 2], scalars[j, 3], scalars[j, 4]
             f_a, f_e, G_e, alpha_e, dalpha_e, E_e = (scalars[j, 5], scalars[j, 6], scalars[j, 7], scalars[j, 8],
@@ -304,19 +319,19 @@ def event_tangents_kernel(is_impact, turning, moving, sigma_in, w_minus, scalars
                     Dw_minus[p] = (rows[5, j, p] - G_e * 2 * s * moved) / E_e
         root = math.sqrt(w_minus[j]) if w_minus[j] > 0 else 0.0
         v_minus = sigma_in[j] * math.sqrt(max(w_minus[j], 0.0))
-        Dw_plus = np.empty(P)
         for p in range(P):
             Dv_minus = sigma_in[j] * Dw_minus[p] / (2 * root) if w_minus[j] > 0 else 0.0
             rows[6, j, p] = Dv_minus
             if is_impact[j]:
-                Dw_plus[p] = 2 * k * Dk[p] * w_minus[j] + k * k * Dw_minus[p]
+                Dw_a[p] = 2 * k * Dk[p] * w_minus[j] + k * k * Dw_minus[p]        # (w after the event)
                 rows[7, j, p] = -(Dk[p] * v_minus + k * Dv_minus)
                 tail[0, p] = tail[0, p] + m / 2 * (-2 * k * Dk[p] * w_minus[j] + (1 - k * k) * Dw_minus[p])
             else:
-                Dw_plus[p] = Dw_minus[p]
+                Dw_a[p] = Dw_minus[p]
                 rows[7, j, p] = 0.0 if turning[j] else Dv_minus
-        Dq_a, Dw_a = Dq_e, Dw_plus
-    tail[1] = Dw_a
+            Dq_a[p] = Dq_e[p]
+    for p in range(P):
+        tail[1, p] = Dw_a[p]
     return rows, tail
 
 
@@ -431,7 +446,6 @@ def quadratures(module) -> dict:
         dalpha=extra["dalpha_scalar"], dh=extra["dh_scalar"])
     tag = curve_tag(module)
     options = {name: {"cache": True, **ERRORS} for name in ENTRIES}
-    options.update({name: {"inline": "always", **INNER} for name in ("_f_df", "_df_dmu", "_nan_max")})
     compiled = compiled_functions([sys.modules[__name__]], lambda n: n in COMPILED,
                                    names={"SK": StaticKernels(f"{tag}_sensitivity", kernels)}, options=options,
                                    default=INNER, qualnames={name: f"{name}__{tag}" for name in ENTRIES})
