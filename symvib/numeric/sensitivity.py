@@ -155,7 +155,11 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     Four passes: the run's path in scalars (each interval's ends, branch and ``w``); the integrals
     of ``dF_s'/dp`` over every interval at once; the tangents of positions and speeds, event by
     event; the time derivatives of every interval at once
-    (:mod:`symvib.numeric.sensitivity_batch`).  Only the first and third are loops over events.
+    (:mod:`symvib.numeric.sensitivity_batch`).  Only the first and third are loops over events.  For a
+    run of the compiled engine (``result.stats["backend"] == "numba"``) without curve parameters in
+    ``wrt``, the second and fourth are compiled with the curve's kernels, and so is the third where no
+    event needs the curve's jets (:mod:`symvib.numeric.sensitivity_compiled`: the same numbers to
+    rounding; compiled once per curve, then read from numba's disk cache).
     """
     from symvib.numeric.prepared import prepared_of
 
