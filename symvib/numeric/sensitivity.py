@@ -161,7 +161,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     event needs the curve's jets (:mod:`symvib.numeric.sensitivity_compiled`: the same numbers to
     rounding; compiled once per curve, then read from numba's disk cache).
     """
-    from symvib.numeric.prepared import prepared_of
+    from symvib.numeric.prepared import kernels_of
 
     scene = result.scene
     targets = resolve_wrt(scene, wrt)
@@ -171,7 +171,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     if getattr(scene, "drag", 0.0):
         raise ValueError("result: a run with air drag (physics.drag) has no sensitivities yet: the derivatives of "
                          "physics.md, \"Sensitivities\" are those of the drag-free phase trajectory")
-    kernels = (prepared or prepared_of(scene)).kernels
+    kernels = prepared.kernels if prepared else kernels_of(scene)
     if jets is None:
         from symvib.numeric.jet_kernels import load_jets
 
@@ -180,9 +180,10 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     c.quadratures = quadratures_for(result, kernels, c)      # (a run of the compiled engine: compiled levels)
     P = len(wrt)
     unit = {name: np.zeros(P) for name in PARAMETERS}
+    eye = np.eye(P)
     for j, (_, kind, p) in enumerate(targets):
         if kind == "scene":
-            unit[p] = np.eye(P)[j]
+            unit[p] = eye[j]
     Dmu, Dk = unit["mu"], unit["k"]
     limiter_D = {scene.left: unit["left"], scene.right: unit["right"]}
 
