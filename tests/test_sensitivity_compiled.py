@@ -31,9 +31,13 @@ ONE_LIMITER = {**HUMP, "limiters": {"right": 0.3}, "initial": {"q": -0.2, "qdot"
 CIRCLE_N = {"curve": {"shape": "circle"}, "parameters": {"R": 0.5},      # sign changes of N
             "physics": {"alpha0": 0.02, "restitution": 1.0}, "initial": {"q": 0.0, "qdot": 11.0},
             "limiters": {"right": 2.5}}
+FLIGHTS = {"curve": {"shape": "circle"}, "parameters": {"R": 1.0},      # lift-offs, bounces, an accumulation
+           "physics": {"mu": 0.1, "restitution": 0.8, "contact": "unilateral", "restitution_curve": 0.3},
+           "initial": {"q": 0.0, "qdot": 7.0}}
 SCENES = ([resolve_scene(n).replace(k=k) for n, k in PAPER]
-          + [scene_from_dict(HUMP), scene_from_dict(ONE_LIMITER), scene_from_dict(CIRCLE_N)])
-IDS = [f"{n}-k{k}" for n, k in PAPER] + ["user-two-limiters", "user-one-limiter", "circle-sign-change-of-N"]
+          + [scene_from_dict(d) for d in (HUMP, ONE_LIMITER, CIRCLE_N, FLIGHTS)])
+IDS = [f"{n}-k{k}" for n, k in PAPER] + ["user-two-limiters", "user-one-limiter", "circle-sign-change-of-N",
+                                          "flights"]
 
 
 def _run(scene):
