@@ -19,6 +19,11 @@ stays the reference and the path of every other run: :func:`quadratures_for` giv
 one only for a run of the compiled engine (whose user has waited for a compiler already), without
 curve parameters in ``wrt`` (then ``dF_s'/dp = dF_s'/dmu Dmu``), for a curve module on disk.
 
+The pass over events that gives the tangents of positions and speeds (pass 3 of
+:func:`symvib.numeric.sensitivity._slide`) is compiled too where no event needs the curve's jets
+(:func:`event_tangents_kernel`: the Python loop's operations in its order, so its numbers bit for
+bit); it calls no kernel, so it is one compiled function for every curve.
+
 Examples
 --------
 >>> LEVELS, BATCH_LEVELS
