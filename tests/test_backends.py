@@ -149,7 +149,7 @@ def test_a_numeric_F_sigma_kernel_is_cached_on_disk_like_the_others(tmp_path, mo
     import numba
     from numba.core.errors import NumbaWarning
 
-    from symvib.numeric.engine.bind import _compiled_kernels
+    from symvib.numeric.engine.bind import compiled_kernels
     from symvib.prepare import load_kernels
 
     monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
@@ -158,7 +158,7 @@ def test_a_numeric_F_sigma_kernel_is_cached_on_disk_like_the_others(tmp_path, mo
     assert set(mod.F_ROUTES.values()) == {"numeric"}
     with warnings.catch_warnings():
         warnings.simplefilter("error", NumbaWarning)   # "Cannot cache ... dynamic globals" fails here
-        kernels = _compiled_kernels(mod, len(mod.PARAMS))
+        kernels = compiled_kernels(mod, len(mod.PARAMS))
     assert kernels[0](0.1, 0.05, 0.5) == mod.F_p_scalar(0.1, 0.05, 0.5)   # the same arithmetic
     stem = Path(mod.__file__).stem
     saved = {p.name.split("-")[0] for p in Path(numba.config.CACHE_DIR).rglob(f"{stem}.F_*_scalar-*.nbi")}

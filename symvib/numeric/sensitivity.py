@@ -57,6 +57,7 @@ import numpy as np
 from symvib.kernelformat import KernelError
 from symvib.numeric.layout import EventCode, StatusCode
 from symvib.numeric.sensitivity_batch import MAX_PANELS, NODES, end_integrals, time_derivatives
+from symvib.numeric.sensitivity_compiled import quadratures_for
 from symvib.numeric.sensitivity_curve import PARAMETERS, CurveFunctions, resolve_wrt
 from symvib.numeric.sensitivity_flight import land, landing_reason, launch
 from symvib.numeric.sensitivity_interval import Interval
@@ -154,9 +155,13 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     Four passes: the run's path in scalars (each interval's ends, branch and ``w``); the integrals
     of ``dF_s'/dp`` over every interval at once; the tangents of positions and speeds, event by
     event; the time derivatives of every interval at once
-    (:mod:`symvib.numeric.sensitivity_batch`).  Only the first and third are loops over events.
+    (:mod:`symvib.numeric.sensitivity_batch`).  Only the first and third are loops over events.  For a
+    run of the compiled engine (``result.stats["backend"] == "numba"``) without curve parameters in
+    ``wrt``, the second and fourth are compiled with the curve's kernels, and so is the third where no
+    event needs the curve's jets (:mod:`symvib.numeric.sensitivity_compiled`: the same numbers to
+    rounding; compiled once per curve, then read from numba's disk cache).
     """
-    from symvib.numeric.prepared import prepared_of
+    from symvib.numeric.prepared import kernels_of
 
     scene = result.scene
     targets = resolve_wrt(scene, wrt)
@@ -166,17 +171,19 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     if getattr(scene, "drag", 0.0):
         raise ValueError("result: a run with air drag (physics.drag) has no sensitivities yet: the derivatives of "
                          "physics.md, \"Sensitivities\" are those of the drag-free phase trajectory")
-    kernels = (prepared or prepared_of(scene)).kernels
+    kernels = prepared.kernels if prepared else kernels_of(scene)
     if jets is None:
         from symvib.numeric.jet_kernels import load_jets
 
         jets = lambda: load_jets(scene.shape)  # noqa: E731 - loaded only if needed
     c = CurveFunctions(kernels, scene, targets, jets)
+    c.quadratures = quadratures_for(result, kernels, c)      # (a run of the compiled engine: compiled levels)
     P = len(wrt)
     unit = {name: np.zeros(P) for name in PARAMETERS}
+    eye = np.eye(P)
     for j, (_, kind, p) in enumerate(targets):
         if kind == "scene":
-            unit[p] = np.eye(P)[j]
+            unit[p] = eye[j]
     Dmu, Dk = unit["mu"], unit["k"]
     limiter_D = {scene.left: unit["left"], scene.right: unit["right"]}
 
@@ -284,7 +291,11 @@ def _slide(c, scene, events, start, last, path, units):
     # 3. the tangents of the events' positions and speeds, event by event (no quadrature left)
     Dq_a, Dw_a, lift = path.Dq, path.Dw, None
     D_impact_loss = np.zeros(P)
-    for j, (i, ev, kind, turning, iv, w_minus) in enumerate(plan):
+    compiled = c.quadratures is not None and plan and not any(p[2] in JETS_EVENTS for p in plan)
+    arrays = None     # (with it, the arrays of the intervals' ends that pass 4 reads)
+    if compiled:    # (the same operations, compiled: sensitivity_compiled.event_tangents_kernel)
+        Dq_a, Dw_a, D_impact_loss, arrays = _compiled_event_tangents(c, scene, plan, path, units)
+    for j, (i, ev, kind, turning, iv, w_minus) in enumerate(() if compiled else plan):
         if iv is None:                      # no motion in between (a rest test at the start)
             Dq_e, Dw_minus = Dq_a.copy(), Dw_a.copy()
         else:
@@ -324,7 +335,9 @@ def _slide(c, scene, events, start, last, path, units):
     dT = np.zeros((len(plan), P))
     for lo in range(0, len(plan), CHUNK):      # (in chunks: none computed after one that fails)
         rows = [lo + r for r, p in enumerate(plan[lo:lo + CHUNK]) if p[4] is not None]
-        if rows:
+        if rows and arrays is not None:
+            dT[rows] = c.quadratures.time_derivatives_arrays(c, arrays[0][rows], arrays[1][:, rows])
+        elif rows:
             ends = {name: np.array([getattr(plan[r][4], name) for r in rows]) for name in BATCH_FIELDS}
             dT[rows] = time_derivatives(c, ends)
         if not np.all(np.isfinite(dT[lo:lo + CHUNK])):
@@ -354,6 +367,49 @@ def _slide(c, scene, events, start, last, path, units):
 
 #: Intervals whose time derivatives are computed at once (a chunk after one that fails is not computed).
 CHUNK = 64
+#: Events whose tangent needs the curve's jets (:mod:`symvib.numeric.sensitivity_normal`): pass 3 of a
+#: slide with one of them runs in Python.
+JETS_EVENTS = (EventCode.NORMAL_SIGN_CHANGE, EventCode.LIFT_OFF)
+#: Columns ``s, q_a, q_e, G_a, G_e, f_a, f_e`` of :func:`_compiled_event_tangents`' interval scalars, and its
+#: rows ``Dq_a, Dq_e, DG_a, DG_e`` (:data:`BATCH_FIELDS`, as the compiled time derivatives read them).
+ENDS_COLUMNS, TANGENT_ROWS = [0, 11, 12, 2, 7, 5, 6], [0, 4, 2, 5]
+
+
+def _compiled_event_tangents(c, scene, plan, path, units):
+    """Pass 3 of :func:`_slide` compiled (:func:`symvib.numeric.sensitivity_compiled.event_tangents_kernel`,
+    no event of :data:`JETS_EVENTS` in ``plan``, no curve parameter): writes the table's rows and each
+    interval's tangents as the Python loop does; returns ``Dq`` and ``Dw`` after the last event, the
+    tangent of the impact loss, and the intervals' ends as pass 4 reads them (``s, q_a, q_e, G_a, G_e, f_a,
+    f_e``, shape (n, 7); ``Dq_a, Dq_e, DG_a, DG_e``, shape (4, n, P))."""
+    from symvib.numeric.sensitivity_compiled import event_tangents
+
+    Dmu, Dk, limiter_D = units
+    T, Q, VB, VA = path.table
+    zeros = np.zeros(len(Dmu))
+    n = len(plan)
+    rest = (0.0,) * 13
+    scalars = np.array([rest if iv is None else (iv.s, iv.E_a, iv.G_a, iv.alpha_a, iv.dalpha_a, iv.f_a, iv.f_e, iv.G_e,
+                                                 iv.alpha_e[0], iv.dalpha_e[0], iv.E_e[0], iv.q_a, iv.q_e)
+                        for _, _, _, _, iv, _ in plan], dtype=float)
+    I_p_e = np.zeros((n, len(Dmu)))
+    limiter = np.zeros((n, len(Dmu)))
+    for j, (_, ev, kind, _, iv, _) in enumerate(plan):
+        if iv is not None:
+            I_p_e[j] = iv.I_p_e
+        if kind in (EventCode.IMPACT, EventCode.REST_ON_LIMITER):
+            limiter[j] = limiter_D.get(ev.q, zeros)
+    rows, tail = event_tangents()(
+        np.array([p[2] == EventCode.IMPACT for p in plan]), np.array([p[3] for p in plan]),
+        np.array([p[4] is not None for p in plan]), np.array([1.0 if p[1].qdot_before >= 0 else -1.0 for p in plan]),
+        np.array([p[5] for p in plan], dtype=float), scalars, I_p_e, limiter, float(c.mu), float(c.g),
+        float(scene.k), float(c.m), Dmu, Dk, np.asarray(path.Dq, dtype=float), np.asarray(path.Dw, dtype=float))
+    for j, (_, _, _, _, iv, _) in enumerate(plan):
+        if iv is not None:
+            iv.Dq_a, iv.Dw_a, iv.Dmu, iv.DG_a, iv.A, iv.Dq_e, iv.DG_e = (rows[0, j], rows[1, j], Dmu, rows[2, j],
+                                                                        rows[3, j], rows[4, j], rows[5, j])
+    index = [p[0] for p in plan]
+    Q[index], VB[index], VA[index] = rows[4], rows[6], rows[7]
+    return rows[4, -1], tail[1], tail[0], (scalars[:, ENDS_COLUMNS], rows[TANGENT_ROWS])
 #: The arrays of each interval that :func:`symvib.numeric.sensitivity_batch.time_derivatives` reads.
 BATCH_FIELDS = ("s", "q_a", "q_e", "G_a", "G_e", "f_a", "f_e", "Dq_a", "Dq_e", "DG_a", "DG_e")
 
@@ -388,8 +444,14 @@ def _plan(events, start, last, scene, c, q_a, w_a):
     # the kernels at every event and every interval's middle, each called once for all of them
     at = np.array([q_a] + [ev.q for ev in segment])
     middle = at[:-1] + (at[1:] - at[:-1]) / 2
-    alpha, dalpha, alpha_mid = c.alpha(at), c.dalpha(at), c.alpha(middle)
-    F, f, F_mid = ({s: fn(s, x) for s in (1, -1)} for fn, x in ((c.F, at), (c.f, at), (c.F, middle)))
+    both, n = np.concatenate((at, middle)), len(at)      # (alpha and F_s at both in one call each)
+    alpha_at, dalpha_at = c.alpha(both), c.dalpha(at)
+    # (as lists of floats, read one by one below: the same values, without NumPy's scalars)
+    alpha, alpha_mid, middle = alpha_at[:n].tolist(), alpha_at[n:].tolist(), middle.tolist()
+    dalpha = dalpha_at.tolist()
+    F = {s: c.F(s, both).tolist() for s in (1, -1)}
+    f = {s: c.f(s, at).tolist() for s in (1, -1)}
+    F, F_mid = {s: v[:n] for s, v in F.items()}, {s: v[n:] for s, v in F.items()}
     for j, ev in enumerate(segment):
         i, kind = start + j, ev.kind.code
         own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
@@ -401,8 +463,8 @@ def _plan(events, start, last, scene, c, q_a, w_a):
         else:
             sigma = 1 if ev.q > q_a else -1
             s = _branch(c, w_a, sigma, middle[j], (alpha[j], alpha_mid[j], F[sigma][j], F_mid[sigma][j]))
-            ends = (float(alpha[j]), float(dalpha[j]), float(f[s][j]), float(f[s][j + 1]), F[s][j], F[s][j + 1],
-                    alpha[j + 1:j + 2], dalpha[j + 1:j + 2])
+            ends = (alpha[j], dalpha[j], f[s][j], f[s][j + 1], F[s][j], F[s][j + 1], alpha_at[j + 1:j + 2],
+                    dalpha_at[j + 1:j + 2])
             iv = Interval(c, q_a, w_a, ev.q, s, turning, I_p_e=0.0, ends=ends)
             w_minus = 0.0 if turning else float((iv.G_e / iv.E_e)[0])
         plan.append((i, ev, kind, turning, iv, w_minus))

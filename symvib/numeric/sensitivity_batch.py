@@ -28,8 +28,8 @@ from functools import cache
 
 import numpy as np
 
-__all__ = ["NODES", "RTOL", "ACCEPT", "MAX_PANELS", "INNER_NODES", "INTEGRAL_RTOL", "gauss", "cumulative",
-           "end_integrals", "time_derivatives"]
+__all__ = ["NODES", "RTOL", "ACCEPT", "MAX_PANELS", "INNER_NODES", "INTEGRAL_RTOL", "gauss", "theta_level",
+           "cumulative", "end_integrals", "time_derivatives"]
 
 #: Gauss-Legendre nodes per panel of the time derivative's integral in ``theta``.
 NODES = 20
@@ -61,7 +61,7 @@ def gauss(n):
 
 
 @cache
-def _theta_level(panels):
+def theta_level(panels):
     """The nodes ``u``, ``1 - u`` (each to its last bit) and weights of ``panels`` Gauss panels in ``theta``
     on ``[0, pi]``, ``u = (1 - cos theta) / 2`` (the weights carry ``du/dtheta``)."""
     x, wts = gauss(NODES)
@@ -128,7 +128,10 @@ def end_integrals(c, s, anchor, D, max_pieces):
     """``Integral_{anchor}^{anchor + D} dF_s'/dp dq`` of each interval (shape (M, P)): :func:`cumulative`
     over 8, 16, ... equal pieces until two agree to ``INTEGRAL_RTOL`` of the integral of ``|dF_s'/dp|``,
     column by column, each interval to its own count (the last count tried where none agree).  Without
-    curve parameters only ``mu``'s column is integrated (the others are 0)."""
+    curve parameters only ``mu``'s column is integrated (the others are 0).  ``c.quadratures``, where
+    set, evaluates the same levels compiled (:mod:`symvib.numeric.sensitivity_compiled`)."""
+    if getattr(c, "quadratures", None) is not None:
+        return c.quadratures.end_integrals(c, s, anchor, D, max_pieces)
     factors = c.df_dp_factors(s)
     fn = factors[0] if factors else (lambda v: c.df_dp(s, v))
     M = len(anchor)
@@ -165,8 +168,11 @@ def time_derivatives(c, ends):
     and the tangents ``Dq_a``, ``Dq_e``, ``DG_a``, ``DG_e`` (M, P); ``c`` is the
     :class:`~symvib.numeric.sensitivity_curve.CurveFunctions` of the run.  The levels up to
     ``BATCH_PANELS`` panels are evaluated for all unconverged intervals at once, the finer ones
-    interval by interval (few need them, and none after one that fails).
+    interval by interval (few need them, and none after one that fails).  ``c.quadratures``, where set,
+    evaluates the same levels compiled (:mod:`symvib.numeric.sensitivity_compiled`).
     """
+    if getattr(c, "quadratures", None) is not None:
+        return c.quadratures.time_derivatives(c, ends)
     M, P = ends["Dq_a"].shape
     out = np.full((M, P), np.nan)
     if M == 0:
@@ -214,7 +220,7 @@ class _Refinement:
 def _level(c, ends, rows, panels):
     """The integral of the time derivative's integrand and of its magnitude on ``panels`` panels, for the
     intervals ``rows`` of ``ends`` (shape (len(rows), P) each)."""
-    u, d, weights, start, end = _theta_level(panels)
+    u, d, weights, start, end = theta_level(panels)
     e = {k: v[rows] for k, v in ends.items()}
     q_a, q_e = e["q_a"], e["q_e"]
     delta = q_e - q_a

@@ -118,6 +118,8 @@ class CurveFunctions:
         self._zero_block = np.zeros((0, self.P))
         self._jets_of = jets     # a module, or a callable that loads it (only when first needed)
         self._jets = None
+        #: The compiled quadratures of the run (:mod:`symvib.numeric.sensitivity_compiled`), or None: NumPy's.
+        self.quadratures = None
 
     @property
     def has_curve_parameters(self) -> bool:

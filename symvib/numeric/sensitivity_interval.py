@@ -55,8 +55,10 @@ class Interval:
         c, s = self.c, self.s
         self.Dq_a, self.Dw_a, self.Dmu = Dq_a, Dw_a, Dmu
         # total derivative of G at the start: D(w_a E(q_a)), alpha's own derivative in a curve parameter too
-        self.DG_a = Dw_a * self.E_a + self.G_a * 2 * s * (self.alpha_a * Dmu + c.mu * self.dalpha_a * Dq_a
-                                                            + c.mu * c.geometry_dp("alpha", self.q_a)[0])
+        moved = self.alpha_a * Dmu + c.mu * self.dalpha_a * Dq_a
+        if c.has_curve_parameters:      # (else alpha's own derivative is 0: nothing to add)
+            moved = moved + c.mu * c.geometry_dp("alpha", self.q_a)[0]
+        self.DG_a = Dw_a * self.E_a + self.G_a * 2 * s * moved
         # dG/dp at fixed q, the part that does not depend on q: (dG/dp)(q) = A - 2 g I_p(q), with
         # I_p(q) = Integral_{q_a}^{q} dF_s'/dp (mu and the curve's parameters)
         self.A = self.DG_a + 2 * c.g * self.f_a * Dq_a
@@ -65,9 +67,11 @@ class Interval:
         """``w`` at the end and its total derivative there (shape (P,)): :meth:`along` at ``u = 1``, where
         every integral from the end is empty."""
         c, s = self.c, self.s
-        W = (self.DG_e - self.G_e * 2 * s * (np.outer(self.alpha_e, self.Dmu) + c.mu * self.dalpha_e[:, None]
-                                             * self.Dq_e[None, :] + c.mu * c.geometry_dp("alpha", self.q_e)))
-        return float((self.G_e / self.E_e)[0]), (W / self.E_e[:, None])[0]
+        E_e = self.E_e[0]
+        moved = self.alpha_e[0] * self.Dmu + c.mu * self.dalpha_e[0] * self.Dq_e
+        if c.has_curve_parameters:      # (else alpha's own derivative is 0: nothing to add)
+            moved = moved + c.mu * c.geometry_dp("alpha", self.q_e)[0]
+        return float(self.G_e / E_e), (self.DG_e - self.G_e * 2 * s * moved) / E_e
 
     def dG_fixed_q_end(self):
         """``dG/dp`` at fixed ``q = q_e``."""

@@ -18,7 +18,7 @@ no source text is pasted or executed.
   (:mod:`~symvib.numeric.engine.compiled`); a new curve costs its kernels only.
 
 Either way every engine function is compiled from its own code object with its
-calls bound to its compiled siblings (:func:`_compiled_functions`).
+calls bound to its compiled siblings (:func:`compiled_functions`).
 
 The binding's contract
 ----------------------
@@ -87,7 +87,8 @@ from symvib.numeric.engine.rebind import ENGINE_MODULES, rebound_functions
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
 __all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
-           "own_rules", "rebound_functions", "ENGINE_MODULES", "ENTRY_POINTS", "NO_REFCOUNT"]
+           "own_rules", "rebound_functions", "compiled_functions", "compiled_kernels", "kernel_signatures",
+           "flush_if_stale", "curve_tag", "ENGINE_MODULES", "ENTRY_POINTS", "NO_REFCOUNT", "ERRORS", "INNER"]
 
 #: Entry points compiled with explicit signatures (and cached on disk).
 ENTRY_POINTS = ("simulate_scene", "sample_scene", "sweep_block")
@@ -138,7 +139,7 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
                       threaded_sweep(entries["sweep_bound"]))
     from symvib.numeric.engine.compiled import kernels_box
 
-    k = kernels_box(_compiled_kernels(module, ncp), _signatures(ncp))
+    k = kernels_box(compiled_kernels(module, ncp), kernel_signatures(ncp))
     entries = _compiled_engine(ncp)
     return Engine(partial(entries["simulate_scene"], k), partial(entries["sample_scene"], k),
                   threaded_sweep(partial(entries["sweep_block"], k)))
@@ -178,7 +179,7 @@ ERRORS = {"error_model": "numpy"}
 INNER = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True, **ERRORS}
 
 
-def _signatures(ncp: int) -> dict:
+def kernel_signatures(ncp: int) -> dict:
     """numba signatures of the kernels (by engine name) for ``ncp`` curve parameters."""
     from numba import types as nt
 
@@ -190,7 +191,7 @@ def _signatures(ncp: int) -> dict:
     return out
 
 
-def _compiled_functions(modules, keep, *, names=None, options=None, default=None, qualnames=None) -> dict:
+def compiled_functions(modules, keep, *, names=None, options=None, default=None, qualnames=None) -> dict:
     """numba dispatchers of the functions defined in ``modules`` whose names pass ``keep``
     (:func:`rebound_functions`, their calls bound to their compiled siblings).
 
@@ -249,16 +250,16 @@ def _cacheable(module) -> bool:
     return bool(getattr(module, "__file__", None))
 
 
-def _compiled_kernels(module, ncp: int) -> tuple:
+def compiled_kernels(module, ncp: int) -> tuple:
     """The module's interface kernels compiled with their signatures (cached per module)."""
     cached = getattr(module, "_symvib_compiled_kernels", None)
     if cached is not None:
         return cached
-    sigs = _signatures(ncp)
+    sigs = kernel_signatures(ncp)
     wanted = {fname for fname, _, _ in KERNEL_INTERFACE.values()}
     # Every function the interface kernels may call: the module's float-only functions.
     cache = _cacheable(module)
-    compiled = _compiled_functions([module], lambda n: n.endswith("_scalar") or n in wanted,
+    compiled = compiled_functions([module], lambda n: n.endswith("_scalar") or n in wanted,
                                    options={f: {"cache": cache, **ERRORS} for f in wanted}, default=ERRORS)
     out = []
     for name, (fname, _, _) in KERNEL_INTERFACE.items():
@@ -306,7 +307,7 @@ def _params_of(ncp: int):
     return numba.njit(**INNER)(params_of)
 
 
-def _flush_if_stale(dispatchers, marker: Path) -> None:
+def flush_if_stale(dispatchers, marker: Path) -> None:
     """Empty the disk cache of ``dispatchers`` unless ``marker`` (named by :func:`engine_digest`)
     exists, then leave it: numba checks only an entry point's own file, not the modules it calls."""
     if not marker.exists():
@@ -329,7 +330,7 @@ def _compiled_engine(ncp: int) -> dict:
     from symvib.numeric.kernels import cache_dir
 
     f64 = nt.float64
-    k_type = kernels_type(_signatures(ncp))
+    k_type = kernels_type(kernel_signatures(ncp))
     cp_type = nt.Tuple([f64] * ncp)
     vec, mat = f64[::1], f64[:, ::1]
     rules_type = nt.NamedTuple([vec, vec, mat, mat, vec, vec, mat, vec, vec, f64, f64], Rules)
@@ -337,9 +338,9 @@ def _compiled_engine(ncp: int) -> dict:
     options = {name: {"cache": True, **ERRORS} for name in ENTRY_POINTS}
     options["sweep_block"] = {"cache": True, "nogil": True, **ERRORS}
     # (not NO_REFCOUNT here: the kernels' structure is itself reference counted)
-    compiled = _compiled_functions(ENGINE_MODULES, lambda n: not n.endswith("_bound") and n != "params_of",
+    compiled = compiled_functions(ENGINE_MODULES, lambda n: not n.endswith("_bound") and n != "params_of",
                                    names={"params_of": _params_of(ncp)}, options=options, default=INNER)
-    _flush_if_stale([compiled[name] for name in ENTRY_POINTS], cache_dir() / "engines" / f"engine-{engine_digest()}")
+    flush_if_stale([compiled[name] for name in ENTRY_POINTS], cache_dir() / "engines" / f"engine-{engine_digest()}")
     signatures = {
         "simulate_scene": (k_type, cp_type, vec, rules_type, nt.boolean),
         "sample_scene": (k_type, cp_type, vec, rules_type, mat, nt.int64, nt.int64),
@@ -358,7 +359,7 @@ def _compiled_engine(ncp: int) -> dict:
 BOUND_ENTRIES = ("simulate_bound", "sample_bound", "sweep_bound")
 
 
-def _tag(module) -> str:
+def curve_tag(module) -> str:
     """The name of a curve's compiled engine: its module's name and input hash (an identifier)."""
     import re
 
@@ -369,7 +370,7 @@ def compiled_marker(module, entry: str) -> Path:
     """The file that says a curve's compiled ``entry`` is in numba's disk cache (for this engine)."""
     from symvib.numeric.kernels import cache_dir
 
-    return cache_dir() / "engines" / f"compiled-{engine_digest()}-{_tag(module)}-{entry}"
+    return cache_dir() / "engines" / f"compiled-{engine_digest()}-{curve_tag(module)}-{entry}"
 
 
 def is_compiled(module, entry: str = "simulate_bound") -> bool:
@@ -410,7 +411,7 @@ def _specialized_engine(module, ncp: int) -> dict:
     from symvib.numeric.engine.static import StaticKernels
     from symvib.numeric.kernels import cache_dir
 
-    tag = _tag(module)
+    tag = curve_tag(module)
     cache = _cacheable(module)
     options = {name: {"cache": cache, **ERRORS} for name in BOUND_ENTRIES}
     # Threads of Python over blocks of scenes (threaded_sweep), not numba's parallel loop (prange):
@@ -421,11 +422,11 @@ def _specialized_engine(module, ncp: int) -> dict:
                                  *timing.QUAD_STEPS)})
     options.update({name: {"_nrt": False, **INNER} for name in NO_REFCOUNT})
     names = {"params_of": _params_of(ncp),
-             "BOUND_KERNELS": StaticKernels(tag, Kernels(*_compiled_kernels(module, ncp)))}
-    compiled = _compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,
+             "BOUND_KERNELS": StaticKernels(tag, Kernels(*compiled_kernels(module, ncp)))}
+    compiled = compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,
                                    default=INNER,
                                    qualnames={name: f"{name}__{tag}" for name in BOUND_ENTRIES})
-    _flush_if_stale([compiled[name] for name in BOUND_ENTRIES],
+    flush_if_stale([compiled[name] for name in BOUND_ENTRIES],
                     cache_dir() / "engines" / f"engine-{engine_digest()}-{tag}")
     module._symvib_specialized_engine = compiled
     return compiled
