@@ -54,9 +54,9 @@ def _both(res, wrt, monkeypatch, **kwargs):
     """The tangents of ``res`` with the compiled quadratures and with NumPy's."""
     kernels = prepared_of(res.scene).kernels
     monkeypatch.setattr(sensitivity, "quadratures_for",
-                        lambda result, k, c: Quadratures(quadratures(kernels), c._cp))
+                        lambda result, k, c, **_: Quadratures(quadratures(kernels), c._cp))
     fast = interval_tangents(res, wrt, **kwargs)
-    monkeypatch.setattr(sensitivity, "quadratures_for", lambda *args: None)
+    monkeypatch.setattr(sensitivity, "quadratures_for", lambda *args, **_: None)
     return fast, interval_tangents(res, wrt, **kwargs)
 
 
@@ -144,11 +144,37 @@ def test_only_runs_of_the_compiled_engine_without_curve_parameters_take_them():
     plain = CurveFunctions(kernels, scene, resolve_wrt(scene, ("mu", "k")))
     curve = CurveFunctions(kernels, scene, resolve_wrt(scene, ("mu", "p")))
     numba_run, plain_run = SimpleNamespace(stats={"backend": "numba"}), SimpleNamespace(stats={"backend": "python"})
-    assert isinstance(quadratures_for(numba_run, kernels, plain), Quadratures)
-    assert quadratures_for(plain_run, kernels, plain) is None          # a plain run never waits for a compiler
-    assert quadratures_for(numba_run, kernels, curve) is None          # curve parameters: NumPy's path
-    view = SimpleNamespace(PARAMS=kernels.PARAMS)                       # (a prepared view: no file)
-    assert quadratures_for(numba_run, view, plain) is None
+    assert isinstance(quadratures_for(numba_run, kernels, plain, compile=True), Quadratures)
+    assert quadratures_for(plain_run, kernels, plain, compile=True) is None   # a plain run never waits for one
+    assert quadratures_for(numba_run, kernels, curve, compile=True) is None   # curve parameters: NumPy's path
+    view = SimpleNamespace(PARAMS=kernels.PARAMS)                              # (a prepared view: no file)
+    assert quadratures_for(numba_run, view, plain, compile=True) is None
+
+
+def test_one_call_takes_them_only_where_they_are_compiled_and_a_fit_compiles_them(tmp_path, monkeypatch):
+    monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))                    # (no markers of other runs)
+    scene = resolve_scene("paper-parabola")
+    c = CurveFunctions(prepared_of(scene).kernels, scene, resolve_wrt(scene, ("mu", "k")))
+    fresh = SimpleNamespace(__file__="parabola.py", PARAMS=("p",), __name__="fresh", INPUT_HASH="0" * 64)
+    monkeypatch.setattr(sensitivity_compiled, "quadratures", lambda module: {})      # (no compile here)
+    numba_run = SimpleNamespace(stats={"backend": "numba"})
+    assert not sensitivity_compiled.compiled_on_disk(fresh)
+    assert quadratures_for(numba_run, fresh, c) is None                 # one call: NumPy's, no compile
+    assert isinstance(quadratures_for(numba_run, fresh, c, compile=True), Quadratures)     # a fit's
+    for entry in sensitivity_compiled.MARKED:                           # (what a first call leaves)
+        marker = sensitivity_compiled.compiled_marker(fresh, entry)
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.touch()
+    assert sensitivity_compiled.compiled_on_disk(fresh)
+    assert isinstance(quadratures_for(numba_run, fresh, c), Quadratures)          # then one call takes them
+
+
+def test_a_first_compiled_call_leaves_its_marker(tmp_path, monkeypatch):
+    monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
+    marker = tmp_path / "engines" / "m"
+    calls = []
+    marked = sensitivity_compiled._marking(lambda *a: calls.append(a) or 7, marker)
+    assert not marker.exists() and marked(1, 2) == 7 and marker.exists() and calls == [(1, 2)]
 
 
 @pytest.mark.parametrize("name", ["paper-parabola", "paper-circle-7"])
@@ -157,7 +183,8 @@ def test_the_compiled_pass_over_events_is_the_python_loop_bit_for_bit(name, monk
     res = _run(scene)
     kernels = prepared_of(scene).kernels
     wrt = _scene_wrt(scene)
-    monkeypatch.setattr(sensitivity, "quadratures_for", lambda result, k, c: Quadratures(quadratures(kernels), c._cp))
+    monkeypatch.setattr(sensitivity, "quadratures_for",
+                        lambda result, k, c, **_: Quadratures(quadratures(kernels), c._cp))
     fast = interval_tangents(res, wrt)
     monkeypatch.setattr(sensitivity, "JETS_EVENTS", tuple(EventCode))     # (every event: the Python loop)
     slow = interval_tangents(res, wrt)

@@ -218,7 +218,7 @@ def _model(scene, observed, free, run):
 
     def jacobian():
         # (the events after the last matched one are not differentiated: no row needs them)
-        sens = sensitivities(result, wrt=free, through=index[matched - 1] if matched else 0)
+        sens = sensitivities(result, wrt=free, through=index[matched - 1] if matched else 0, compile=True)
         blocks, usable = [], []
         for values in ([sens.t] if observed.q is None else [sens.t, sens.q]):
             J = np.zeros((n_obs, len(free)))
@@ -248,7 +248,8 @@ def _sample_model(scene, observed, free, run):
     r = (sample_positions(result, observed.t, observed.coordinates) - observed.values).T.ravel()
 
     def jacobian():
-        D = sample_sensitivities(result, observed.t, free, observed.coordinates).derivatives  # (n, columns, P)
+        D = sample_sensitivities(result, observed.t, free, observed.coordinates,
+                                 compile=True).derivatives  # (n, columns, P)
         J = np.concatenate([D[:, j, :] for j in range(D.shape[1])])
         usable = np.all(np.isfinite(J), axis=1)
         J[~usable] = 0.0

@@ -78,7 +78,8 @@ class SampleSensitivities:
     reasons: tuple
 
 
-def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepared=None) -> SampleSensitivities:
+def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepared=None,
+                         compile: bool = False) -> SampleSensitivities:
     """The position of ``result`` at times ``t`` and its derivatives with respect to ``wrt``.
 
     Parameters
@@ -92,6 +93,8 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
     coordinates : {"q", "xz", "s"}
         Key of :data:`COORDINATES`.
     prepared : Prepared, optional
+    compile : bool
+        Compile the quadratures if they are not yet (:func:`symvib.numeric.sensitivity.interval_tangents`).
 
     Returns
     -------
@@ -114,7 +117,7 @@ def sample_sensitivities(result, t, wrt=("mu", "k"), coordinates="q", *, prepare
     # (no event after the one that ends the last sample's interval, and the one after it, is needed)
     event_times = np.array([e.t for e in result.events])
     through = int(np.searchsorted(event_times, np.max(times), side="left")) + 1 if len(times) else None
-    tangents = interval_tangents(result, wrt, prepared=prepared, through=through)
+    tangents = interval_tangents(result, wrt, prepared=prepared, through=through, compile=compile)
     sens = tangents.sensitivities
     q, qdot = (np.asarray(a, dtype=float).reshape(-1) for a in dense.state(times))
     flying = _flying(dense, times)

@@ -76,7 +76,7 @@ GRAZING = 1e-9
 FINAL_STATUSES = (StatusCode.ARRESTED, StatusCode.RESTING_ON_LIMITER)
 
 
-def sensitivities(result, wrt=PARAMETERS, *, prepared=None, through=None) -> Sensitivities:
+def sensitivities(result, wrt=PARAMETERS, *, prepared=None, through=None, compile: bool = False) -> Sensitivities:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``.
 
     Parameters and errors as :func:`interval_tangents`, whose ``sensitivities`` this is.
@@ -86,7 +86,7 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None, through=None) -> Sen
     Sensitivities
         The record (:mod:`symvib.numeric.sensitivity_table`).
     """
-    return interval_tangents(result, wrt, prepared=prepared, through=through).sensitivities
+    return interval_tangents(result, wrt, prepared=prepared, through=through, compile=compile).sensitivities
 
 
 @dataclass(frozen=True)
@@ -117,7 +117,8 @@ class Tangents:
     flights: tuple = ()
 
 
-def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, through=None) -> Tangents:
+def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, through=None,
+                      compile: bool = False) -> Tangents:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``, and its intervals.
 
     Parameters
@@ -138,6 +139,11 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
         their reason says they were not asked for, and so is the final state unless it is the last
         event.  The events up to it are the same numbers as without it (a fit that matches the
         first events asks for those only).
+    compile : bool
+        For a run of the compiled engine, compile the quadratures with the curve's kernels if they are
+        not compiled yet (a few seconds, once per curve: :mod:`symvib.numeric.sensitivity_compiled`);
+        the fit and a sweep's sensitivity columns ask for it.  Default: the compiled quadratures only
+        where they are compiled already, else NumPy's (the same numbers to rounding).
 
     Returns
     -------
@@ -177,7 +183,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
 
         jets = lambda: load_jets(scene.shape)  # noqa: E731 - loaded only if needed
     c = CurveFunctions(kernels, scene, targets, jets)
-    c.quadratures = quadratures_for(result, kernels, c)      # (a run of the compiled engine: compiled levels)
+    c.quadratures = quadratures_for(result, kernels, c, compile=compile)   # (compiled levels, where they may be)
     P = len(wrt)
     unit = {name: np.zeros(P) for name in PARAMETERS}
     eye = np.eye(P)

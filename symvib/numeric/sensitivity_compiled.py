@@ -52,7 +52,8 @@ from symvib.numeric.sensitivity_batch import (
     theta_level,
 )
 
-__all__ = ["SensitivityKernels", "Quadratures", "quadratures_for", "quadratures", "level_tables",
+__all__ = ["SensitivityKernels", "Quadratures", "quadratures_for", "quadratures", "level_tables", "MARKED",
+           "compiled_marker", "compiled_on_disk",
            "event_tangents", "event_tangents_kernel", "LEVELS", "BATCH_LEVELS", "ENTRIES", "INTERVAL_SCALARS"]
 
 #: Levels of the time derivative's refinement (``2, 4, ..., MAX_PANELS`` panels).
@@ -389,13 +390,15 @@ class Quadratures:
         return values[:, None] * c.Dmu
 
 
-def quadratures_for(result, kernels, c):
+def quadratures_for(result, kernels, c, *, compile: bool = False):
     """The compiled :class:`Quadratures` a differentiated run takes, or None (the NumPy path).
 
-    Compiled only for a run of the compiled engine (``result.stats["backend"] == "numba"``: a run of
-    the plain engine never waits for a compiler), without curve parameters in ``wrt``, with numba
-    installed and the curve's module on disk (a prepared view of it is compiled per process only:
-    not worth it for the quadratures).
+    Only for a run of the compiled engine (``result.stats["backend"] == "numba"``: a run of the plain
+    engine never waits for a compiler), without curve parameters in ``wrt``, with numba installed and
+    the curve's module on disk (a prepared view of it is compiled per process only: not worth it for
+    the quadratures); and only where they are compiled already (in this process, or on disk:
+    :func:`compiled_on_disk`) unless ``compile`` (a caller that differentiates many runs, a fit or a
+    sweep's columns, for which the compile of a few seconds pays): one call never waits for it.
     """
     if result.stats.get("backend") != "numba" or c.has_curve_parameters or not getattr(kernels, "__file__", None):
         return None
@@ -403,7 +406,46 @@ def quadratures_for(result, kernels, c):
 
     if importlib.util.find_spec("numba") is None:
         return None
+    if not (compile or getattr(kernels, "_symvib_sensitivity_quadratures", None) is not None
+            or compiled_on_disk(kernels)):
+        return None
     return Quadratures(quadratures(kernels), c._cp)
+
+
+#: The compiled functions whose disk-cache markers :func:`compiled_on_disk` asks for.
+MARKED = (*ENTRIES, "event_tangents")
+
+
+def compiled_marker(module, entry: str) -> Path:
+    """The file that says ``entry`` (of :data:`MARKED`) is in numba's disk cache for ``module``'s curve
+    (:func:`event_tangents`, which calls no kernel: for every curve)."""
+    from symvib.numeric.engine.bind import curve_tag
+    from symvib.numeric.kernels import cache_dir
+
+    owner = "all" if entry == "event_tangents" else curve_tag(module)
+    return cache_dir() / "engines" / f"compiled-sensitivity-{_digest()}-{owner}-{entry}"
+
+
+def compiled_on_disk(module) -> bool:
+    """Whether every compiled quadrature of ``module``'s curve was compiled before (and so loads from
+    numba's disk cache in a new process instead of compiling)."""
+    return all(compiled_marker(module, entry).exists() for entry in MARKED)
+
+
+def _marking(fn, marker: Path):
+    """``fn`` that leaves ``marker`` after its first call (numba has compiled and cached it then)."""
+    done = [marker.exists()]
+
+    def call(*args):
+        out = fn(*args)
+        if not done[0]:
+            marker.parent.mkdir(parents=True, exist_ok=True)
+            marker.touch()
+            done[0] = True
+        return out
+
+    call.__wrapped__ = fn
+    return call
 
 
 def _digest() -> str:
@@ -456,6 +498,7 @@ def quadratures(module) -> dict:
                                    default=INNER, qualnames={name: f"{name}__{tag}" for name in ENTRIES})
     compiled = {name: compiled[name] for name in ENTRIES}
     flush_if_stale(compiled.values(), cache_dir() / "engines" / f"sensitivity-{_digest()}-{tag}")
+    compiled = {name: _marking(fn, compiled_marker(module, name)) for name, fn in compiled.items()}
     module._symvib_sensitivity_quadratures = compiled
     return compiled
 
@@ -468,4 +511,4 @@ def event_tangents():
 
     from symvib.numeric.engine.bind import ERRORS
 
-    return numba.njit(cache=True, **ERRORS)(event_tangents_kernel)
+    return _marking(numba.njit(cache=True, **ERRORS)(event_tangents_kernel), compiled_marker(None, "event_tangents"))

@@ -171,7 +171,7 @@ def compute(spec, values, status, backend: str = "auto") -> dict:
         if result.status.is_error:
             out[REASON_COLUMN][i] = 8
             continue
-        sens = sensitivities(result, wrt, prepared=prepared)
+        sens = sensitivities(result, wrt, prepared=prepared, compile=True)
         for quantity in differentiated:
             for j, p in enumerate(wrt):
                 out[f"d_{quantity}_d_{p}"][i] = sens.final[quantity][j]
