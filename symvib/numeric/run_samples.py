@@ -1,5 +1,5 @@
 """A run's samples: the logged motion intervals cut into pieces and evaluated at Gauss nodes
-(physics.md, "Samples"), computed on first use of ``Result.samples``.
+(physics.md, "Time": the nodes of the time quadrature), computed on first use of ``Result.samples``.
 
 :func:`simulate <symvib.numeric.driver.simulate>` keeps what the samples need (the interval
 log) and hands :func:`lazy_samples` to the result; the samples are computed by the engine the
