@@ -348,3 +348,21 @@ def test_a_fit_whose_every_trial_run_fails_says_so_instead_of_converged():
     result = fit(scene.replace(qdot0=4.2), observed_events(times, kinds=["impact"] * len(times)), free=("qdot0", "a"))
     assert result.status == "runs_failed", result.message
     assert "not prepared" in result.message and result.estimates["qdot0"] == 4.2
+
+
+def test_a_minimum_far_worse_than_the_weights_allow_is_a_poor_fit_not_converged(monkeypatch):
+    # Without the continuation (all 20 impacts at once) this start settles in a local minimum
+    # (mu 0.004, k 0.96 for 0.01, 0.95) whose residuals are hundreds of sigmas: it said "converged".
+    from symvib.numeric import fit as fitmod
+
+    truth = resolve_scene("paper-parabola").replace(mu=0.01, k=0.95)
+    impacts = [e.t for e in simulate(truth, samples=False).events if e.kind.value == "impact"][:20]
+    noisy = np.array(impacts) + np.random.default_rng(26).normal(0, 1e-3, 20)
+    start = truth.replace(mu=0.012, k=0.9, qdot0=7.5, right=0.75)
+    free, w = ("mu", "k", "qdot0", "right"), np.full(20, 1e3)
+    good = fit(start, observed_events(noisy, kinds=["impact"] * 20), free, weights=w)
+    assert good.status == "converged" and 2 * good.cost / (20 - 4) < fitmod.POOR_FIT
+    monkeypatch.setattr(fitmod, "_stages", lambda n_obs, n_free: [n_obs])
+    local = fit(start, observed_events(noisy, kinds=["impact"] * 20), free, weights=w)
+    assert local.status == "poor_fit" and abs(local.estimates["mu"] - 0.01) > 1e-3
+    assert "chi^2 / (m - n) = " in local.message and "another start" in local.message

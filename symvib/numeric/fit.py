@@ -31,7 +31,10 @@ result says so; a sample after the end of a run that does not come to rest is re
 covariance is scaled by the residual variance (``cost / (m - n)``, as SciPy's
 ``curve_fit`` with ``absolute_sigma=False``).  Parameters the data do not
 separate (a near-singular Jacobian, ``|correlation| > 1 - 1e-6``) are named in
-the status ``not_identified``.
+the status ``not_identified``.  With weights, a minimum whose ``chi^2 / (m - n)``
+exceeds :data:`POOR_FIT` is no answer: the status ``poor_fit`` says so (least squares
+from a distant start can settle in a local minimum, which the continuation avoids
+but cannot rule out).
 
 Examples
 --------
@@ -67,7 +70,7 @@ from symvib.numeric.sensitivity import PARAMETERS, sensitivities
 from symvib.numeric.sensitivity_curve import parameter_value, resolve_wrt, with_parameters
 
 __all__ = ["fit", "observed_events", "observed_samples", "read_events", "read_samples", "read_observations",
-           "FitResult", "Observed", "ObservedSamples", "STATUSES"]
+           "FitResult", "Observed", "ObservedSamples", "STATUSES", "POOR_FIT"]
 
 #: Outcomes of a fit.
 STATUSES = {
@@ -78,7 +81,13 @@ STATUSES = {
     "incomplete": "stopped where the model does not make every observed event (see message); try another start",
     "no_events": "the model makes none of the observed events at the start; give another start",
     "runs_failed": "stopped: the run of every trial step from here failed (see message); try another start or bounds",
+    "poor_fit": ("converged to a minimum whose residuals are far larger than the weights' sigmas (see message): a "
+                 "local minimum (try another start) or data the model cannot make"),
 }
+#: A converged fit with weights ``1 / sigma`` whose ``chi^2 / (m - n)`` exceeds this has status ``poor_fit``
+#: (the residuals about 3 times their sigmas or more; with the right model and sigmas it is about 1,
+#: above 10 with probability 0.2 % at one degree of freedom and far less at more).
+POOR_FIT = 10.0
 #: Largest ``|correlation|`` of two estimates that still counts as separated.
 IDENTIFIED = 1 - 1e-6
 #: Steps of ``lambda`` (Levenberg-Marquardt) up and down, and its range (above the top no step is
@@ -506,6 +515,10 @@ def _result(status, message, scene, free, x, J, r, w, absolute, matched, iterati
         # from (A^T A)^-1 itself: the correlation needs no estimate of the noise
         d = np.sqrt(np.abs(np.diag(inverse)))
         corr = inverse / np.outer(d, d)
+    if status == "converged" and absolute and m > n and 2 * cost / (m - n) > POOR_FIT:
+        status = "poor_fit"
+        message = (f"{STATUSES['poor_fit']}; chi^2 / (m - n) = {2 * cost / (m - n):.3g} with the weights as "
+                   f"1/sigma (about 1 for a model that makes the data)") + message[len(STATUSES["converged"]):]
     if status == "converged" and n > 1:
         pairs = [(free[i], free[j], corr[i, j]) for i in range(n) for j in range(i + 1, n)
                  if not abs(corr[i, j]) <= IDENTIFIED]
