@@ -170,10 +170,12 @@ def test_one_call_takes_them_only_where_they_are_compiled_and_a_fit_compiles_the
 
 
 def test_a_first_compiled_call_leaves_its_marker(tmp_path, monkeypatch):
+    from symvib.numeric.engine.bind import marking
+
     monkeypatch.setenv("SYMVIB_CACHE", str(tmp_path))
     marker = tmp_path / "engines" / "m"
     calls = []
-    marked = sensitivity_compiled._marking(lambda *a: calls.append(a) or 7, marker)
+    marked = marking(lambda *a: calls.append(a) or 7, marker)
     assert not marker.exists() and marked(1, 2) == 7 and marker.exists() and calls == [(1, 2)]
 
 

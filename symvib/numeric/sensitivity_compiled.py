@@ -432,21 +432,6 @@ def compiled_on_disk(module) -> bool:
     return all(compiled_marker(module, entry).exists() for entry in MARKED)
 
 
-def _marking(fn, marker: Path):
-    """``fn`` that leaves ``marker`` after its first call (numba has compiled and cached it then)."""
-    done = [marker.exists()]
-
-    def call(*args):
-        out = fn(*args)
-        if not done[0]:
-            marker.parent.mkdir(parents=True, exist_ok=True)
-            marker.touch()
-            done[0] = True
-        return out
-
-    call.__wrapped__ = fn
-    return call
-
 
 def _digest() -> str:
     """SHA-256 (hex, 20 digits) of the sources the compiled quadratures are built from (this module, the
@@ -476,6 +461,7 @@ def quadratures(module) -> dict:
         curve_tag,
         flush_if_stale,
         kernel_signatures,
+        marking,
     )
     from symvib.numeric.engine.static import StaticKernels
     from symvib.numeric.kernels import cache_dir
@@ -498,7 +484,7 @@ def quadratures(module) -> dict:
                                    default=INNER, qualnames={name: f"{name}__{tag}" for name in ENTRIES})
     compiled = {name: compiled[name] for name in ENTRIES}
     flush_if_stale(compiled.values(), cache_dir() / "engines" / f"sensitivity-{_digest()}-{tag}")
-    compiled = {name: _marking(fn, compiled_marker(module, name)) for name, fn in compiled.items()}
+    compiled = {name: marking(fn, compiled_marker(module, name)) for name, fn in compiled.items()}
     module._symvib_sensitivity_quadratures = compiled
     return compiled
 
@@ -509,6 +495,6 @@ def event_tangents():
     curves, cached on disk)."""
     import numba
 
-    from symvib.numeric.engine.bind import ERRORS
+    from symvib.numeric.engine.bind import ERRORS, marking
 
-    return _marking(numba.njit(cache=True, **ERRORS)(event_tangents_kernel), compiled_marker(None, "event_tangents"))
+    return marking(numba.njit(cache=True, **ERRORS)(event_tangents_kernel), compiled_marker(None, "event_tangents"))

@@ -88,7 +88,7 @@ from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
 
 __all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
            "own_rules", "rebound_functions", "compiled_functions", "compiled_kernels", "kernel_signatures",
-           "flush_if_stale", "curve_tag", "ENGINE_MODULES", "ENTRY_POINTS", "NO_REFCOUNT", "ERRORS", "INNER"]
+           "flush_if_stale", "curve_tag", "marking", "ENGINE_MODULES", "ENTRY_POINTS", "NO_REFCOUNT", "ERRORS", "INNER"]
 
 #: Entry points compiled with explicit signatures (and cached on disk).
 ENTRY_POINTS = ("simulate_scene", "sample_scene", "sweep_block")
@@ -134,8 +134,8 @@ def bind(module, backend: str, *, shared: bool = False) -> Engine:
         entries = _specialized_engine(module, ncp)
         if not _cacheable(module):   # compiled in this process only: never marked compiled
             return Engine(entries["simulate_bound"], entries["sample_bound"], threaded_sweep(entries["sweep_bound"]))
-        return Engine(_marking(entries["simulate_bound"], compiled_marker(module, "simulate_bound")),
-                      _marking(entries["sample_bound"], compiled_marker(module, "sample_bound")),
+        return Engine(marking(entries["simulate_bound"], compiled_marker(module, "simulate_bound")),
+                      marking(entries["sample_bound"], compiled_marker(module, "sample_bound")),
                       threaded_sweep(entries["sweep_bound"]))
     from symvib.numeric.engine.compiled import kernels_box
 
@@ -378,7 +378,7 @@ def is_compiled(module, entry: str = "simulate_bound") -> bool:
     return compiled_marker(module, entry).exists()
 
 
-def _marking(fn, marker: Path):
+def marking(fn, marker: Path):
     """``fn`` that leaves ``marker`` after its first call (numba has compiled and cached it then)."""
     done = [marker.exists()]
 
