@@ -9,7 +9,8 @@ Usage, from the project folder (the benchmark script is taken from each revision
 ``BASE`` (and ``HEAD``, default: the working tree) are checked out into
 temporary git worktrees; each round runs the benchmark once per revision, in a
 fresh process that imports that revision's ``symvib`` (an editable install of
-the current checkout is bypassed).  Each ``--metric`` (a regular expression
+the current checkout is bypassed; ``--bench-from head`` runs HEAD's script at both,
+for a benchmark BASE does not have).  Each ``--metric`` (a regular expression
 whose first group is a number) is read from every run; the report gives the
 values per round, and the ratio HEAD / BASE of their medians.  Machines are
 noisy: alternate rounds, never compare numbers from different runs.
@@ -48,9 +49,9 @@ def checkout(revision: str, where: Path) -> Path:
     return where
 
 
-def run(folder: Path, bench: str, args: list) -> str:
-    """The output of one benchmark run at ``folder``."""
-    code = BOOTSTRAP.format(folder=str(folder), script=str(folder / bench), args=args)
+def run(folder: Path, bench: str, args: list, script_folder: Path | None = None) -> str:
+    """The output of one benchmark run at ``folder`` (the script from ``script_folder``, default ``folder``)."""
+    code = BOOTSTRAP.format(folder=str(folder), script=str((script_folder or folder) / bench), args=args)
     out = subprocess.run([sys.executable, "-W", "ignore", "-c", code], capture_output=True, text=True, cwd=folder)
     if out.returncode != 0:
         raise SystemExit(f"{folder}: the benchmark failed:\n{out.stderr[-3000:]}")
@@ -72,6 +73,8 @@ def main(argv=None) -> int:
     ap.add_argument("--args", default="", help="its arguments, one string")
     ap.add_argument("--metric", action="append", required=True, help="regex; group 1 is the number")
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--bench-from", choices=("each", "head"), default="each",
+                    help="take the script from each revision (default) or HEAD's for both (a new benchmark)")
     opts = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         folders = {"base": checkout(opts.base, Path(tmp) / "base")}
@@ -80,7 +83,8 @@ def main(argv=None) -> int:
             values = {(side, m): [] for side in folders for m in opts.metric}
             for r in range(opts.rounds):
                 for side, folder in folders.items():
-                    text = run(folder, opts.bench, shlex.split(opts.args))
+                    text = run(folder, opts.bench, shlex.split(opts.args),
+                               folders["head"] if opts.bench_from == "head" else None)
                     for m in opts.metric:
                         values[side, m].append(number(m, text))
                     print(f"round {r + 1} {side}: " + "; ".join(f"{values[side, m][-1]:g}" for m in opts.metric),

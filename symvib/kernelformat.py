@@ -68,7 +68,7 @@ SAFE_BUILTINS = frozenset({"float", "int", "abs", "max", "min", "range", "zip", 
 #: NumPy attributes besides its ufuncs (which do arithmetic only) a generated module may use.
 NUMPY_ATTRIBUTES = frozenset({
     "pi", "e", "inf", "nan", "arange", "array", "asarray", "broadcast", "broadcast_to", "max", "min", "ones",
-    "zeros", "sum", "amax", "amin", "float64",
+    "zeros", "sum", "amax", "amin", "float64", "reshape",
 })
 #: Attributes of values (arrays) a generated module may read.
 VALUE_ATTRIBUTES = frozenset({"shape", "size"})

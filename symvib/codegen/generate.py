@@ -36,8 +36,17 @@ when the kernel ``alpha`` is ``atan2(z', x')``, no continuous closed form having
 found: it jumps by ``2 pi`` where ``x' < 0`` and ``z'`` changes sign, so the engine
 must not integrate across such a point as if ``alpha`` were continuous.
 
-On the numeric route ``F_s`` is a composite Gauss-Legendre quadrature of
-``dF_s`` from ``Q_REF``, with panels no wider than ``PANEL * q_scale``.
+On the numeric route ``F_s`` integrates ``dF_s`` from ``Q_REF`` by the rule of
+:mod:`symvib.antiderivative`: pieces no wider than ``PANEL * q_scale``, each one
+16-point Gauss-Legendre panel where the Legendre tail of ``dF_s`` on it says that
+is enough (``TOL``, 1e-15 of its integral of ``|dF_s|``), else walked with halved
+and doubled panels (``_F_p_panel_scalar`` is one panel: its integral, error
+estimate and tolerance), so that a narrow feature of a curve whose ``q_scale`` is
+1 (a Gaussian well, a sine track of small width) is resolved where it is: ``F_s``
+within a few rounding errors of the integral of ``|dF_s|``.  ``F_p_scalar``
+calls its ``dF_p_scalar`` by name and decides without a conditional (the
+whitelist has none: ``math.copysign`` steps, ``range`` of 0 or 1); ``F_p`` is
+``F_p_scalar`` at every point of the broadcast arguments.
 
 The output is deterministic (no timings, sorted data), so generating twice
 gives the same bytes; the header records the inputs' hash
@@ -62,12 +71,11 @@ import unicodedata
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-from symvib import provenance, safeio
+from symvib import antiderivative, provenance, safeio
 from symvib.codegen import gauss
 from symvib.kernelformat import DIGEST_PREFIX, verify_text
 from symvib.symbolic.curve import CurveError, generic_branch, removable_form
@@ -78,10 +86,10 @@ __all__ = ["module_text", "generate", "generate_catalogue", "stale", "check_para
            "DIGEST_PREFIX", "route_plan", "module_source", "Plan", "AUTO_SEARCH_SECONDS", "AUTO_ROUTES",
            "AUTO_ROUTE_SECONDS", "kernel_forms"]
 
-#: Gauss-Legendre nodes per panel of a numeric-route antiderivative.
-QUAD_NODES = 16
+#: Gauss-Legendre nodes per panel of a numeric-route antiderivative (:mod:`symvib.antiderivative`).
+QUAD_NODES = antiderivative.NODES
 #: Widest panel of a numeric-route antiderivative, in units of ``q_scale``.
-PANEL = 0.25
+PANEL = antiderivative.PANEL
 #: Functions every kernel module defines (each also as ``<name>_scalar``).
 KERNEL_FUNCTIONS = frozenset({
     "x", "z", "h", "alpha", "kappa", "dx", "dz", "dh", "dalpha", "N_w", "F_N", "P_mu", "Ek", "Ep", "E",
@@ -368,27 +376,84 @@ def _broadcast(value, *args):
 _QUAD_HELPERS = '''
 _GL_X = {x}
 _GL_W = {w}
-_GL_XA = numpy.array(_GL_X)
-_GL_WA = numpy.array(_GL_W)
-
-
-def _antiderivative(f, q, q_ref, args, width):
-    """Integral of f from q_ref to q by composite Gauss-Legendre (broadcasts)."""
-    q = numpy.asarray(q, dtype=float)
-    q_ref = numpy.asarray(q_ref, dtype=float)
-    length = q - q_ref
-    width = numpy.asarray(width, dtype=float)
-    panels = int(max(1.0, numpy.ceil(numpy.max(numpy.abs(length) / width, initial=0.0))))
-    edges = numpy.arange(panels)[..., None] / panels
-    t = (edges + (_GL_XA + 1.0) / (2.0 * panels))
-    shape = numpy.broadcast(q, *[numpy.asarray(a) for a in args]).shape
-    nodes = q_ref[..., None, None] + length[..., None, None] * t
-    bargs = [numpy.asarray(a, dtype=float)[..., None, None] for a in args]
-    values = f(nodes, *bargs)
-    total = numpy.sum(values * (_GL_WA / (2.0 * panels)), axis=(-2, -1))
-    return numpy.broadcast_to(total * length, shape) * 1.0
-
+_GL_T1 = {t1}
+_GL_T2 = {t2}
+_GL_T3 = {t3}
+_GL_T4 = {t4}
+_F_TOL = {tol!r}
+_F_FLAT = {flat!r}
+_F_UNRESOLVED = {unresolved!r}
+_F_POWER = {power!r}
+_F_TRIES = {tries!r}
+_F_NARROWEST = {narrowest!r}
 '''
+
+# One panel of a numeric F_s, and F_s itself (symvib.antiderivative), per branch: formatted with
+# {b} (p or m), {args} (q, mu, cp), {pargs} (left, width, mu, cp), {cargs} (mu, cp), {ref}, {scale}.
+# The scalar F_s calls its panel and dF by name (not as functions passed in): numba caches a
+# compiled function on disk only without such values, so the compiled engine is found again.
+# No conditional, no comparison (the whitelist, symvib.kernelformat): 0.5 + 0.5 copysign(1, x) is
+# 1 where x >= 0 and 0 where x < 0 (and 0 or 1 for NaN), and range(n) with n 0 or 1 is a branch.
+_PANEL_TEMPLATE = '''def _F_{b}_panel_scalar({pargs}):
+    \"\"\"(integral, error estimate, tolerance) of dF_{b} over [left, left + width]: one panel of
+    Gauss-Legendre nodes, the error from the Legendre tail of dF_{b} (symvib.antiderivative).
+
+    Arguments: ({pargs}). Floats only (math).\"\"\"
+    total = 0.0
+    size = 0.0
+    c1 = 0.0
+    c2 = 0.0
+    c3 = 0.0
+    c4 = 0.0
+    for xk, wk, t1, t2, t3, t4 in zip(_GL_X, _GL_W, _GL_T1, _GL_T2, _GL_T3, _GL_T4):
+        v = dF_{b}_scalar(left + 0.5 * width * (xk + 1.0), {cargs})
+        total += wk * v
+        size += wk * abs(v)
+        c1 += t1 * v
+        c2 += t2 * v
+        c3 += t3 * v
+        c4 += t4 * v
+    tail = max(abs(c1), abs(c2))
+    ratio = min(1.0, math.sqrt(tail / (max(abs(c3), abs(c4)) + 1e-300)))
+    flat = 0.5 + 0.5 * math.copysign(1.0, ratio - _F_UNRESOLVED)
+    real = 0.5 + 0.5 * math.copysign(1.0, tail - flat * _F_FLAT * 0.5 * size)
+    return 0.5 * width * total, 2.0 * tail * max(ratio ** _F_POWER, flat) * real, _F_TOL * size'''
+
+_F_TEMPLATE = '''def F_{b}_scalar({args}):
+    \"\"\"{doc} Floats only (math).\"\"\"
+    q_ref = {ref}
+    length = q - q_ref
+    panels = max(1, math.ceil(abs(length) / (PANEL * q_scale_scalar({scale}))))
+    step = length / panels
+    total = 0.0
+    for k in range(panels):
+        left = q_ref + k * step
+        value, error, tol = _F_{b}_panel_scalar(left, step, {cargs})
+        passed = max(0.5 + 0.5 * math.copysign(1.0, tol - error), 1.0 - int(math.isfinite(error)))
+        total += passed * value
+        done = passed
+        width = 0.5
+        tries = int((_F_TRIES - 1) * (1.0 - passed))
+        for attempt in range(tries):
+            todo = int(0.5 - 0.5 * math.copysign(1.0, done - 1.0))
+            for once in range(todo):
+                width = min(width, 1.0 - done)
+                value, error, tol = _F_{b}_panel_scalar(left + done * step, width * step, {cargs})
+                passed = max(0.5 + 0.5 * math.copysign(1.0, tol - error), 1.0 - int(math.isfinite(error)),
+                             0.5 + 0.5 * math.copysign(1.0, _F_NARROWEST - width))
+                total += passed * value
+                done += passed * width
+                width = min(1.0, width * (0.5 + 1.5 * passed))
+        todo = int(0.5 - 0.5 * math.copysign(1.0, done - 1.0))
+        for once in range(todo):
+            total += _F_{b}_panel_scalar(left + done * step, (1.0 - done) * step, {cargs})[0]
+    return total'''
+
+_F_ARRAY_TEMPLATE = '''def F_{b}({args}):
+    \"\"\"{doc}\"\"\"
+    points = numpy.broadcast({args})
+    values = [F_{b}_scalar(*[float(v) for v in point]) for point in points]
+    return numpy.reshape(numpy.array(values, dtype=float), points.shape) * 1.0'''
 
 
 def module_text(d: Derivation, source: dict) -> str:
@@ -429,28 +494,16 @@ def module_text(d: Derivation, source: dict) -> str:
         args = ("q", "mu", *cp)
         signatures[f"F_{b}"] = args
         call_args = ", ".join(("mu", *cp))
-        ref = np_printer.doprint(d.branches[s].F.q_ref.xreplace({c.q: _Q}))
         ref_s = math_printer.doprint(d.branches[s].F.q_ref.xreplace({c.q: _Q}))
         scale = ", ".join(cp)
-        doc = (f"F_{sign}(q): integral of dF_{b} from Q_REF (numeric route: no closed form).\n\n"
-               f"    Arguments: ({', '.join(args)}).")
-        parts.append(
-            f"def F_{b}({', '.join(args)}):\n    \"\"\"{doc}\"\"\"\n"
-            f"    return _antiderivative(dF_{b}, q, {ref}, ({call_args},), PANEL * q_scale({scale}))")
-        # The scalar twin calls dF by name (not as a function passed in): numba caches a compiled
-        # function on disk only without such values, so the compiled engine is found again.
-        parts.append(
-            f"def F_{b}_scalar({', '.join(args)}):\n    \"\"\"{doc} Floats only (math).\"\"\"\n"
-            f"    q_ref = {ref_s}\n"
-            f"    length = q - q_ref\n"
-            f"    panels = max(1, math.ceil(abs(length) / (PANEL * q_scale_scalar({scale}))))\n"
-            f"    step = length / panels\n"
-            f"    total = 0.0\n"
-            f"    for k in range(panels):\n"
-            f"        left = q_ref + k * step\n"
-            f"        for xk, wk in zip(_GL_X, _GL_W):\n"
-            f"            total += wk * dF_{b}_scalar(left + 0.5 * step * (xk + 1.0), {call_args})\n"
-            f"    return 0.5 * step * total")
+        doc = (f"F_{sign}(q): integral of dF_{b} from Q_REF (numeric route: no closed form; the rule of "
+               f"symvib.antiderivative).\n\n    Arguments: ({', '.join(args)}).")
+        fill = {"b": b, "args": ", ".join(args), "pargs": ", ".join(("left", "width", "mu", *cp)),
+                "cargs": call_args, "ref": ref_s, "scale": scale}
+        parts.append(_F_ARRAY_TEMPLATE.format(doc=doc + " F_" + b + "_scalar at every point (broadcasts).",
+                                              **fill))
+        parts.append(_F_TEMPLATE.format(doc=doc, **fill))
+        parts.append(_PANEL_TEMPLATE.format(**fill))
     # Domain as numbers.
     lo, hi = c.domain
     dom = lambda e, p: "math.inf" if e == sp.oo else "-math.inf" if e == -sp.oo else p.doprint(e)  # noqa: E731
@@ -476,8 +529,12 @@ def module_text(d: Derivation, source: dict) -> str:
     ]
     quad = ""
     if needs_quad:
-        x, w = np.polynomial.legendre.leggauss(QUAD_NODES)
-        quad = _QUAD_HELPERS.format(x=_literal(x), w=_literal(w))
+        x, w, t1, t2, t3, t4 = antiderivative.tail_rows(QUAD_NODES)
+        quad = _QUAD_HELPERS.format(x=_literal(x), w=_literal(w), t1=_literal(t1), t2=_literal(t2),
+                                    t3=_literal(t3), t4=_literal(t4), tol=antiderivative.TOL,
+                                    flat=antiderivative.FLAT, unresolved=antiderivative.UNRESOLVED,
+                                    power=antiderivative.TAIL_POWER, tries=antiderivative.TRIES,
+                                    narrowest=antiderivative.NARROWEST)
     body = (header + "import math\n\nimport numpy\n\n" + "\n".join(consts) + "\n" + _BROADCAST + quad
             + "\n\n" + "\n\n\n".join(parts) + "\n")
     digest = hashlib.sha256(body.encode()).hexdigest()

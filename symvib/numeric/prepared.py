@@ -33,7 +33,7 @@ import os
 import types
 from dataclasses import dataclass
 
-from symvib import regular, safeio
+from symvib import antiderivative, regular, safeio
 from symvib.numeric.scene import SceneError, declared_domain
 from symvib.paths import UserPathError
 
@@ -51,7 +51,7 @@ MAX_RECORD_ENTRIES = 256
 #: Largest record read, in bytes.
 MAX_RECORD_BYTES = 4 * 2**20
 #: Gauss-Legendre nodes per panel of a narrowed run's ``F_sigma`` (as a generated numeric ``F_sigma``).
-F_NODES = 16
+F_NODES = antiderivative.NODES
 
 
 class NotPrepared(SceneError):
@@ -270,17 +270,59 @@ def _q_scale(*cp):
 
 
 def _F_p_scalar(q, mu, *cp):
-    """Integral of ``F_+'`` from ``RUN_Q_REF`` to ``q``: composite Gauss-Legendre, panels at most
-    ``RUN_WIDTH`` (the generated numeric ``F_sigma``'s rule; ``F_+'`` called by name, not passed)."""
+    """Integral of ``F_+'`` from ``RUN_Q_REF`` to ``q``: the rule of a generated numeric ``F_sigma``
+    (:mod:`symvib.antiderivative`: pieces at most ``RUN_WIDTH``, each one panel where its Legendre
+    tail allows, else walked with halved and doubled panels), the same arithmetic in plain Python
+    (``F_+'`` called by name, not passed)."""
     length = q - RUN_Q_REF  # noqa: F821 - globals of the view
     panels = max(1, math.ceil(abs(length) / RUN_WIDTH))  # noqa: F821
     step = length / panels
     total = 0.0
     for k in range(panels):
         left = RUN_Q_REF + k * step  # noqa: F821
-        for xk, wk in zip(RUN_GL_X, RUN_GL_W):  # noqa: F821
-            total += wk * dF_p_scalar(left + 0.5 * step * (xk + 1.0), mu, *cp)  # noqa: F821
-    return 0.5 * step * total
+        value, error, tol = _F_p_panel_scalar(left, step, mu, *cp)
+        if error <= tol or not math.isfinite(error):
+            total += value
+            continue
+        done, width, tries = 0.0, 0.5, 1
+        while done < 1.0 and tries < RUN_F_TRIES:  # noqa: F821
+            tries += 1
+            width = min(width, 1.0 - done)
+            value, error, tol = _F_p_panel_scalar(left + done * step, width * step, mu, *cp)
+            if error <= tol or not math.isfinite(error) or width <= RUN_F_NARROWEST:  # noqa: F821
+                total += value
+                done += width
+                width = min(1.0, 2.0 * width)
+            else:
+                width = 0.5 * width
+        if done < 1.0:   # the budget spent: the rest of the piece as one panel
+            total += _F_p_panel_scalar(left + done * step, (1.0 - done) * step, mu, *cp)[0]
+    return total
+
+
+def _F_p_panel_scalar(left, width, mu, *cp):
+    """``(integral, error estimate, tolerance)`` of ``F_+'`` over ``[left, left + width]``: one panel
+    of the rule of :mod:`symvib.antiderivative` (as a generated module's ``_F_p_panel_scalar``)."""
+    total = 0.0
+    size = 0.0
+    c1 = 0.0
+    c2 = 0.0
+    c3 = 0.0
+    c4 = 0.0
+    for xk, wk, t1, t2, t3, t4 in zip(RUN_GL_X, RUN_GL_W, RUN_GL_T1, RUN_GL_T2, RUN_GL_T3, RUN_GL_T4):  # noqa: F821
+        v = dF_p_scalar(left + 0.5 * width * (xk + 1.0), mu, *cp)  # noqa: F821
+        total += wk * v
+        size += wk * abs(v)
+        c1 += t1 * v
+        c2 += t2 * v
+        c3 += t3 * v
+        c4 += t4 * v
+    tail = max(abs(c1), abs(c2))
+    ratio = min(1.0, math.sqrt(tail / (max(abs(c3), abs(c4)) + 1e-300)))
+    flat = 0.5 + 0.5 * math.copysign(1.0, ratio - RUN_F_UNRESOLVED)  # noqa: F821
+    real = 0.5 + 0.5 * math.copysign(1.0, tail - flat * RUN_F_FLAT * 0.5 * size)  # noqa: F821
+    return (0.5 * width * total, 2.0 * tail * max(ratio ** RUN_F_POWER, flat) * real,  # noqa: F821
+            RUN_F_TOL * size)  # noqa: F821
 
 
 def _twin(fn, names: dict):
@@ -291,7 +333,8 @@ def _twin(fn, names: dict):
                               fn.__globals__, fn.__name__.replace("_p", "_m"))
 
 
-_F_m_scalar = _twin(_F_p_scalar, {"dF_p_scalar": "dF_m_scalar"})
+_F_m_scalar = _twin(_F_p_scalar, {"_F_p_panel_scalar": "_F_m_panel_scalar"})
+_F_m_panel_scalar = _twin(_F_p_panel_scalar, {"dF_p_scalar": "dF_m_scalar"})
 
 
 def _F_p(q, mu, *cp):
@@ -305,6 +348,7 @@ def _F_m(q, mu, *cp):
 #: The view's replacements, by the name they take.
 _TEMPLATES = {"domain": _domain, "q_scale_scalar": _q_scale_scalar, "q_scale": _q_scale,
               "F_p_scalar": _F_p_scalar, "F_m_scalar": _F_m_scalar,
+              "_F_p_panel_scalar": _F_p_panel_scalar, "_F_m_panel_scalar": _F_m_panel_scalar,
               "F_p": _F_p, "F_m": _F_m}
 #: Views already built, by (module name, input hash, run numbers): one object each, so the driver's
 #: engine cache holds.
@@ -329,11 +373,14 @@ def kernel_view(module, run: regular.RunDomain):
     for attr, value in vars(module).items():
         if attr not in ("__name__", "__doc__", "__spec__", "__loader__") and not attr.startswith("_symvib_"):
             space[attr] = value
-    gl_x, gl_w = np.polynomial.legendre.leggauss(F_NODES)
-    width = float(getattr(module, "PANEL", 0.25)) * run.scale
+    gl_x, gl_w, t1, t2, t3, t4 = antiderivative.tail_rows(F_NODES)
+    width = float(getattr(module, "PANEL", antiderivative.PANEL)) * run.scale
     space.update(RUN_LO=run.lo, RUN_HI=run.hi, RUN_SCALE=run.scale, RUN_Q_REF=run.q_ref, RUN_WIDTH=width,
-                 RUN_GL_X=tuple(float(v) for v in gl_x), RUN_GL_W=tuple(float(v) for v in gl_w),
-                 _RUN_NP=np, math=math, Q_REF=run.q_ref, PANEL=float(getattr(module, "PANEL", 0.25)),
+                 RUN_GL_X=gl_x, RUN_GL_W=gl_w, RUN_GL_T1=t1, RUN_GL_T2=t2, RUN_GL_T3=t3, RUN_GL_T4=t4,
+                 RUN_F_TOL=antiderivative.TOL, RUN_F_FLAT=antiderivative.FLAT,
+                 RUN_F_UNRESOLVED=antiderivative.UNRESOLVED, RUN_F_POWER=antiderivative.TAIL_POWER,
+                 RUN_F_TRIES=antiderivative.TRIES, RUN_F_NARROWEST=antiderivative.NARROWEST,
+                 _RUN_NP=np, math=math, Q_REF=run.q_ref, PANEL=float(getattr(module, "PANEL", antiderivative.PANEL)),
                  F_ROUTES={1: "numeric", -1: "numeric"}, __file__=None, RUN_OF=module.__name__)
     functions = {fname: fn for fname, fn in vars(module).items()
                  if isinstance(fn, types.FunctionType) and fn.__module__ == module.__name__}
