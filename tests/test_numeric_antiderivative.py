@@ -218,10 +218,10 @@ def test_a_narrowed_view_takes_the_same_rule(cache):
 def test_the_compiled_rule_is_the_same_arithmetic(cache):
     """numba compiles the generated walk (no conditional, calls by name) to the same bits."""
     pytest.importorskip("numba")
-    from symvib.numeric.engine.bind import _compiled_kernels
+    from symvib.numeric.engine.bind import compiled_kernels
 
     k = load_kernels(GAUSS)
-    compiled = _compiled_kernels(k, len(k.PARAMS))
+    compiled = compiled_kernels(k, len(k.PARAMS))
     F_p, F_m = compiled[0], compiled[1]
     a, b = 0.05, 0.05
     for q in _points(b):

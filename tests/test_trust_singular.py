@@ -306,6 +306,22 @@ def test_a_pole_that_repels_is_no_end():
     assert result.q_final < 0.3
 
 
+def test_the_turning_point_next_to_a_pole_is_where_an_independent_integrator_puts_it():
+    # F_s' grows as 1/(x - 0.3)^2: G carried from an anchor (its closed form cancels at the turning
+    # point) by fixed panels was off by 2.6e-11 in q and 2.9e-9 s in t; its panels are checked now.
+    pytest.importorskip("scipy")
+    from symvib import simulate
+    from symvib.checks.accuracy import reference_for
+
+    data = {"curve": {"z": "x**2 - 1/(x - 0.3)"}, "physics": {"mu": 0.1, "restitution": 0.8},
+            "initial": {"q": 0.0, "qdot": 3.0}, "run": {"t_max": 5.0}}
+    kind, t_ref, q_ref = reference_for(data).run.events[0][:3]
+    for backend in ("python", "numba"):
+        first = simulate(scene_from_dict(data), samples=False, backend=backend).events[0]
+        assert first.kind.value == kind == "reversal"
+        assert abs(first.t - t_ref) <= 1e-12 * t_ref and abs(first.q - q_ref) <= 1e-13, (backend, first)
+
+
 def test_a_sweep_refuses_a_user_curve_with_a_singular_point_in_its_domain(tmp_path):
     """A sweep runs one kernel module for all rows: it names the regular domain to declare
     instead of integrating across the pole (simulate narrows; a sweep once bypassed that)."""

@@ -27,7 +27,8 @@ import numpy as np
 from symvib.numeric.engine.laws import EDGE_REACH, EDGE_SHARE, EPS, dF_edge, dFs, node
 from symvib.numeric.engine.roots import ROOT_MAXITER, ROOT_RTOL
 
-__all__ = ["crit_near", "dF_best", "anchored_G", "root_anchored", "PANEL_Q"]
+__all__ = ["crit_near", "dF_best", "anchored_G", "root_anchored", "PANEL_Q", "ANCHOR_RTOL", "ANCHOR_NARROWEST",
+           "ANCHOR_TRIES"]
 
 #: Widest quadrature panel, in units of the curve's q_scale (here and in the time quadrature).
 PANEL_Q = 1.0
@@ -68,17 +69,87 @@ def anchored_G(x, qa, Ga, s, S, K, cp, X, Wt, roots, count):
     """``G(x) = G(qa) - 2 g Integral_qa^x F_s'``: ``G`` from a nearby anchor, by Gauss-Legendre panels
     of at most ``PANEL_Q`` q_scale, free of the cancellation of ``C - 2 g F_s(x)`` where ``G`` is
     small next to ``F_s`` (physics.md, "Accuracy"); ``X, Wt``: the nodes and weights of a Gauss-Legendre
-    rule (``Rules.Xp, Rules.Wp``)."""
+    rule (``Rules.Xp, Rules.Wp``).
+
+    Error control: each panel is checked against its two halves (:func:`_panel_agrees`); one that
+    disagrees (``F_s'`` varying on a length below the panel's: next to a pole) is walked in halved and
+    doubled panels (:func:`_walked`).  Where every panel agrees the sum is the plain rule's, to the bit.
+    """
     L = x - qa
     if L == 0.0:
         return Ga
     parts = max(1, int(math.ceil(abs(L) / (PANEL_Q * S.scale))))
     step = L / parts
     total = 0.0
+    walked = 0.0   # the integral over the parts that were walked
     for jp in range(parts):
+        before = total
         for j in range(len(X)):
             total += Wt[j] * dF_best(s, qa, (jp + 0.5 * (X[j] + 1.0)) * step, S, K, cp, roots, count)
-    return Ga - S.g * step * total
+        if not _panel_agrees(s, qa, jp * step, step, total - before, S, K, cp, X, Wt, roots, count):
+            total = before
+            walked += _walked(s, qa, jp * step, step, S, K, cp, X, Wt, roots, count)
+    return Ga - S.g * step * total - 2.0 * S.g * walked
+
+
+#: :func:`anchored_G`'s check: a panel agrees with its two halves when their sums differ by at most this
+#: share of the sum of ``|F_s'|`` (the rounding of a sum of a few dozen terms is far below it; a panel
+#: whose integrand varies on a length below its own is far above it).
+ANCHOR_RTOL = 64.0 * EPS
+#: Narrowest panel of :func:`_walked`, as a share of its part: taken as it is.
+ANCHOR_NARROWEST = 2.0 ** -30
+#: Most panels :func:`_walked` tries in one part (then the rest of the part is one panel).
+ANCHOR_TRIES = 400
+
+
+def _panel_sum(s, qa, u0, width, S, K, cp, X, Wt, roots, count):
+    """``(sum_j Wt_j F_s'(qa + u0 + width (X_j + 1) / 2), the same of |F_s'|)`` (the panel's integral is
+    ``width / 2`` times the first)."""
+    total = 0.0
+    size = 0.0
+    for j in range(len(X)):
+        v = dF_best(s, qa, u0 + 0.5 * (X[j] + 1.0) * width, S, K, cp, roots, count)
+        total += Wt[j] * v
+        size += Wt[j] * abs(v)
+    return total, size
+
+
+def _panel_agrees(s, qa, u0, width, full, S, K, cp, X, Wt, roots, count):
+    """Whether the panel ``[qa + u0, qa + u0 + width]``, whose rule sum is ``full``, agrees with its halves
+    within :data:`ANCHOR_RTOL` (a non-finite sum agrees: the caller's result says it is not finite)."""
+    left, size = _panel_sum(s, qa, u0, 0.5 * width, S, K, cp, X, Wt, roots, count)
+    right, size_r = _panel_sum(s, qa, u0 + 0.5 * width, 0.5 * width, S, K, cp, X, Wt, roots, count)
+    gap = abs(full - 0.5 * (left + right))
+    if not math.isfinite(gap):
+        return True
+    return gap <= ANCHOR_RTOL * 0.5 * (size + size_r)
+
+
+def _walked(s, qa, u0, step, S, K, cp, X, Wt, roots, count):
+    """``Integral F_s'`` over ``[qa + u0, qa + u0 + step]`` by panels halved where they disagree with their
+    halves and doubled after they agree (each accepted panel counted by its halves)."""
+    done = 0.0
+    width = 0.5
+    tries = 0
+    out = 0.0
+    while done < 1.0 and tries < ANCHOR_TRIES:
+        tries += 1
+        width = min(width, 1.0 - done)
+        w = width * step
+        u = u0 + done * step
+        full, _ = _panel_sum(s, qa, u, w, S, K, cp, X, Wt, roots, count)
+        if width <= ANCHOR_NARROWEST or _panel_agrees(s, qa, u, w, full, S, K, cp, X, Wt, roots, count):
+            left, _ = _panel_sum(s, qa, u, 0.5 * w, S, K, cp, X, Wt, roots, count)
+            right, _ = _panel_sum(s, qa, u + 0.5 * w, 0.5 * w, S, K, cp, X, Wt, roots, count)
+            out += 0.25 * w * (left + right)
+            done += width
+            width = min(1.0, 2.0 * width)
+        else:
+            width = 0.5 * width
+    if done < 1.0:   # (the budget spent: the rest of the part as one panel)
+        rest, _ = _panel_sum(s, qa, u0 + done * step, (1.0 - done) * step, S, K, cp, X, Wt, roots, count)
+        out += 0.5 * (1.0 - done) * step * rest
+    return out
 
 
 def root_anchored(qa, Ga, b, Gb, x, s, S, K, cp, X, Wt, roots, count):
