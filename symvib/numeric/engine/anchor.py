@@ -71,7 +71,7 @@ def anchored_G(x, qa, Ga, s, S, K, cp, X, Wt, roots, count):
     small next to ``F_s`` (physics.md, "Accuracy"); ``X, Wt``: the nodes and weights of a Gauss-Legendre
     rule (``Rules.Xp, Rules.Wp``).
 
-    Error control: each panel is checked against its two halves (:func:`_panel_agrees`); one that
+    Error control: each panel is checked against its two halves (:func:`_agrees`); one that
     disagrees (``F_s'`` varying on a length below the panel's: next to a pole) is walked in halved and
     doubled panels (:func:`_walked`).  Where every panel agrees the sum is the plain rule's, to the bit.
     """
@@ -86,7 +86,8 @@ def anchored_G(x, qa, Ga, s, S, K, cp, X, Wt, roots, count):
         before = total
         for j in range(len(X)):
             total += Wt[j] * dF_best(s, qa, (jp + 0.5 * (X[j] + 1.0)) * step, S, K, cp, roots, count)
-        if not _panel_agrees(s, qa, jp * step, step, total - before, S, K, cp, X, Wt, roots, count):
+        halves, size = _halves(s, qa, jp * step, step, S, K, cp, X, Wt, roots, count)
+        if not _agrees(total - before, halves, size):
             total = before
             walked += _walked(s, qa, jp * step, step, S, K, cp, X, Wt, roots, count)
     return Ga - S.g * step * total - 2.0 * S.g * walked
@@ -114,15 +115,20 @@ def _panel_sum(s, qa, u0, width, S, K, cp, X, Wt, roots, count):
     return total, size
 
 
-def _panel_agrees(s, qa, u0, width, full, S, K, cp, X, Wt, roots, count):
-    """Whether the panel ``[qa + u0, qa + u0 + width]``, whose rule sum is ``full``, agrees with its halves
-    within :data:`ANCHOR_RTOL` (a non-finite sum agrees: the caller's result says it is not finite)."""
+def _halves(s, qa, u0, width, S, K, cp, X, Wt, roots, count):
+    """``(left + right, their sums of |F_s'|)``: :func:`_panel_sum` of the panel's two halves."""
     left, size = _panel_sum(s, qa, u0, 0.5 * width, S, K, cp, X, Wt, roots, count)
     right, size_r = _panel_sum(s, qa, u0 + 0.5 * width, 0.5 * width, S, K, cp, X, Wt, roots, count)
-    gap = abs(full - 0.5 * (left + right))
+    return left + right, size + size_r
+
+
+def _agrees(full, halves, size):
+    """Whether a panel's rule sum ``full`` agrees with its halves' ``halves`` (sum of ``|F_s'|``: ``size``)
+    within :data:`ANCHOR_RTOL` (a non-finite sum agrees: the caller's result says it is not finite)."""
+    gap = abs(full - 0.5 * halves)
     if not math.isfinite(gap):
         return True
-    return gap <= ANCHOR_RTOL * 0.5 * (size + size_r)
+    return gap <= ANCHOR_RTOL * 0.5 * size
 
 
 def _walked(s, qa, u0, step, S, K, cp, X, Wt, roots, count):
@@ -138,10 +144,9 @@ def _walked(s, qa, u0, step, S, K, cp, X, Wt, roots, count):
         w = width * step
         u = u0 + done * step
         full, _ = _panel_sum(s, qa, u, w, S, K, cp, X, Wt, roots, count)
-        if width <= ANCHOR_NARROWEST or _panel_agrees(s, qa, u, w, full, S, K, cp, X, Wt, roots, count):
-            left, _ = _panel_sum(s, qa, u, 0.5 * w, S, K, cp, X, Wt, roots, count)
-            right, _ = _panel_sum(s, qa, u + 0.5 * w, 0.5 * w, S, K, cp, X, Wt, roots, count)
-            out += 0.25 * w * (left + right)
+        halves, size = _halves(s, qa, u, w, S, K, cp, X, Wt, roots, count)
+        if width <= ANCHOR_NARROWEST or _agrees(full, halves, size):
+            out += 0.25 * w * halves
             done += width
             width = min(1.0, 2.0 * width)
         else:
