@@ -183,3 +183,25 @@ def test_the_circle_across_its_top_is_not_arrested_at_pi():
     assert result.success and result.status.value == "resting_on_limiter"
     assert [e.kind.value for e in result.events[:3]] == ["impact", "impact", "reversal"]
     assert all(e.kind.value != "arrest" or abs(e.q - np.pi) > 0.1 for e in result.events)
+
+
+def test_a_simplified_geometry_never_overflows_where_the_plain_derivative_does_not():
+    # simplify() clears the Gaussian's denominators: alpha' became exp(x**2/b**2)/(... + b**4
+    # exp(2 x**2/b**2)), inf/inf = nan beyond x**2/b**2 of about 355, where alpha' is 0.
+    c = cv.graph("-a*exp(-x**2/b**2)", params={"a": "positive", "b": "positive"})
+    a, b = c.params
+    values = {a: 0.1, b: 0.05}
+    for name in ("hp", "alphap", "kappa"):
+        fn = sp.lambdify([c.q], getattr(c, name).subs(values), "numpy")
+        with np.errstate(all="ignore"):
+            far = np.array([fn(x) for x in (-1.5, -1.0, 1.0, 1.5)], dtype=float)
+        assert np.all(np.isfinite(far)), (name, getattr(c, name))
+        assert np.all(np.abs(far) < 1e-100), (name, far)
+    # Where they are finite, the forms agree with the plain derivative (60 digits).
+    raw = sp.diff(c.alpha, c.q)
+    for x in (0.01, 0.04, 0.1):
+        exact = raw.subs({**values, c.q: x}).evalf(60)
+        assert abs(c.alphap.subs({**values, c.q: x}).evalf(60) - exact) <= 1e-50 * (1 + abs(exact))
+    # A simplification that overflows nowhere is kept.
+    q = c.q
+    assert cv.tamed(sp.cos(q) ** 2, 1 - sp.sin(q) ** 2, c) == sp.cos(q) ** 2

@@ -129,3 +129,23 @@ def test_numba_warnings_stay_quiet_and_an_uncacheable_engine_is_forgotten(tmp_pa
             warnings.warn("something else", UserWarning, stacklevel=1)
     assert [w.category for w in seen] == [UserWarning]
     assert not any(path.exists() for path in markers.values())
+
+
+def test_a_narrow_well_with_far_limiters_agrees_with_an_independent_integrator():
+    # A Gaussian well 0.05 wide between limiters 30 widths out: its simplified curvature once
+    # overflowed to inf/inf there, and the run ended non_finite on both engines.
+    pytest.importorskip("scipy")
+    from symvib import simulate
+    from symvib.checks.accuracy import compare, reference_for
+
+    data = {"curve": {"z": "-a*exp(-x**2/b**2)"}, "parameters": {"a": 0.1, "b": 0.05},
+            "physics": {"mu": 0.1, "restitution": 0.8}, "limiters": {"left": -1.5, "right": 1.5},
+            "initial": {"q": -1.4, "qdot": 3.0}, "run": {"t_max": 50.0, "max_events": 200}}
+    scene = scene_from_dict(data)
+    reference = reference_for(data)
+    for backend in ("python", "numba"):
+        result = simulate(scene, samples=False, backend=backend)
+        assert result.success, (backend, result.status)
+        verdict = compare(result, reference.run, scene=scene)
+        assert verdict.verdict == "agree", (backend, verdict)
+        assert [e.kind.value for e in result.events][-1] == "arrest"

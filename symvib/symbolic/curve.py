@@ -37,7 +37,7 @@ from symvib.symbolic import budget
 from symvib.symbolic.symbols import RESERVED
 
 __all__ = ["Curve", "CurveError", "graph", "parametric", "to_sympy", "sample_points", "reference_point",
-           "generic_branch", "tangent_angle", "angle_jump", "removable_form"]
+           "generic_branch", "tangent_angle", "angle_jump", "removable_form", "tamed", "far_points"]
 
 #: Parameter assumptions a curve may declare.
 ASSUMPTIONS = {
@@ -54,6 +54,9 @@ CHECK_DIGITS = 30
 CHECK_TOLERANCE = mpmath.mpf("1e-25")
 #: Half width, in units of ``q_scale``, of the sampling window on an infinite domain.
 SAMPLE_HALF_WIDTH = 2
+#: Distances, in units of ``q_scale``, at which :func:`tamed` checks a simplified form for overflow
+#: on an infinite end of the domain (``exp(x**2)`` overflows beyond ``x`` of about 27).
+FAR_WIDTHS = (30.0, 1e3, 1e6)
 
 _FUNCTIONS = {
     "sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "asin": sp.asin, "acos": sp.acos,
@@ -308,18 +311,20 @@ class Curve:
     @cached_property
     def hp(self) -> sp.Expr:
         """``h'(q)`` (its generic branch: :func:`generic_branch`)."""
-        return removable_form(generic_branch(budget.simplify(sp.diff(self.h, self.q)), f"curve '{self.name}': h'"))
+        raw = sp.diff(self.h, self.q)
+        return removable_form(generic_branch(tamed(budget.simplify(raw), raw, self), f"curve '{self.name}': h'"))
 
     @cached_property
     def alphap(self) -> sp.Expr:
         """``alpha'(q) = (x' z'' - z' x'') / h**2`` (its generic branch)."""
-        return removable_form(generic_branch(budget.simplify(sp.diff(self.alpha, self.q)),
-                                             f"curve '{self.name}': alpha'"))
+        raw = sp.diff(self.alpha, self.q)
+        return removable_form(generic_branch(tamed(budget.simplify(raw), raw, self), f"curve '{self.name}': alpha'"))
 
     @cached_property
     def kappa(self) -> sp.Expr:
         """Curvature ``kappa = alpha' / h`` (its generic branch)."""
-        return removable_form(generic_branch(budget.simplify(self.alphap / self.h), f"curve '{self.name}': kappa"))
+        raw = self.alphap / self.h
+        return removable_form(generic_branch(tamed(budget.simplify(raw), raw, self), f"curve '{self.name}': kappa"))
 
     @property
     def coordinate(self) -> str:
@@ -376,6 +381,65 @@ def sample_points(curve: Curve, n: int, *, seed: int = 0, margin: float = 0.1, v
     width = hi - lo
     lo, hi = lo + margin * width, hi - margin * width
     return [mpmath.mpf(lo + (hi - lo) * rng.random()) for _ in range(n)]
+
+
+def far_points(curve: Curve, values=None) -> list:
+    """Coordinates far out on the infinite ends of ``curve.domain`` (:data:`FAR_WIDTHS` times
+    ``q_scale``), and the sample points in between; none beyond a finite end, where a curve may
+    well be singular."""
+    values = values or curve.default_values()
+    scale = float(curve.q_scale.subs(values))
+    lo, hi = curve.domain
+    far = []
+    if lo.is_infinite:
+        far += [-w * scale for w in FAR_WIDTHS]
+    if hi.is_infinite:
+        far += [w * scale for w in FAR_WIDTHS]
+    return far + [float(v) for v in sample_points(curve, IDENTITY_CHECK_POINTS, seed=3, values=values)]
+
+
+def _finite_at(expr: sp.Expr, curve: Curve, points, values) -> np.ndarray:
+    """Whether ``expr`` (the curve's parameters at ``values``) is finite in double precision at ``points``."""
+    fn = sp.lambdify([curve.q], expr.subs(values), "numpy")
+    out = []
+    with np.errstate(all="ignore"):
+        for qv in points:
+            try:
+                v = complex(fn(np.float64(qv)))
+            except (ArithmeticError, ValueError, TypeError):
+                out.append(False)
+                continue
+            out.append(math.isfinite(v.real) and math.isfinite(v.imag))
+    return np.array(out, dtype=bool)
+
+
+def tamed(simplified: sp.Expr, raw: sp.Expr, curve: Curve) -> sp.Expr:
+    """``simplified``, unless it overflows in double precision where ``raw`` (the same function
+    before simplification) does not: then ``raw``.
+
+    SymPy's ``simplify`` clears denominators, which can turn a decaying factor into a growing
+    one.  The Gaussian well ``z = -a exp(-x**2/b**2)`` is the case that showed it: its
+    ``alpha'`` simplifies to ``2 a (b**2 - 2 x**2) exp(x**2/b**2) / (4 a**2 x**2 + b**4
+    exp(2 x**2/b**2))``, which is ``inf/inf`` once ``x**2/b**2`` passes about 355, although
+    ``alpha'`` there is a harmless ``0``.  Checked at :func:`far_points` with the parameters
+    at 1.
+
+    Examples
+    --------
+    >>> x = sp.Symbol("x", real=True)
+    >>> c = graph("-exp(-x**2)")
+    >>> tamed(sp.exp(x**2) / (1 + sp.exp(2 * x**2)), sp.exp(-x**2) / (sp.exp(-2 * x**2) + 1), c).has(sp.exp(x**2))
+    False
+    """
+    if simplified == raw:
+        return simplified
+    try:
+        values = curve.default_values()
+        points = far_points(curve, values)
+        worse = _finite_at(raw, curve, points, values) & ~_finite_at(simplified, curve, points, values)
+    except Exception:  # noqa: BLE001 - a form numpy cannot evaluate: keep SymPy's simplification
+        return simplified
+    return raw if worse.any() else simplified
 
 
 def identity_holds(expr: sp.Expr, curve: Curve, *, extra=None, points: int = IDENTITY_CHECK_POINTS,
