@@ -42,9 +42,10 @@ __all__ = ["Prepared", "NotPrepared", "prepared_of", "kernels_of", "prepared_fro
 
 #: Suffix of the record of a module's singular pieces, beside the module in the kernel cache.
 RECORD_SUFFIX = ".regular.json"
-#: Version of the record (a record of another is searched again): its layout, and 2 since a smooth
-#: minimum of ``h`` far below the scan grid's spacing is no longer taken for a cusp.
-RECORD_FORMAT = 2
+#: Version of the record (a record of another is searched again): its layout; 2 since a smooth
+#: minimum of ``h`` far below the scan grid's spacing is no longer taken for a cusp; 3 since a
+#: cusp's piece is measured against ``h``'s rounding floor next to it, not at the grid's points.
+RECORD_FORMAT = 3
 #: Most parameter sets a record keeps (the oldest go first): a sweep of a pole's position
 #: does not grow it without bound.
 MAX_RECORD_ENTRIES = 256

@@ -76,6 +76,11 @@ CUSP_DIP = 0.9
 LEVEL_STEP, LEVEL_FLOOR = 10.0, 1e3
 #: ``h`` within this factor of its value at the minimum: it has levelled off (a smooth minimum).
 LEVEL_RATIO = 2.0
+#: :func:`_floor`: ``h`` stopped falling when a probe 10 times closer is not this many times smaller
+#: (a power law ``|q - m|**p`` with ``p >= 1/2`` falls 3.16 times or more).
+FLOOR_FALL = 2.0
+#: A cusp's piece spans at most where ``h`` is within this many times its rounding floor (:func:`_floor`).
+FLOOR_MARGIN = 10.0
 #: Functions of the geometry searched symbolically (the others only numerically: SymPy is slow on them).
 SYMBOLIC_LABELS = ("x", "z", "x'", "z'")
 
@@ -279,7 +284,10 @@ def _cusps(fn, grid, v, ok, speed=None) -> list:
             m_speed = _golden_minimum(speed, grid[j - 1], grid[j + 1])
             if _levels_off(speed, m_speed, abs(speed(np.array([m_speed]))[0]), grid[j + 1] - grid[j]):
                 continue
-        # h is at rounding level on a small interval around the cusp: keep all of it.
+        # h is at rounding level on a small interval around the cusp: keep all of it.  Rounding level
+        # is measured near the cusp too (_floor): the grid's neighbours of a cusp at a length far
+        # below the grid's spacing see h at millions of times its local scale.
+        small = min(small, FLOOR_MARGIN * _floor(fn, m, grid[j + 1] - grid[j]))
         edges = []
         for far in (grid[j - 1], grid[j + 1]):
             near = m
@@ -294,6 +302,27 @@ def _cusps(fn, grid, v, ok, speed=None) -> list:
             edges.append(far)
         out.append((float(edges[0]), float(edges[1]), "h", CUSP))
     return out
+
+
+def _floor(fn, m: float, spacing: float) -> float:
+    """The rounding floor of ``h`` at a cusp ``m``: ``max |h(m +- d)|`` at the probe ``d`` (from
+    ``spacing`` down, each :data:`LEVEL_STEP` times closer) where it stops falling by at least
+    :data:`FLOOR_FALL`, or at the last probe (a few rounding units of ``m``) if it never does.
+
+    Near a cusp ``h ~ c |q - m|**p`` with ``p >= 1/2`` falls by ``10**p >= 3.16`` a probe until
+    rounding, so the floor is where the power law breaks: about ``sqrt(eps)`` of ``h``'s terms
+    for ``h`` written as the square root of a difference, and next to nothing for ``h`` computed
+    without cancellation (the semicubical parabola's ``|q| sqrt(9 q**2 + 4)``).
+    """
+    last = LEVEL_FLOOR * np.spacing(max(1.0, abs(m)))
+    step, before = spacing / LEVEL_STEP, math.inf
+    while step >= last:
+        now = float(np.max(np.abs(_real(fn, np.array([m - step, m + step])))))
+        if not now * FLOOR_FALL <= before:
+            return before
+        before = now
+        step /= LEVEL_STEP
+    return before
 
 
 def _levels_off(fn, m: float, h_m: float, spacing: float) -> bool:
