@@ -131,6 +131,7 @@ def test_numba_warnings_stay_quiet_and_an_uncacheable_engine_is_forgotten(tmp_pa
     assert not any(path.exists() for path in markers.values())
 
 
+@pytest.mark.slow
 def test_a_narrow_well_with_far_limiters_agrees_with_an_independent_integrator():
     # A Gaussian well 0.05 wide between limiters 30 widths out: its simplified curvature once
     # overflowed to inf/inf there, and the run ended non_finite on both engines.
@@ -149,3 +150,23 @@ def test_a_narrow_well_with_far_limiters_agrees_with_an_independent_integrator()
         verdict = compare(result, reference.run, scene=scene)
         assert verdict.verdict == "agree", (backend, verdict)
         assert [e.kind.value for e in result.events][-1] == "arrest"
+
+
+@pytest.mark.slow
+def test_an_interval_far_below_q_scale_that_misses_its_tolerance_names_q_scale_as_the_remedy():
+    # The semicubical parabola at L = 1e-6 without a q_scale: its numeric F_sigma's panels are fractions
+    # of a q_scale thousands of times the motion; the run says so, and declaring it is the cure.
+    pytest.importorskip("scipy")
+    from symvib import simulate
+    from symvib.checks.accuracy import reference_for
+
+    length = 1e-6
+    data = {"curve": {"x": "q**3/L**2", "z": "q**2/L", "q": "q"}, "parameters": {"L": length},
+            "physics": {"mu": 0.1, "restitution": 0.8}, "limiters": {"right": 2.0 * length},
+            "initial": {"q": 0.5 * length, "qdot": 0.0}, "run": {"t_max": 10.0, "max_events": 50}}
+    result = simulate(scene_from_dict(data), samples=False, backend="python")
+    assert result.status.value == "tolerance_not_met" and "q_scale" in result.message, result.message
+    data["curve"]["q_scale"] = "L"
+    kind, t_ref = reference_for(data).run.events[0][:2]
+    first = simulate(scene_from_dict(data), samples=False, backend="python").events[0]
+    assert first.kind.value == kind == "normal_sign_change" and abs(first.t - t_ref) <= 1e-12 * t_ref, first

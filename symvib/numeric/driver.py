@@ -93,6 +93,9 @@ NODES = 16
 RTOL = 1e-12
 #: Default absolute tolerance of the time of a motion interval, seconds.
 ATOL = 0.0
+#: An interval that missed its tolerance and spans less than this fraction of the curve's ``q_scale``
+#: adds declaring ``q_scale`` to the remedies (:func:`_scale_remedy`).
+SMALL_SPAN = 1e-3
 #: Smallest rtol a run may ask for: a few rounding errors of a sum of quadrature terms.
 MIN_RTOL = 1e-14
 #: Most Gauss-Legendre panels one evaluation of a numeric ``F_sigma`` may take (``|q - Q_REF| / (PANEL
@@ -131,6 +134,22 @@ def check_wall_time(wall_time, name: str = "wall_time") -> float | None:
     if not ok or not math.isfinite(wall_time) or wall_time < 0:
         raise ValueError(f"{name} must be a number of seconds >= 0 (0: no limit), not {wall_time!r}")
     return float(wall_time) if wall_time > 0 else None
+
+
+def _scale_remedy(scene, mod, cp, q_from: float, q_to: float) -> str:
+    """A further remedy for an interval that missed its tolerance: where it is far shorter than the
+    curve's ``q_scale``, the curve likely changes on a length its numeric kernels do not resolve
+    (a numeric ``F_sigma``'s panels are fractions of ``q_scale``)."""
+    try:
+        scale = abs(float(mod.q_scale_scalar(*cp)))
+    except (AttributeError, TypeError, ValueError, ArithmeticError):
+        return ""
+    span = abs(q_to - q_from)
+    if not (math.isfinite(scale) and 0.0 < span < SMALL_SPAN * scale):
+        return ""
+    return (f"; or, since the interval spans {span:.3g} of {scene.shape.q} while the curve's q_scale is "
+            f"{scale:.3g}, declare the length on which the curve changes as its q_scale (the scene's "
+            f"[curve] q_scale, or curve.q_scale of a shape)")
 
 
 def check_tolerances(rtol, atol) -> tuple:
@@ -305,7 +324,8 @@ def simulate(scene, *, nodes: int = NODES, samples: bool = True, backend: str = 
             f"error: the time of the motion interval from {scene.shape.q} = {float(out.q):.12g} to "
             f"{float(out.q_bad):.12g} (starting at t = {float(out.t):.12g} s) could not be brought within its "
             f"tolerance (rtol {rtol:g}, atol {atol:g} s); the run stopped at its start. Remedies: a looser "
-            f"tolerance (simulate(scene, rtol=...), symvib run --rtol), or more nodes per panel (nodes=...)")
+            f"tolerance (simulate(scene, rtol=...), symvib run --rtol), or more nodes per panel (nodes=...)"
+            + _scale_remedy(scene, mod, cp, float(out.q), float(out.q_bad)))
     if status == StatusCode.WALL_TIME_LIMIT:
         stats["stopped"] = (
             f"the plain engine's wall-clock limit of {wall_time:g} s was reached at t = {float(out.t):.12g} s, "
