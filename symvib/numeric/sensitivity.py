@@ -86,7 +86,8 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None, through=None, compil
     Sensitivities
         The record (:mod:`symvib.numeric.sensitivity_table`).
     """
-    return interval_tangents(result, wrt, prepared=prepared, through=through, compile=compile).sensitivities
+    return interval_tangents(result, wrt, prepared=prepared, through=through, compile=compile,
+                             legs=False).sensitivities
 
 
 @dataclass(frozen=True)
@@ -118,7 +119,7 @@ class Tangents:
 
 
 def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, through=None,
-                      compile: bool = False) -> Tangents:
+                      compile: bool = False, legs: bool = True) -> Tangents:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``, and its intervals.
 
     Parameters
@@ -144,6 +145,10 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
         not compiled yet (a few seconds, once per curve: :mod:`symvib.numeric.sensitivity_compiled`);
         the fit and a sweep's sensitivity columns ask for it.  Default: the compiled quadratures only
         where they are compiled already, else NumPy's (the same numbers to rounding).
+    legs : bool
+        Whether to build the legs (their :class:`~symvib.numeric.sensitivity_interval.Interval` records);
+        without them the result's ``legs`` is empty and the compiled path builds no record per interval
+        (:func:`sensitivities`, which returns the table only: the same numbers).
 
     Returns
     -------
@@ -210,7 +215,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     events = result.events
     path = _Path(q_a, w_a, Dq_a, Dw_a, np.zeros(P), 0.0, tuple(np.full((n, P), np.nan) for _ in range(4)), [],
                  np.zeros(P), np.zeros(P))
-    units = (Dmu, Dk, limiter_D)
+    units = (Dmu, Dk, limiter_D, legs)
     i, broken, first, flight = 0, "", None, None
     flights = []
     while i <= last and not broken:
@@ -283,25 +288,35 @@ def _slide(c, scene, events, start, last, path, units):
     Returns the next event's index, why the derivatives end (empty if they go on), the index of the
     first event without them, and the flight launched at a lift-off (or None).
     """
-    Dmu, Dk, limiter_D = units
+    Dmu, Dk, limiter_D, want_legs = units
     T, Q, VB, VA = path.table
     P = len(Dmu)
     # 1. the run's path, event by event, in scalars: each interval's ends, branch and w before and after
     plan, first, broken = _plan(events, start, last, scene, c, path.q, path.w)
+    compiled = c.quadratures is not None and plan and not any(p[2] in JETS_EVENTS for p in plan)
+    # (the Interval records: for the Python pass 3 and the NumPy pass 4, and for the legs)
+    intervals = [None if p[4] is None else Interval.of_scalars(c, p[4], p[3]) for p in plan] \
+        if want_legs or not compiled else None
     # 2. the integrals of dF_s'/dp over whole intervals, all at once (they need no tangent)
+    I_p_e = np.zeros((len(plan), P))
     if c.f_depends:
-        for s, group in _by_branch([p[4] for p in plan]):
-            q0s, D = np.array([iv.q_a for iv in group]), np.array([iv.q_e - iv.q_a for iv in group])
-            for iv, I_p_e in zip(group, end_integrals(c, s, q0s, D, MAX_PANELS * NODES)):
-                iv.I_p_e = I_p_e
+        for s in (1, -1):
+            group = [j for j, p in enumerate(plan) if p[4] is not None and p[4][0] == s]
+            if group:
+                q0s = np.array([plan[j][4][11] for j in group])
+                D = np.array([plan[j][4][12] - plan[j][4][11] for j in group])
+                I_p_e[group] = end_integrals(c, s, q0s, D, MAX_PANELS * NODES)
+                if intervals is not None:
+                    for j in group:
+                        intervals[j].I_p_e = I_p_e[j]
     # 3. the tangents of the events' positions and speeds, event by event (no quadrature left)
     Dq_a, Dw_a, lift = path.Dq, path.Dw, None
     D_impact_loss = np.zeros(P)
-    compiled = c.quadratures is not None and plan and not any(p[2] in JETS_EVENTS for p in plan)
     arrays = None     # (with it, the arrays of the intervals' ends that pass 4 reads)
     if compiled:    # (the same operations, compiled: sensitivity_compiled.event_tangents_kernel)
-        Dq_a, Dw_a, D_impact_loss, arrays = _compiled_event_tangents(c, scene, plan, path, units)
-    for j, (i, ev, kind, turning, iv, w_minus) in enumerate(() if compiled else plan):
+        Dq_a, Dw_a, D_impact_loss, arrays = _compiled_event_tangents(c, scene, plan, path, units, I_p_e, intervals)
+    for j, (i, ev, kind, turning, _, w_minus) in enumerate(() if compiled else plan):
+        iv = intervals[j]
         if iv is None:                      # no motion in between (a rest test at the start)
             Dq_e, Dw_minus = Dq_a.copy(), Dw_a.copy()
         else:
@@ -344,7 +359,7 @@ def _slide(c, scene, events, start, last, path, units):
         if rows and arrays is not None:
             dT[rows] = c.quadratures.time_derivatives_arrays(c, arrays[0][rows], arrays[1][:, rows])
         elif rows:
-            ends = {name: np.array([getattr(plan[r][4], name) for r in rows]) for name in BATCH_FIELDS}
+            ends = {name: np.array([getattr(intervals[r], name) for r in rows]) for name in BATCH_FIELDS}
             dT[rows] = time_derivatives(c, ends)
         if not np.all(np.isfinite(dT[lo:lo + CHUNK])):
             break
@@ -355,12 +370,15 @@ def _slide(c, scene, events, start, last, path, units):
     if broken and first is not None:       # (the rows pass 3 wrote past the first event without derivatives)
         for column in (Q, VB, VA):
             column[first:last + 1] = np.nan
-    for j, (i, ev, _, _, iv, _) in enumerate(plan):
-        Dt_e = path.Dt + dT[j]
-        T[i] = Dt_e
-        if iv is not None:
-            path.legs.append(Leg(iv, path.t, ev.t, path.Dt, Dt_e))
-        path.q, path.Dt, path.t = ev.q, Dt_e, ev.t
+    if plan:    # each event's time tangent: the one before plus its interval's (summed in time order)
+        Dt = np.cumsum(np.vstack((path.Dt[None, :], dT[:len(plan)])), axis=0)
+        T[[p[0] for p in plan]] = Dt[1:]
+        if want_legs:
+            t_a = [path.t] + [p[1].t for p in plan[:-1]]
+            for j, (_, ev, _, _, _, _) in enumerate(plan):
+                if intervals[j] is not None:
+                    path.legs.append(Leg(intervals[j], t_a[j], ev.t, Dt[j], Dt[j + 1]))
+        path.q, path.Dt, path.t = plan[-1][1].q, Dt[-1], plan[-1][1].t
     if plan:      # (past the first event without derivatives, only path.q is read: the reasons')
         _, _, kind, _, _, w_minus = plan[-1]
         path.w = scene.k * scene.k * w_minus if kind == EventCode.IMPACT else w_minus
@@ -381,41 +399,44 @@ JETS_EVENTS = (EventCode.NORMAL_SIGN_CHANGE, EventCode.LIFT_OFF)
 ENDS_COLUMNS, TANGENT_ROWS = [0, 11, 12, 2, 7, 5, 6], [0, 4, 2, 5]
 
 
-def _compiled_event_tangents(c, scene, plan, path, units):
+def _compiled_event_tangents(c, scene, plan, path, units, I_p_e, intervals):
     """Pass 3 of :func:`_slide` compiled (:func:`symvib.numeric.sensitivity_compiled.event_tangents_kernel`,
-    no event of :data:`JETS_EVENTS` in ``plan``, no curve parameter): writes the table's rows and each
-    interval's tangents as the Python loop does; returns ``Dq`` and ``Dw`` after the last event, the
-    tangent of the impact loss, and the intervals' ends as pass 4 reads them (``s, q_a, q_e, G_a, G_e, f_a,
-    f_e``, shape (n, 7); ``Dq_a, Dq_e, DG_a, DG_e``, shape (4, n, P))."""
+    no event of :data:`JETS_EVENTS` in ``plan``, no curve parameter): writes the table's rows (and each
+    interval's tangents, where ``intervals`` holds their records) as the Python loop does; returns ``Dq`` and
+    ``Dw`` after the last event, the tangent of the impact loss, and the intervals' ends as pass 4 reads them
+    (``s, q_a, q_e, G_a, G_e, f_a, f_e``, shape (n, 7); ``Dq_a, Dq_e, DG_a, DG_e``, shape (4, n, P)).
+    ``I_p_e``: each interval's integral of ``dF_s'/dp`` (shape (n, P)), pass 2's."""
     from symvib.numeric.sensitivity_compiled import event_tangents
 
-    Dmu, Dk, limiter_D = units
+    Dmu, Dk, limiter_D, _ = units
     T, Q, VB, VA = path.table
     zeros = np.zeros(len(Dmu))
     n = len(plan)
-    rest = (0.0,) * 13
-    scalars = np.array([rest if iv is None else (iv.s, iv.E_a, iv.G_a, iv.alpha_a, iv.dalpha_a, iv.f_a, iv.f_e, iv.G_e,
-                                                 iv.alpha_e[0], iv.dalpha_e[0], iv.E_e[0], iv.q_a, iv.q_e)
-                        for _, _, _, _, iv, _ in plan], dtype=float)
-    I_p_e = np.zeros((n, len(Dmu)))
+    rest = (0.0,) * SCALARS
+    scalars = np.array([rest if p[4] is None else p[4][:SCALARS] for p in plan], dtype=float)
     limiter = np.zeros((n, len(Dmu)))
-    for j, (_, ev, kind, _, iv, _) in enumerate(plan):
-        if iv is not None:
-            I_p_e[j] = iv.I_p_e
-        if kind in (EventCode.IMPACT, EventCode.REST_ON_LIMITER):
-            limiter[j] = limiter_D.get(ev.q, zeros)
+    for j, p in enumerate(plan):
+        if p[2] in LIMITER_EVENTS:
+            limiter[j] = limiter_D.get(p[1].q, zeros)
     rows, tail = event_tangents()(
         np.array([p[2] == EventCode.IMPACT for p in plan]), np.array([p[3] for p in plan]),
         np.array([p[4] is not None for p in plan]), np.array([1.0 if p[1].qdot_before >= 0 else -1.0 for p in plan]),
         np.array([p[5] for p in plan], dtype=float), scalars, I_p_e, limiter, float(c.mu), float(c.g),
         float(scene.k), float(c.m), Dmu, Dk, np.asarray(path.Dq, dtype=float), np.asarray(path.Dw, dtype=float))
-    for j, (_, _, _, _, iv, _) in enumerate(plan):
+    for j, iv in enumerate(intervals or ()):
         if iv is not None:
             iv.Dq_a, iv.Dw_a, iv.Dmu, iv.DG_a, iv.A, iv.Dq_e, iv.DG_e = (rows[0, j], rows[1, j], Dmu, rows[2, j],
                                                                         rows[3, j], rows[4, j], rows[5, j])
     index = [p[0] for p in plan]
     Q[index], VB[index], VA[index] = rows[4], rows[6], rows[7]
     return rows[4, -1], tail[1], tail[0], (scalars[:, ENDS_COLUMNS], rows[TANGENT_ROWS])
+
+
+#: Scalars of an interval in :func:`_plan`'s rows that :func:`_compiled_event_tangents` reads (the columns of
+#: :data:`symvib.numeric.sensitivity_compiled.INTERVAL_SCALARS`, then ``q_a, q_e``).
+SCALARS = 13
+#: Events that end on a limiter (their ``Dq`` is the limiter's).
+LIMITER_EVENTS = (EventCode.IMPACT, EventCode.REST_ON_LIMITER)
 #: The arrays of each interval that :func:`symvib.numeric.sensitivity_batch.time_derivatives` reads.
 BATCH_FIELDS = ("s", "q_a", "q_e", "G_a", "G_e", "f_a", "f_e", "Dq_a", "Dq_e", "DG_a", "DG_e")
 
@@ -438,13 +459,16 @@ def _by_branch(intervals):
 def _plan(events, start, last, scene, c, q_a, w_a):
     """The differentiable sliding events from ``start`` (the particle at ``q_a`` with ``w_a``) to a
     lift-off (included), a landing (not included) or ``last``, each ``(index, event, kind code,
-    turning, interval or None, w before it)``; and the first event without derivatives (its index,
-    or None) and why."""
+    turning, interval's scalars or None, w before it)``; and the first event without derivatives (its
+    index, or None) and why.  An interval's scalars are ``s, E_a, G_a, alpha_a, alpha'_a, f_a, f_e, G_e,
+    alpha_e, alpha'_e, E_e, q_a, q_e, w_a`` (floats: what :class:`Interval` holds,
+    :meth:`Interval.of_scalars`)."""
     plan = []
     stop = start
-    while stop < last and events[stop].kind.code not in (EventCode.LIFT_OFF, EventCode.LANDING):
+    codes = [_code(ev.kind) for ev in events[start:last + 1]]
+    while stop < last and codes[stop - start] not in (EventCode.LIFT_OFF, EventCode.LANDING):
         stop += 1
-    if events[stop].kind.code == EventCode.LANDING:
+    if codes[stop - start] == EventCode.LANDING:
         stop -= 1
     segment = events[start:stop + 1]
     # the kernels at every event and every interval's middle, each called once for all of them
@@ -452,30 +476,53 @@ def _plan(events, start, last, scene, c, q_a, w_a):
     middle = at[:-1] + (at[1:] - at[:-1]) / 2
     both, n = np.concatenate((at, middle)), len(at)      # (alpha and F_s at both in one call each)
     alpha_at, dalpha_at = c.alpha(both), c.dalpha(at)
+    # E_s at every event (Interval's: NumPy's exp, as for one interval at a time)
+    E_at = {s: np.exp(2 * s * c.mu * alpha_at[:n]).tolist() for s in (1, -1)}
     # (as lists of floats, read one by one below: the same values, without NumPy's scalars)
     alpha, alpha_mid, middle = alpha_at[:n].tolist(), alpha_at[n:].tolist(), middle.tolist()
     dalpha = dalpha_at.tolist()
     F = {s: c.F(s, both).tolist() for s in (1, -1)}
     f = {s: c.f(s, at).tolist() for s in (1, -1)}
     F, F_mid = {s: v[:n] for s, v in F.items()}, {s: v[n:] for s, v in F.items()}
+    mu, g, k2 = c.mu, c.g, scene.k * scene.k
     for j, ev in enumerate(segment):
-        i, kind = start + j, ev.kind.code
-        own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
+        i, kind = start + j, codes[j]
+        q_e = ev.q
+        own = _not_differentiable(ev, scene, c, kind, moved=q_e != q_a)
         if own:
             return plan, i, own
-        turning = kind in (EventCode.REVERSAL, EventCode.ARREST)
-        if ev.q == q_a:                      # no motion in between (a rest test at the start)
-            iv, w_minus = None, w_a
+        turning = kind in TURNING_EVENTS
+        if q_e == q_a:                      # no motion in between (a rest test at the start)
+            row, w_minus = None, w_a
         else:
-            sigma = 1 if ev.q > q_a else -1
+            sigma = 1 if q_e > q_a else -1
             s = _branch(c, w_a, sigma, middle[j], (alpha[j], alpha_mid[j], F[sigma][j], F_mid[sigma][j]))
-            ends = (alpha[j], dalpha[j], f[s][j], f[s][j + 1], F[s][j], F[s][j + 1], alpha_at[j + 1:j + 2],
-                    dalpha_at[j + 1:j + 2])
-            iv = Interval(c, q_a, w_a, ev.q, s, turning, I_p_e=0.0, ends=ends)
-            w_minus = 0.0 if turning else float((iv.G_e / iv.E_e)[0])
-        plan.append((i, ev, kind, turning, iv, w_minus))
-        q_a, w_a = ev.q, (scene.k * scene.k * w_minus if kind == EventCode.IMPACT else w_minus)
+            # (Interval's arithmetic: E_a by math.exp, G_e from the difference of F_s)
+            E_a = math.exp(2 * s * mu * alpha[j])
+            G_a = w_a * E_a
+            G_e = 0.0 if turning else G_a - 2 * g * (F[s][j + 1] - F[s][j])
+            E_e = E_at[s][j + 1]
+            row = (s, E_a, G_a, alpha[j], dalpha[j], f[s][j], f[s][j + 1], G_e, alpha[j + 1], dalpha[j + 1], E_e,
+                   q_a, q_e, w_a)
+            w_minus = 0.0 if turning else G_e / E_e
+        plan.append((i, ev, kind, turning, row, w_minus))
+        q_a, w_a = q_e, (k2 * w_minus if kind == EventCode.IMPACT else w_minus)
     return plan, None, ""
+
+
+#: The engine's code of each event kind seen (``EventKind.code`` looks it up by name on every read).
+_CODES = {}
+
+
+def _code(kind) -> EventCode:
+    """``kind.code``, looked up once per kind."""
+    code = _CODES.get(kind)
+    if code is None:
+        code = _CODES[kind] = kind.code
+    return code
+
+#: Events that end at a turning point of ``G``.
+TURNING_EVENTS = (EventCode.REVERSAL, EventCode.ARREST)
 
 
 def _reasons_after(events, first, why, scene, c, q_a) -> list:
