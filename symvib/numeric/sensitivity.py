@@ -182,7 +182,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     if getattr(scene, "drag", 0.0):
         raise ValueError("result: a run with air drag (physics.drag) has no sensitivities yet: the derivatives of "
                          "physics.md, \"Sensitivities\" are those of the drag-free phase trajectory")
-    kernels = prepared.kernels if prepared else kernels_of(scene)
+    kernels = prepared.kernels if prepared else _kernels_of(scene, kernels_of)
     if jets is None:
         from symvib.numeric.jet_kernels import load_jets
 
@@ -261,6 +261,22 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
             column[..., j] = np.nan
     sens = Sensitivities(wrt, tuple(events), T, Q, VB, VA, tuple(reasons), final, notes)
     return Tangents(sens, tuple(path.legs), tuple(flights))
+
+
+def _kernels_of(scene, load):
+    """``load(scene)`` (:func:`symvib.numeric.prepared.kernels_of`), remembered for the last catalogue shape (by
+    identity: the scenes of a fit or a sweep share theirs; its module is the same for any of its scenes)."""
+    shape = scene.shape
+    if _LAST_KERNELS and _LAST_KERNELS[0] is shape:
+        return _LAST_KERNELS[1]
+    kernels = load(scene)
+    if shape.in_catalogue:
+        _LAST_KERNELS[:] = (shape, kernels)
+    return kernels
+
+
+#: The last catalogue shape :func:`_kernels_of` loaded, and its kernels.
+_LAST_KERNELS = []
 
 
 @dataclass
@@ -488,7 +504,9 @@ def _plan(events, start, last, scene, c, q_a, w_a):
     for j, ev in enumerate(segment):
         i, kind = start + j, codes[j]
         q_e = ev.q
-        own = _not_differentiable(ev, scene, c, kind, moved=q_e != q_a)
+        # (an impact has derivatives unless it ends a Zeno accumulation, which its detail says)
+        own = _not_differentiable(ev, scene, c, kind, moved=q_e != q_a) if kind != EventCode.IMPACT or ev.detail \
+            else ""
         if own:
             return plan, i, own
         turning = kind in TURNING_EVENTS

@@ -402,14 +402,20 @@ def quadratures_for(result, kernels, c, *, compile: bool = False):
     """
     if result.stats.get("backend") != "numba" or c.has_curve_parameters or not getattr(kernels, "__file__", None):
         return None
-    import importlib.util
-
-    if importlib.util.find_spec("numba") is None:
+    if not _numba_installed():
         return None
     if not (compile or getattr(kernels, "_symvib_sensitivity_quadratures", None) is not None
             or compiled_on_disk(kernels)):
         return None
     return Quadratures(quadratures(kernels), c._cp)
+
+
+@cache
+def _numba_installed() -> bool:
+    """Whether numba can be imported (asked once per process)."""
+    import importlib.util
+
+    return importlib.util.find_spec("numba") is not None
 
 
 #: The compiled functions whose disk-cache markers :func:`compiled_on_disk` asks for.

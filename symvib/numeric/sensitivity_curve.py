@@ -111,6 +111,7 @@ class CurveFunctions:
         self._dF = {1: kernels.dF_p, -1: kernels.dF_m}
         self._ddF = {1: kernels.ddF_p, -1: kernels.ddF_m}
         self._N = kernels.N_w
+        self._N_scalar = getattr(kernels, "N_w_scalar", None)
         self._cp = cp
         self.P = len(targets)
         self.Dmu = np.array([1.0 if t[1:] == ("scene", "mu") else 0.0 for t in targets])
@@ -197,4 +198,11 @@ class CurveFunctions:
         return float(np.asarray(self.jets.jet3(np.asarray(float(q)), *self._cp)[2]))
 
     def N(self, q, w):
+        """The normal force per unit mass at ``q`` where ``w`` is given (the scalar kernel, where the curve has one
+        and it computes: ten times faster on one point than the NumPy kernel)."""
+        if self._N_scalar is not None:
+            try:
+                return float(self._N_scalar(float(q), float(w), self.g, *self._cp))
+            except (ArithmeticError, ValueError):     # (math refuses what NumPy makes NaN or inf)
+                pass
         return float(self._N(float(q), float(w), self.g, *self._cp))
