@@ -442,9 +442,18 @@ class _Problem:
     hi: np.ndarray
     absolute: bool
     model: object
+    scenes: list = field(default_factory=list, compare=False, repr=False)
 
     def at(self, values) -> Scene:
-        return with_parameters(self.scene, self.targets, values)
+        """The scene with the free parameters ``values`` (the last two remembered: a stage ends and the next
+        starts where the last step was taken)."""
+        key = np.asarray(values, dtype=float).tobytes()
+        for known, scene in self.scenes:
+            if known == key:
+                return scene
+        scene = with_parameters(self.scene, self.targets, values)
+        self.scenes[:] = [(key, scene), *self.scenes[:1]]
+        return scene
 
 
 def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: float, max_iterations: int,
@@ -469,10 +478,11 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
         A = w[:, None] * J
         scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
         g, H = A.T @ (w * r), A.T @ A
+        D2, minus_g = np.diag(scale ** 2), -g        # (the same for every lambda)
         ran, failure = False, ""
         while True:
-            step = np.linalg.lstsq(H + lam * np.diag(scale ** 2), -g, rcond=None)[0]
-            trial = np.clip(x + step, lo, hi)
+            step = np.linalg.lstsq(H + lam * D2, minus_g, rcond=None)[0]
+            trial = np.minimum(np.maximum(x + step, lo), hi)     # (np.clip's result, without its overhead)
             try:
                 r_new, m_new, jacobian_new = problem.model(problem.at(trial), observed, free, problem.run)
                 new_cost = 0.5 * float(np.sum((w * r_new) ** 2))

@@ -80,6 +80,8 @@ def show_value(value) -> str:
 def finite(value, field) -> float:
     """``value`` as a float, when it is a finite real number (not a bool); else a :class:`SceneError`
     naming ``field``."""
+    if type(value) is float and math.isfinite(value):    # (the common case, without the ABC checks below)
+        return value
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise SceneError(field, f"must be a number, got {show_value(value)}")
     try:
