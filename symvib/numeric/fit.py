@@ -217,7 +217,7 @@ def _model(scene, observed, free, run):
     # (the kinds as EventKind members: a tuple's `in` finds a member by identity, without the enum's value)
     kinds = [_KINDS[v] for v in observed.kinds] if observed.kinds is not None else None
     if kinds:
-        wanted = tuple(set(kinds))
+        wanted = tuple(_KINDS[v] for v in set(observed.kinds))    # (a set of the names: str hashes are kept)
         index = [i for i, e in enumerate(events) if e.kind in wanted]
     else:
         index = list(range(len(events)))
@@ -240,16 +240,13 @@ def _model(scene, observed, free, run):
     def jacobian():
         # (the events after the last matched one are not differentiated: no row needs them)
         sens = sensitivities(result, wrt=free, through=index[matched - 1] if matched else 0, compile=True)
-        blocks, usable = [], []
-        for values in ([sens.t] if observed.q is None else [sens.t, sens.q]):
-            J = np.zeros((n_obs, len(free)))
-            J[:matched] = values[rows]
-            blocks.append(J)
-            usable.append(np.concatenate([np.all(np.isfinite(J[:matched]), axis=1),
-                                          np.ones(n_obs - matched, dtype=bool)]))
-        J, usable = np.vstack(blocks), np.concatenate(usable)
+        columns = [sens.t] if observed.q is None else [sens.t, sens.q]
+        J = np.zeros((len(columns), n_obs, len(free)))
+        for block, values in zip(J, columns):
+            block[:matched] = values[rows]
+        usable = np.isfinite(J).all(axis=2)       # (the rows past the matched ones are 0: usable)
         J[~usable] = 0.0
-        return J, usable
+        return J.reshape(-1, len(free)), usable.ravel()
 
     return np.concatenate(r), matched, jacobian
 

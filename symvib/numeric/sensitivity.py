@@ -194,7 +194,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     limiter_D = {scene.left: unit["left"], scene.right: unit["right"]}
 
     q_a, qdot0 = scene.q0, scene.qdot0
-    h0, dh0 = float(c.h(q_a)), float(c.dh(q_a))
+    h0, dh0, dz0 = _start_values(c, kernels, q_a)
     w_a = h0 ** 2 * qdot0 ** 2
     Dq_a = unit["q0"].copy()
     Dw_a = (2 * h0 ** 2 * qdot0 * unit["qdot0"] + 2 * h0 * dh0 * qdot0 ** 2 * unit["q0"]
@@ -203,19 +203,19 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     if qdot0 == 0 and "qdot0" in [t[2] for t in targets if t[1] == "scene"]:
         notes[next(t[0] for t in targets if t[1:] == ("scene", "qdot0"))] = \
             "the run starts at rest: the sign of qdot0 chooses the direction (no derivative)"
-    DE0 = c.m * (Dw_a / 2 + c.g * (float(c.dz(q_a)) * Dq_a + c.geometry_dp("z", q_a)[0]))
+    DE0 = c.m * (Dw_a / 2 + c.g * (dz0 * Dq_a + c.geometry_dp("z", q_a)[0]))
 
     n = len(result.events)
     last = n - 1 if through is None else _checked_through(through, n)
     events = result.events
-    path = _Path(q_a, w_a, Dq_a, Dw_a, np.zeros(P), 0.0, tuple(np.full((n, P), np.nan) for _ in range(4)), [],
-                 np.zeros(P), np.zeros(P))
+    path = _Path(q_a, w_a, Dq_a, Dw_a, np.zeros(P), 0.0, tuple(np.full((4, n, P), np.nan)), [], np.zeros(P),
+                 np.zeros(P))
     units = (Dmu, Dk, limiter_D, legs)
     i, broken, first, flight = 0, "", None, None
     flights = []
     while i <= last and not broken:
         ev = events[i]
-        if ev.kind.code != EventCode.LANDING:       # sliding, up to a lift-off or a landing
+        if _code(ev.kind) != EventCode.LANDING:       # sliding, up to a lift-off or a landing
             i, broken, first, flight = _slide(c, scene, events, i, last, path, units)
             if flight is not None:
                 flights.append(flight)
@@ -286,6 +286,23 @@ def _targets(scene, wrt):
 
 #: What :func:`_targets` resolved, by its key.
 _TARGETS = {}
+
+
+def _start_values(c, kernels, q):
+    """``h``, ``h'`` and ``z'`` at the start ``q`` (floats), remembered for the last few starts of a curve with
+    its parameters (a fit's runs mostly start where the scene does)."""
+    key = (id(kernels), q, c._cp)
+    known = _STARTS.get(key)
+    if known is None or known[0] is not kernels:
+        known = (kernels, float(c.h(q)), float(c.dh(q)), float(c.dz(q)))
+        if len(_STARTS) >= 16:
+            _STARTS.clear()
+        _STARTS[key] = known
+    return known[1:]
+
+
+#: :func:`_start_values` remembered: ``(id of the kernels, q, curve parameters) -> (kernels, h, h', z')``.
+_STARTS = {}
 
 
 def _kernels_of(scene, load):
@@ -458,19 +475,22 @@ def _segment(events, start, last, scene, c, q_a):
     (``at``, ``middle``; each kernel called once for all of them: ``alpha`` at both, ``alpha'``, ``F_s`` at both,
     ``F_s'`` and ``E_s = exp(2 s mu alpha)`` at the events, NumPy's exp as :class:`Interval`'s)."""
     codes, n, first, broken, q_before = [], None, None, "", q_a
+    landing, lift_off, impact = EventCode.LANDING, EventCode.LIFT_OFF, EventCode.IMPACT
     for j, ev in enumerate(events[start:last + 1]):
-        kind = _code(ev.kind)
-        if kind == EventCode.LANDING:     # (a landing ends the slide before it, a lift-off with it)
+        kind = _CODES.get(ev.kind)
+        if kind is None:
+            kind = _code(ev.kind)
+        if kind == landing:     # (a landing ends the slide before it, a lift-off with it)
             break
         codes.append(kind)
         if n is None:
             # (an impact has derivatives unless it ends a Zeno accumulation, which its detail says)
             own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_before) \
-                if kind != EventCode.IMPACT or ev.detail else ""
+                if kind != impact or ev.detail else ""
             if own:
                 n, first, broken = j, start + j, own
             q_before = ev.q
-        if kind == EventCode.LIFT_OFF:
+        if kind == lift_off:
             break
     segment = events[start:start + len(codes)]
     n = len(segment) if n is None else n
