@@ -168,9 +168,10 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     event; the time derivatives of every interval at once
     (:mod:`symvib.numeric.sensitivity_batch`).  Only the first and third are loops over events.  For a
     run of the compiled engine (``result.stats["backend"] == "numba"``) without curve parameters in
-    ``wrt``, the second and fourth are compiled with the curve's kernels, and so is the third where no
-    event needs the curve's jets (:mod:`symvib.numeric.sensitivity_compiled`: the same numbers to
-    rounding; compiled once per curve, then read from numba's disk cache).
+    ``wrt``, the second and fourth are compiled with the curve's kernels, and where no event needs the
+    curve's jets a sliding stretch's four passes are one compiled call
+    (:mod:`symvib.numeric.sensitivity_compiled`: the same numbers to rounding as NumPy's, the Python
+    passes' bit for bit; compiled once per curve, then read from numba's disk cache).
     """
     from symvib.numeric.prepared import kernels_of
 
