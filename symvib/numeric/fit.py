@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from symvib.numeric.events import EventKind
 from symvib.numeric.fit_data import (
                                      Observed,
                                      ObservedSamples,
@@ -200,6 +201,10 @@ def _default_bounds(scene: Scene, name: str, kind: str = "scene") -> tuple:
             "q0": (left, right), "left": (-math.inf, scene.q0), "right": (scene.q0, math.inf)}[name]
 
 
+#: Event kinds by their names (the observed events' kinds).
+_KINDS = {kind.value: kind for kind in EventKind}
+
+
 def _model(scene, observed, free, run):
     """Residuals (model - observed, unweighted), how many events matched, and a function that gives
     their Jacobian and which rows have one (the exact sensitivities cost more than the run: a
@@ -208,37 +213,40 @@ def _model(scene, observed, free, run):
     if result.status.is_error:
         raise ValueError(f"scene: the run at {_at(scene, free)} failed "
                          f"({result.status.value}): {result.message}")
-    wanted = set(observed.kinds) if observed.kinds else None
-    index = [i for i, e in enumerate(result.events) if wanted is None or e.kind.value in wanted]
+    events = result.events
+    # (the kinds as EventKind members: a tuple's `in` finds a member by identity, without the enum's value)
+    kinds = [_KINDS[v] for v in observed.kinds] if observed.kinds is not None else None
+    if kinds:
+        wanted = tuple(_KINDS[v] for v in set(observed.kinds))    # (a set of the names: str hashes are kept)
+        index = [i for i, e in enumerate(events) if e.kind in wanted]
+    else:
+        index = list(range(len(events)))
     n_obs = len(observed.t)
-    matched = 0
-    while matched < min(n_obs, len(index)) and (
-            observed.kinds is None or result.events[index[matched]].kind.value == observed.kinds[matched]):
-        matched += 1
+    matched = min(n_obs, len(index))
+    if kinds is not None:
+        for j in range(matched):
+            if events[index[j]].kind is not kinds[j]:
+                matched = j
+                break
     span_t = max(float(observed.t[-1] - observed.t[0]), float(observed.t[-1]), 1e-300)
+    rows = index[:matched]
     r = [np.full(n_obs, span_t)]
-    for k in range(matched):
-        r[0][k] = result.events[index[k]].t - observed.t[k]
+    r[0][:matched] = np.array([events[i].t for i in rows], dtype=float) - observed.t[:matched]
     if observed.q is not None:
         span_q = max(float(np.max(np.abs(observed.q - scene.q0))), 1e-300)
         r.append(np.full(n_obs, span_q))
-        for k in range(matched):
-            r[1][k] = result.events[index[k]].q - observed.q[k]
+        r[1][:matched] = np.array([events[i].q for i in rows], dtype=float) - observed.q[:matched]
 
     def jacobian():
         # (the events after the last matched one are not differentiated: no row needs them)
         sens = sensitivities(result, wrt=free, through=index[matched - 1] if matched else 0, compile=True)
-        blocks, usable = [], []
-        for values in ([sens.t] if observed.q is None else [sens.t, sens.q]):
-            J = np.zeros((n_obs, len(free)))
-            for k in range(matched):
-                J[k] = values[index[k]]
-            blocks.append(J)
-            usable.append(np.concatenate([np.all(np.isfinite(J[:matched]), axis=1),
-                                          np.ones(n_obs - matched, dtype=bool)]))
-        J, usable = np.vstack(blocks), np.concatenate(usable)
+        columns = [sens.t] if observed.q is None else [sens.t, sens.q]
+        J = np.zeros((len(columns), n_obs, len(free)))
+        for block, values in zip(J, columns):
+            block[:matched] = values[rows]
+        usable = np.isfinite(J).all(axis=2)       # (the rows past the matched ones are 0: usable)
         J[~usable] = 0.0
-        return J, usable
+        return J.reshape(-1, len(free)), usable.ravel()
 
     return np.concatenate(r), matched, jacobian
 
@@ -369,7 +377,8 @@ def fit(scene: Scene, observed: Observed | ObservedSamples, free=("mu", "k"), *,
         part = observed.head(n)
         part_w = np.concatenate([w[j * n_obs:j * n_obs + n] for j in range(m // n_obs)])
         # (a stage before the last only needs to land near its minimum: the next one refines it)
-        result = _levenberg_marquardt(problem, part, part_w, x, xtol if n == n_obs else STAGE_XTOL, max_iterations)
+        result = _levenberg_marquardt(problem, part, part_w, x, xtol if n == n_obs else STAGE_XTOL, max_iterations,
+                                      final=n == n_obs)
         total += result.iterations
         history += list(result.history)
         x = np.array([result.estimates[name] for name in free])
@@ -430,15 +439,28 @@ class _Problem:
     hi: np.ndarray
     absolute: bool
     model: object
+    scenes: list = field(default_factory=list, compare=False, repr=False)
 
     def at(self, values) -> Scene:
-        return with_parameters(self.scene, self.targets, values)
+        """The scene with the free parameters ``values`` (the last two remembered: a stage ends and the next
+        starts where the last step was taken)."""
+        key = np.asarray(values, dtype=float).tobytes()
+        for known, scene in self.scenes:
+            if known == key:
+                return scene
+        scene = with_parameters(self.scene, self.targets, values)
+        self.scenes[:] = [(key, scene), *self.scenes[:1]]
+        return scene
 
 
-def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: float, max_iterations: int) -> FitResult:
+def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: float, max_iterations: int,
+                         final: bool = True) -> FitResult:
     """Levenberg-Marquardt from ``x`` (Moré's column scaling, bounds by projection): a trial that
     lowers the cost is taken and ``lambda`` falls, else ``lambda`` rises; it stops when the relative
-    step is below ``xtol`` or no step lowers the cost (a minimum, to rounding)."""
+    step is below ``xtol`` or no step lowers the cost (a minimum, to rounding).  A stage before the
+    last (not ``final``) reads only the estimates, the status and the history of the result: the
+    Jacobian at a last step that ends it on ``xtol`` is not computed (its covariance is that of the
+    step before)."""
     free, lo, hi = problem.free, problem.lo, problem.hi
     r, matched, jacobian = problem.model(problem.at(x), observed, free, problem.run)
     J, usable = jacobian()
@@ -453,10 +475,11 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
         A = w[:, None] * J
         scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
         g, H = A.T @ (w * r), A.T @ A
+        D2, minus_g = np.diag(scale ** 2), -g        # (the same for every lambda)
         ran, failure = False, ""
         while True:
-            step = np.linalg.lstsq(H + lam * np.diag(scale ** 2), -g, rcond=None)[0]
-            trial = np.clip(x + step, lo, hi)
+            step = np.linalg.lstsq(H + lam * D2, minus_g, rcond=None)[0]
+            trial = np.minimum(np.maximum(x + step, lo), hi)     # (np.clip's result, without its overhead)
             try:
                 r_new, m_new, jacobian_new = problem.model(problem.at(trial), observed, free, problem.run)
                 new_cost = 0.5 * float(np.sum((w * r_new) ** 2))
@@ -475,8 +498,9 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
             status = "runs_failed" if stuck else "converged"
             break
         moved = np.abs(trial - x) <= xtol * (np.abs(x) + xtol)
-        J_new, u_new = jacobian_new()
-        x, r, J, matched, usable, cost = trial, r_new, J_new, m_new, u_new, new_cost
+        if final or not np.all(moved):
+            J, usable = jacobian_new()
+        x, r, matched, cost = trial, r_new, m_new, new_cost
         lam = max(lam * LAMBDA_DOWN, LAMBDA_MIN)
         history.append((x.copy(), cost))
         if np.all(moved):

@@ -33,6 +33,7 @@ import numbers
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
+from types import SimpleNamespace
 
 from symvib import expr as _expr
 
@@ -80,6 +81,8 @@ def show_value(value) -> str:
 def finite(value, field) -> float:
     """``value`` as a float, when it is a finite real number (not a bool); else a :class:`SceneError`
     naming ``field``."""
+    if type(value) is float and math.isfinite(value):    # (the common case, without the ABC checks below)
+        return value
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise SceneError(field, f"must be a number, got {show_value(value)}")
     try:
@@ -299,7 +302,15 @@ CHECKS = (
 
 def checks(n: SceneNumbers) -> list:
     """Every check of the numbers ``n``, in order: the parameters', then :data:`CHECKS`."""
-    return _parameter_checks(n) + list(CHECKS)
+    return list(_checks_of(tuple((name, n.kinds.get(name, "positive")) for name in n.params)))
+
+
+@lru_cache(maxsize=256)
+def _checks_of(parameters: tuple) -> tuple:
+    """:func:`checks` of numbers whose parameters are ``(name, kind)`` in order (the checks read the numbers
+    they are given: built once per set of parameters)."""
+    kinds = dict(parameters)
+    return tuple(_parameter_checks(SimpleNamespace(params=kinds, kinds=kinds))) + CHECKS
 
 
 def check_numbers(n: SceneNumbers) -> None:

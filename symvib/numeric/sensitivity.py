@@ -86,7 +86,8 @@ def sensitivities(result, wrt=PARAMETERS, *, prepared=None, through=None, compil
     Sensitivities
         The record (:mod:`symvib.numeric.sensitivity_table`).
     """
-    return interval_tangents(result, wrt, prepared=prepared, through=through, compile=compile).sensitivities
+    return interval_tangents(result, wrt, prepared=prepared, through=through, compile=compile,
+                             legs=False).sensitivities
 
 
 @dataclass(frozen=True)
@@ -118,7 +119,7 @@ class Tangents:
 
 
 def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, through=None,
-                      compile: bool = False) -> Tangents:
+                      compile: bool = False, legs: bool = True) -> Tangents:
     """Derivatives of ``result``'s events and final state with respect to ``wrt``, and its intervals.
 
     Parameters
@@ -144,6 +145,10 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
         not compiled yet (a few seconds, once per curve: :mod:`symvib.numeric.sensitivity_compiled`);
         the fit and a sweep's sensitivity columns ask for it.  Default: the compiled quadratures only
         where they are compiled already, else NumPy's (the same numbers to rounding).
+    legs : bool
+        Whether to build the legs (their :class:`~symvib.numeric.sensitivity_interval.Interval` records);
+        without them the result's ``legs`` is empty and the compiled path builds no record per interval
+        (:func:`sensitivities`, which returns the table only: the same numbers).
 
     Returns
     -------
@@ -163,21 +168,22 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     event; the time derivatives of every interval at once
     (:mod:`symvib.numeric.sensitivity_batch`).  Only the first and third are loops over events.  For a
     run of the compiled engine (``result.stats["backend"] == "numba"``) without curve parameters in
-    ``wrt``, the second and fourth are compiled with the curve's kernels, and so is the third where no
-    event needs the curve's jets (:mod:`symvib.numeric.sensitivity_compiled`: the same numbers to
-    rounding; compiled once per curve, then read from numba's disk cache).
+    ``wrt``, the second and fourth are compiled with the curve's kernels, and where no event needs the
+    curve's jets a sliding stretch's four passes are one compiled call
+    (:mod:`symvib.numeric.sensitivity_compiled`: the same numbers to rounding as NumPy's, the Python
+    passes' bit for bit; compiled once per curve, then read from numba's disk cache).
     """
     from symvib.numeric.prepared import kernels_of
 
     scene = result.scene
-    targets = resolve_wrt(scene, wrt)
+    targets, unit = _targets(scene, wrt)
     wrt = tuple(t[0] for t in targets)
     if result.status.is_error:
         raise ValueError(f"result: the run failed ({result.status.value}); its events have no derivatives")
     if getattr(scene, "drag", 0.0):
         raise ValueError("result: a run with air drag (physics.drag) has no sensitivities yet: the derivatives of "
                          "physics.md, \"Sensitivities\" are those of the drag-free phase trajectory")
-    kernels = prepared.kernels if prepared else kernels_of(scene)
+    kernels = prepared.kernels if prepared else _kernels_of(scene, kernels_of)
     if jets is None:
         from symvib.numeric.jet_kernels import load_jets
 
@@ -185,16 +191,11 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     c = CurveFunctions(kernels, scene, targets, jets)
     c.quadratures = quadratures_for(result, kernels, c, compile=compile)   # (compiled levels, where they may be)
     P = len(wrt)
-    unit = {name: np.zeros(P) for name in PARAMETERS}
-    eye = np.eye(P)
-    for j, (_, kind, p) in enumerate(targets):
-        if kind == "scene":
-            unit[p] = eye[j]
     Dmu, Dk = unit["mu"], unit["k"]
     limiter_D = {scene.left: unit["left"], scene.right: unit["right"]}
 
     q_a, qdot0 = scene.q0, scene.qdot0
-    h0, dh0 = float(c.h(q_a)), float(c.dh(q_a))
+    h0, dh0, dz0 = _start_values(c, kernels, q_a)
     w_a = h0 ** 2 * qdot0 ** 2
     Dq_a = unit["q0"].copy()
     Dw_a = (2 * h0 ** 2 * qdot0 * unit["qdot0"] + 2 * h0 * dh0 * qdot0 ** 2 * unit["q0"]
@@ -203,19 +204,19 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     if qdot0 == 0 and "qdot0" in [t[2] for t in targets if t[1] == "scene"]:
         notes[next(t[0] for t in targets if t[1:] == ("scene", "qdot0"))] = \
             "the run starts at rest: the sign of qdot0 chooses the direction (no derivative)"
-    DE0 = c.m * (Dw_a / 2 + c.g * (float(c.dz(q_a)) * Dq_a + c.geometry_dp("z", q_a)[0]))
+    DE0 = c.m * (Dw_a / 2 + c.g * (dz0 * Dq_a + c.geometry_dp("z", q_a)[0]))
 
     n = len(result.events)
     last = n - 1 if through is None else _checked_through(through, n)
     events = result.events
-    path = _Path(q_a, w_a, Dq_a, Dw_a, np.zeros(P), 0.0, tuple(np.full((n, P), np.nan) for _ in range(4)), [],
-                 np.zeros(P), np.zeros(P))
-    units = (Dmu, Dk, limiter_D)
+    path = _Path(q_a, w_a, Dq_a, Dw_a, np.zeros(P), 0.0, tuple(np.full((4, n, P), np.nan)), [], np.zeros(P),
+                 np.zeros(P))
+    units = (Dmu, Dk, limiter_D, legs)
     i, broken, first, flight = 0, "", None, None
     flights = []
     while i <= last and not broken:
         ev = events[i]
-        if ev.kind.code != EventCode.LANDING:       # sliding, up to a lift-off or a landing
+        if _code(ev.kind) != EventCode.LANDING:       # sliding, up to a lift-off or a landing
             i, broken, first, flight = _slide(c, scene, events, i, last, path, units)
             if flight is not None:
                 flights.append(flight)
@@ -258,6 +259,69 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     return Tangents(sens, tuple(path.legs), tuple(flights))
 
 
+def _targets(scene, wrt):
+    """:func:`~symvib.numeric.sensitivity_curve.resolve_wrt` ``(scene, wrt)`` and the unit tangent of each scene
+    parameter (:data:`PARAMETERS` -> shape (P,), read-only; 0 for one not in ``wrt``), remembered by what they
+    depend on: the names, the curve's parameter names and which limiters the scene has."""
+    try:
+        key = (wrt if isinstance(wrt, str) else tuple(wrt), tuple(n for n, _ in scene.params), scene.left is None,
+               scene.right is None)
+        known = _TARGETS.get(key)
+    except TypeError:        # (names that are not hashable: resolve_wrt says what is wrong)
+        key, known = None, None
+    if known is not None:
+        return known
+    targets = resolve_wrt(scene, wrt if key is None else key[0])
+    P = len(targets)
+    unit = {name: np.zeros(P) for name in PARAMETERS}
+    eye = np.eye(P)
+    for j, (_, kind, p) in enumerate(targets):
+        if kind == "scene":
+            unit[p] = eye[j].copy()
+    for v in unit.values():
+        v.setflags(write=False)
+    if key is not None and len(_TARGETS) < 256:
+        _TARGETS[key] = (targets, unit)
+    return targets, unit
+
+
+#: What :func:`_targets` resolved, by its key.
+_TARGETS = {}
+
+
+def _start_values(c, kernels, q):
+    """``h``, ``h'`` and ``z'`` at the start ``q`` (floats), remembered for the last few starts of a curve with
+    its parameters (a fit's runs mostly start where the scene does)."""
+    key = (id(kernels), q, c._cp)
+    known = _STARTS.get(key)
+    if known is None or known[0] is not kernels:
+        known = (kernels, float(c.h(q)), float(c.dh(q)), float(c.dz(q)))
+        if len(_STARTS) >= 16:
+            _STARTS.clear()
+        _STARTS[key] = known
+    return known[1:]
+
+
+#: :func:`_start_values` remembered: ``(id of the kernels, q, curve parameters) -> (kernels, h, h', z')``.
+_STARTS = {}
+
+
+def _kernels_of(scene, load):
+    """``load(scene)`` (:func:`symvib.numeric.prepared.kernels_of`), remembered for the last catalogue shape (by
+    identity: the scenes of a fit or a sweep share theirs; its module is the same for any of its scenes)."""
+    shape = scene.shape
+    if _LAST_KERNELS and _LAST_KERNELS[0] is shape:
+        return _LAST_KERNELS[1]
+    kernels = load(scene)
+    if shape.in_catalogue:
+        _LAST_KERNELS[:] = (shape, kernels)
+    return kernels
+
+
+#: The last catalogue shape :func:`_kernels_of` loaded, and its kernels.
+_LAST_KERNELS = []
+
+
 @dataclass
 class _Path:
     """Where the differentiation of a run is: the particle's position and ``w`` after the last event
@@ -283,25 +347,32 @@ def _slide(c, scene, events, start, last, path, units):
     Returns the next event's index, why the derivatives end (empty if they go on), the index of the
     first event without them, and the flight launched at a lift-off (or None).
     """
-    Dmu, Dk, limiter_D = units
+    Dmu, Dk, limiter_D, want_legs = units
     T, Q, VB, VA = path.table
     P = len(Dmu)
+    segment_of = _segment(events, start, last, scene, c, path.q)
+    _, codes, count, first, broken, _ = segment_of
+    if c.quadratures is not None and count and not any(code in JETS_EVENTS for code in codes[:count]):
+        return _slide_compiled(c, scene, segment_of, start, last, path, units)
     # 1. the run's path, event by event, in scalars: each interval's ends, branch and w before and after
-    plan, first, broken = _plan(events, start, last, scene, c, path.q, path.w)
+    plan = _plan(segment_of, start, scene, c, path.q, path.w)
+    intervals = [None if p[4] is None else Interval.of_scalars(c, p[4], p[3]) for p in plan]
     # 2. the integrals of dF_s'/dp over whole intervals, all at once (they need no tangent)
+    I_p_e = np.zeros((len(plan), P))
     if c.f_depends:
-        for s, group in _by_branch([p[4] for p in plan]):
-            q0s, D = np.array([iv.q_a for iv in group]), np.array([iv.q_e - iv.q_a for iv in group])
-            for iv, I_p_e in zip(group, end_integrals(c, s, q0s, D, MAX_PANELS * NODES)):
-                iv.I_p_e = I_p_e
+        for s in (1, -1):
+            group = [j for j, p in enumerate(plan) if p[4] is not None and p[4][0] == s]
+            if group:
+                q0s = np.array([plan[j][4][11] for j in group])
+                D = np.array([plan[j][4][12] - plan[j][4][11] for j in group])
+                I_p_e[group] = end_integrals(c, s, q0s, D, MAX_PANELS * NODES)
+                for j in group:
+                    intervals[j].I_p_e = I_p_e[j]
     # 3. the tangents of the events' positions and speeds, event by event (no quadrature left)
     Dq_a, Dw_a, lift = path.Dq, path.Dw, None
     D_impact_loss = np.zeros(P)
-    compiled = c.quadratures is not None and plan and not any(p[2] in JETS_EVENTS for p in plan)
-    arrays = None     # (with it, the arrays of the intervals' ends that pass 4 reads)
-    if compiled:    # (the same operations, compiled: sensitivity_compiled.event_tangents_kernel)
-        Dq_a, Dw_a, D_impact_loss, arrays = _compiled_event_tangents(c, scene, plan, path, units)
-    for j, (i, ev, kind, turning, iv, w_minus) in enumerate(() if compiled else plan):
+    for j, (i, ev, kind, turning, _, w_minus) in enumerate(plan):
+        iv = intervals[j]
         if iv is None:                      # no motion in between (a rest test at the start)
             Dq_e, Dw_minus = Dq_a.copy(), Dw_a.copy()
         else:
@@ -341,10 +412,8 @@ def _slide(c, scene, events, start, last, path, units):
     dT = np.zeros((len(plan), P))
     for lo in range(0, len(plan), CHUNK):      # (in chunks: none computed after one that fails)
         rows = [lo + r for r, p in enumerate(plan[lo:lo + CHUNK]) if p[4] is not None]
-        if rows and arrays is not None:
-            dT[rows] = c.quadratures.time_derivatives_arrays(c, arrays[0][rows], arrays[1][:, rows])
-        elif rows:
-            ends = {name: np.array([getattr(plan[r][4], name) for r in rows]) for name in BATCH_FIELDS}
+        if rows:
+            ends = {name: np.array([getattr(intervals[r], name) for r in rows]) for name in BATCH_FIELDS}
             dT[rows] = time_derivatives(c, ends)
         if not np.all(np.isfinite(dT[lo:lo + CHUNK])):
             break
@@ -355,12 +424,15 @@ def _slide(c, scene, events, start, last, path, units):
     if broken and first is not None:       # (the rows pass 3 wrote past the first event without derivatives)
         for column in (Q, VB, VA):
             column[first:last + 1] = np.nan
-    for j, (i, ev, _, _, iv, _) in enumerate(plan):
-        Dt_e = path.Dt + dT[j]
-        T[i] = Dt_e
-        if iv is not None:
-            path.legs.append(Leg(iv, path.t, ev.t, path.Dt, Dt_e))
-        path.q, path.Dt, path.t = ev.q, Dt_e, ev.t
+    if plan:    # each event's time tangent: the one before plus its interval's (summed in time order)
+        Dt = np.cumsum(np.vstack((path.Dt[None, :], dT[:len(plan)])), axis=0)
+        T[[p[0] for p in plan]] = Dt[1:]
+        if want_legs:
+            t_a = [path.t] + [p[1].t for p in plan[:-1]]
+            for j, (_, ev, _, _, _, _) in enumerate(plan):
+                if intervals[j] is not None:
+                    path.legs.append(Leg(intervals[j], t_a[j], ev.t, Dt[j], Dt[j + 1]))
+        path.q, path.Dt, path.t = plan[-1][1].q, Dt[-1], plan[-1][1].t
     if plan:      # (past the first event without derivatives, only path.q is read: the reasons')
         _, _, kind, _, _, w_minus = plan[-1]
         path.w = scene.k * scene.k * w_minus if kind == EventCode.IMPACT else w_minus
@@ -376,46 +448,8 @@ CHUNK = 64
 #: Events whose tangent needs the curve's jets (:mod:`symvib.numeric.sensitivity_normal`): pass 3 of a
 #: slide with one of them runs in Python.
 JETS_EVENTS = (EventCode.NORMAL_SIGN_CHANGE, EventCode.LIFT_OFF)
-#: Columns ``s, q_a, q_e, G_a, G_e, f_a, f_e`` of :func:`_compiled_event_tangents`' interval scalars, and its
-#: rows ``Dq_a, Dq_e, DG_a, DG_e`` (:data:`BATCH_FIELDS`, as the compiled time derivatives read them).
-ENDS_COLUMNS, TANGENT_ROWS = [0, 11, 12, 2, 7, 5, 6], [0, 4, 2, 5]
-
-
-def _compiled_event_tangents(c, scene, plan, path, units):
-    """Pass 3 of :func:`_slide` compiled (:func:`symvib.numeric.sensitivity_compiled.event_tangents_kernel`,
-    no event of :data:`JETS_EVENTS` in ``plan``, no curve parameter): writes the table's rows and each
-    interval's tangents as the Python loop does; returns ``Dq`` and ``Dw`` after the last event, the
-    tangent of the impact loss, and the intervals' ends as pass 4 reads them (``s, q_a, q_e, G_a, G_e, f_a,
-    f_e``, shape (n, 7); ``Dq_a, Dq_e, DG_a, DG_e``, shape (4, n, P))."""
-    from symvib.numeric.sensitivity_compiled import event_tangents
-
-    Dmu, Dk, limiter_D = units
-    T, Q, VB, VA = path.table
-    zeros = np.zeros(len(Dmu))
-    n = len(plan)
-    rest = (0.0,) * 13
-    scalars = np.array([rest if iv is None else (iv.s, iv.E_a, iv.G_a, iv.alpha_a, iv.dalpha_a, iv.f_a, iv.f_e, iv.G_e,
-                                                 iv.alpha_e[0], iv.dalpha_e[0], iv.E_e[0], iv.q_a, iv.q_e)
-                        for _, _, _, _, iv, _ in plan], dtype=float)
-    I_p_e = np.zeros((n, len(Dmu)))
-    limiter = np.zeros((n, len(Dmu)))
-    for j, (_, ev, kind, _, iv, _) in enumerate(plan):
-        if iv is not None:
-            I_p_e[j] = iv.I_p_e
-        if kind in (EventCode.IMPACT, EventCode.REST_ON_LIMITER):
-            limiter[j] = limiter_D.get(ev.q, zeros)
-    rows, tail = event_tangents()(
-        np.array([p[2] == EventCode.IMPACT for p in plan]), np.array([p[3] for p in plan]),
-        np.array([p[4] is not None for p in plan]), np.array([1.0 if p[1].qdot_before >= 0 else -1.0 for p in plan]),
-        np.array([p[5] for p in plan], dtype=float), scalars, I_p_e, limiter, float(c.mu), float(c.g),
-        float(scene.k), float(c.m), Dmu, Dk, np.asarray(path.Dq, dtype=float), np.asarray(path.Dw, dtype=float))
-    for j, (_, _, _, _, iv, _) in enumerate(plan):
-        if iv is not None:
-            iv.Dq_a, iv.Dw_a, iv.Dmu, iv.DG_a, iv.A, iv.Dq_e, iv.DG_e = (rows[0, j], rows[1, j], Dmu, rows[2, j],
-                                                                        rows[3, j], rows[4, j], rows[5, j])
-    index = [p[0] for p in plan]
-    Q[index], VB[index], VA[index] = rows[4], rows[6], rows[7]
-    return rows[4, -1], tail[1], tail[0], (scalars[:, ENDS_COLUMNS], rows[TANGENT_ROWS])
+#: Events that end on a limiter (their ``Dq`` is the limiter's).
+LIMITER_EVENTS = (EventCode.IMPACT, EventCode.REST_ON_LIMITER)
 #: The arrays of each interval that :func:`symvib.numeric.sensitivity_batch.time_derivatives` reads.
 BATCH_FIELDS = ("s", "q_a", "q_e", "G_a", "G_e", "f_a", "f_e", "Dq_a", "Dq_e", "DG_a", "DG_e")
 
@@ -435,47 +469,154 @@ def _by_branch(intervals):
             yield s, group
 
 
-def _plan(events, start, last, scene, c, q_a, w_a):
-    """The differentiable sliding events from ``start`` (the particle at ``q_a`` with ``w_a``) to a
-    lift-off (included), a landing (not included) or ``last``, each ``(index, event, kind code,
-    turning, interval or None, w before it)``; and the first event without derivatives (its index,
-    or None) and why."""
-    plan = []
-    stop = start
-    while stop < last and events[stop].kind.code not in (EventCode.LIFT_OFF, EventCode.LANDING):
-        stop += 1
-    if events[stop].kind.code == EventCode.LANDING:
-        stop -= 1
-    segment = events[start:stop + 1]
-    # the kernels at every event and every interval's middle, each called once for all of them
+def _segment(events, start, last, scene, c, q_a):
+    """The sliding events from ``start`` (the particle at ``q_a``) to a lift-off (included), a landing (not
+    included) or ``last``: their kind codes, how many of them have derivatives before the first without (its
+    index or None, and why), and the kernels at the start, at every event and every interval's middle
+    (``at``, ``middle``; each kernel called once for all of them: ``alpha`` at both, ``alpha'``, ``F_s`` at both,
+    ``F_s'`` and ``E_s = exp(2 s mu alpha)`` at the events, NumPy's exp as :class:`Interval`'s)."""
+    codes, n, first, broken, q_before = [], None, None, "", q_a
+    landing, lift_off, impact = EventCode.LANDING, EventCode.LIFT_OFF, EventCode.IMPACT
+    for j, ev in enumerate(events[start:last + 1]):
+        kind = _CODES.get(ev.kind)
+        if kind is None:
+            kind = _code(ev.kind)
+        if kind == landing:     # (a landing ends the slide before it, a lift-off with it)
+            break
+        codes.append(kind)
+        if n is None:
+            # (an impact has derivatives unless it ends a Zeno accumulation, which its detail says)
+            own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_before) \
+                if kind != impact or ev.detail else ""
+            if own:
+                n, first, broken = j, start + j, own
+            q_before = ev.q
+        if kind == lift_off:
+            break
+    segment = events[start:start + len(codes)]
+    n = len(segment) if n is None else n
     at = np.array([q_a] + [ev.q for ev in segment])
     middle = at[:-1] + (at[1:] - at[:-1]) / 2
-    both, n = np.concatenate((at, middle)), len(at)      # (alpha and F_s at both in one call each)
-    alpha_at, dalpha_at = c.alpha(both), c.dalpha(at)
+    both = np.concatenate((at, middle))      # (alpha and F_s at both in one call each)
+    alpha_at = c.alpha(both)
+    values = {"alpha": alpha_at, "dalpha": c.dalpha(at), "middle": middle,
+              **{("E", s): np.exp(2 * s * c.mu * alpha_at[:len(at)]) for s in (1, -1)},
+              **{("F", s): c.F(s, both) for s in (1, -1)}, **{("f", s): c.f(s, at) for s in (1, -1)}}
+    return segment, codes, n, first, broken, values
+
+
+def _plan(segment_of, start, scene, c, q_a, w_a):
+    """The differentiable events of a :func:`_segment` ``segment_of`` (the particle at ``q_a`` with ``w_a``
+    before them), each ``(index, event, kind code, turning, interval's scalars or None, w before it)``.  An
+    interval's scalars are ``s, E_a, G_a, alpha_a, alpha'_a, f_a, f_e, G_e, alpha_e, alpha'_e, E_e, q_a, q_e,
+    w_a`` (floats: what :class:`Interval` holds, :meth:`Interval.of_scalars`)."""
+    segment, codes, count, _, _, values = segment_of
+    n = len(segment) + 1
     # (as lists of floats, read one by one below: the same values, without NumPy's scalars)
-    alpha, alpha_mid, middle = alpha_at[:n].tolist(), alpha_at[n:].tolist(), middle.tolist()
-    dalpha = dalpha_at.tolist()
-    F = {s: c.F(s, both).tolist() for s in (1, -1)}
-    f = {s: c.f(s, at).tolist() for s in (1, -1)}
+    alpha, alpha_mid, middle = values["alpha"][:n].tolist(), values["alpha"][n:].tolist(), values["middle"].tolist()
+    dalpha = values["dalpha"].tolist()
+    E_at = {s: values["E", s].tolist() for s in (1, -1)}
+    F = {s: values["F", s].tolist() for s in (1, -1)}
+    f = {s: values["f", s].tolist() for s in (1, -1)}
     F, F_mid = {s: v[:n] for s, v in F.items()}, {s: v[n:] for s, v in F.items()}
-    for j, ev in enumerate(segment):
-        i, kind = start + j, ev.kind.code
-        own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_a)
-        if own:
-            return plan, i, own
-        turning = kind in (EventCode.REVERSAL, EventCode.ARREST)
-        if ev.q == q_a:                      # no motion in between (a rest test at the start)
-            iv, w_minus = None, w_a
+    mu, g, k2 = c.mu, c.g, scene.k * scene.k
+    plan = []
+    for j, ev in enumerate(segment[:count]):
+        i, kind = start + j, codes[j]
+        q_e = ev.q
+        turning = kind in TURNING_EVENTS
+        if q_e == q_a:                      # no motion in between (a rest test at the start)
+            row, w_minus = None, w_a
         else:
-            sigma = 1 if ev.q > q_a else -1
+            sigma = 1 if q_e > q_a else -1
             s = _branch(c, w_a, sigma, middle[j], (alpha[j], alpha_mid[j], F[sigma][j], F_mid[sigma][j]))
-            ends = (alpha[j], dalpha[j], f[s][j], f[s][j + 1], F[s][j], F[s][j + 1], alpha_at[j + 1:j + 2],
-                    dalpha_at[j + 1:j + 2])
-            iv = Interval(c, q_a, w_a, ev.q, s, turning, I_p_e=0.0, ends=ends)
-            w_minus = 0.0 if turning else float((iv.G_e / iv.E_e)[0])
-        plan.append((i, ev, kind, turning, iv, w_minus))
-        q_a, w_a = ev.q, (scene.k * scene.k * w_minus if kind == EventCode.IMPACT else w_minus)
-    return plan, None, ""
+            # (Interval's arithmetic: E_a by math.exp, G_e from the difference of F_s)
+            E_a = math.exp(2 * s * mu * alpha[j])
+            G_a = w_a * E_a
+            G_e = 0.0 if turning else G_a - 2 * g * (F[s][j + 1] - F[s][j])
+            E_e = E_at[s][j + 1]
+            row = (s, E_a, G_a, alpha[j], dalpha[j], f[s][j], f[s][j + 1], G_e, alpha[j + 1], dalpha[j + 1], E_e,
+                   q_a, q_e, w_a)
+            w_minus = 0.0 if turning else G_e / E_e
+        plan.append((i, ev, kind, turning, row, w_minus))
+        q_a, w_a = q_e, (k2 * w_minus if kind == EventCode.IMPACT else w_minus)
+    return plan
+
+
+def _at_values(values, n, count) -> np.ndarray:
+    """:func:`_segment`'s kernel values of its first ``count`` events (of ``n``) as the rows of
+    :func:`symvib.numeric.sensitivity_compiled.slide_kernel`'s ``at_values`` (shape (8, 2 count + 1))."""
+    out = np.zeros((8, 2 * count + 1))
+    events, middles = slice(0, count + 1), slice(n + 1, n + 1 + count)
+    for r, name in enumerate(("alpha", ("F", 1), ("F", -1))):
+        out[(0, 2, 3)[r], :count + 1] = values[name][events]
+        out[(0, 2, 3)[r], count + 1:] = values[name][middles]
+    for r, name in zip((1, 4, 5, 6, 7), ("dalpha", ("f", 1), ("f", -1), ("E", 1), ("E", -1))):
+        out[r, :count + 1] = values[name][events]
+    return out
+
+
+def _slide_compiled(c, scene, segment_of, start, last, path, units):
+    """:func:`_slide` of ``segment_of`` (:func:`_segment`; no event of :data:`JETS_EVENTS` among its
+    differentiable ones, no curve parameter) in one compiled call
+    (:func:`symvib.numeric.sensitivity_compiled.slide_kernel`: the operations of :func:`_plan` and of the four
+    passes, bit for bit)."""
+    Dmu, Dk, limiter_D, want_legs = units
+    T, Q, VB, VA = path.table
+    segment, codes, n, first, broken, values = segment_of
+    evs = segment[:n]
+    zeros = np.zeros(len(Dmu))
+    limiter = np.zeros((n, len(Dmu)))
+    for j, ev in enumerate(evs):
+        if codes[j] in LIMITER_EVENTS:
+            limiter[j] = limiter_D.get(ev.q, zeros)
+    scalars, moving, w_minus, rows, tail, dT, I_p_e = c.quadratures.slide(
+        c, np.array(codes[:n], dtype=np.int64), np.array([path.q] + [ev.q for ev in evs]),
+        _at_values(values, len(segment), n), path.w, scene.k, c.m,
+        np.array([1.0 if ev.qdot_before >= 0 else -1.0 for ev in evs]), limiter, Dmu, Dk,
+        np.asarray(path.Dq, dtype=float), np.asarray(path.Dw, dtype=float), CHUNK)
+    Q[start:start + n], VB[start:start + n], VA[start:start + n] = rows[4], rows[6], rows[7]
+    failed = np.flatnonzero(~np.all(np.isfinite(dT), axis=1))
+    count = n
+    if len(failed):
+        count = int(failed[0])
+        first, broken = start + count, "the time derivative's quadrature did not converge"
+    if broken and first is not None:       # (the rows written past the first event without derivatives)
+        for column in (Q, VB, VA):
+            column[first:last + 1] = np.nan
+    if count:    # each event's time tangent: the one before plus its interval's (summed in time order)
+        Dt = np.cumsum(np.vstack((path.Dt[None, :], dT[:count])), axis=0)
+        T[start:start + count] = Dt[1:]
+        if want_legs:
+            t_a = [path.t] + [ev.t for ev in evs[:count - 1]]
+            for j in range(count):
+                if moving[j]:
+                    row = scalars[j].tolist()
+                    iv = Interval.of_scalars(c, (int(row[0]), *row[1:]), codes[j] in TURNING_EVENTS)
+                    iv.I_p_e = I_p_e[j]
+                    iv.Dq_a, iv.Dw_a, iv.Dmu, iv.DG_a, iv.A, iv.Dq_e, iv.DG_e = (
+                        rows[0, j], rows[1, j], Dmu, rows[2, j], rows[3, j], rows[4, j], rows[5, j])
+                    path.legs.append(Leg(iv, t_a[j], evs[j].t, Dt[j], Dt[j + 1]))
+        path.q, path.Dt, path.t = evs[count - 1].q, Dt[-1], evs[count - 1].t
+        w_last = float(w_minus[count - 1])
+        path.w = scene.k * scene.k * w_last if codes[count - 1] == EventCode.IMPACT else w_last
+        path.Dq, path.Dw, path.D_impact_loss = rows[4, -1], tail[1], path.D_impact_loss + tail[0]
+    return start + count, broken, first, None
+
+
+#: The engine's code of each event kind seen (``EventKind.code`` looks it up by name on every read).
+_CODES = {}
+
+
+def _code(kind) -> EventCode:
+    """``kind.code``, looked up once per kind."""
+    code = _CODES.get(kind)
+    if code is None:
+        code = _CODES[kind] = kind.code
+    return code
+
+#: Events that end at a turning point of ``G``.
+TURNING_EVENTS = (EventCode.REVERSAL, EventCode.ARREST)
 
 
 def _reasons_after(events, first, why, scene, c, q_a) -> list:

@@ -22,7 +22,12 @@ curve parameters in ``wrt`` (then ``dF_s'/dp = dF_s'/dmu Dmu``), for a curve mod
 The pass over events that gives the tangents of positions and speeds (pass 3 of
 :func:`symvib.numeric.sensitivity._slide`) is compiled too where no event needs the curve's jets
 (:func:`event_tangents_kernel`: the Python loop's operations in its order, so its numbers bit for
-bit); it calls no kernel, so it is one compiled function for every curve.
+bit).  There a whole slide is one call (:func:`slide_kernel`): the scalar pass over events of
+:func:`symvib.numeric.sensitivity._plan` (the branch of each interval, ``w`` before each event; the
+kernels at the events come from NumPy as the Python pass reads them), the integrals of
+``dF_s'/dmu``, the pass over events and the time derivatives, the same operations in the same
+order as the Python passes and the entries above, so the same numbers bit for bit, without the
+Python between them (a fit differentiates about 40 runs, each in about a millisecond).
 
 Examples
 --------
@@ -47,6 +52,7 @@ from symvib.numeric.sensitivity_batch import (
     INNER_NODES,
     INTEGRAL_RTOL,
     MAX_PANELS,
+    NODES,
     RTOL,
     gauss,
     theta_level,
@@ -63,9 +69,9 @@ BATCH_LEVELS = int(round(math.log2(min(BATCH_PANELS, MAX_PANELS))))
 #: Floor of a magnitude that a difference of two levels is divided by (as the NumPy path's).
 TINY = 1e-300
 #: The compiled entry points, cached on disk per curve.
-ENTRIES = ("time_derivatives_kernel", "end_integrals_kernel")
+ENTRIES = ("time_derivatives_kernel", "end_integrals_kernel", "slide_kernel")
 #: This module's functions that numba compiles (the entry points and what they call).
-COMPILED = ("_f_df", "_df_dmu", "_nan_max", "_level", "_step", *ENTRIES)
+COMPILED = ("_f_df", "_df_dmu", "_nan_max", "_level", "_step", "_end_integral", "event_tangents_kernel", *ENTRIES)
 
 
 class SensitivityKernels(NamedTuple):
@@ -81,6 +87,7 @@ class SensitivityKernels(NamedTuple):
     dh: object
     dx: object
     dz: object
+    N: object
 
 
 #: The compile-time constant of the curve's kernels; each curve's compiled copy of this module's
@@ -250,35 +257,139 @@ def end_integrals_kernel(s, anchor, D, first_pieces, max_pieces, mu, cp, xg, wg,
     M = anchor.shape[0]
     out = np.empty(M)
     for m in range(M):
-        previous, pieces, done = np.nan, first_pieces, False
-        while pieces <= max_pieces:
-            acc, acc_abs, x_prev = 0.0, 0.0, 0.0
-            for i in range(1, pieces + 1):
-                x = i / pieces
-                mid, hw = (x_prev + x) / 2, (x - x_prev) / 2
-                total, total_abs = 0.0, 0.0
-                for t in range(xg.shape[0]):
-                    v = _df_dmu(SK, s, anchor[m] + D[m] * (mid + hw * xg[t]), mu, cp)
-                    total += v * wg[t]
-                    total_abs += abs(v) * wg[t]
-                acc += hw * total
-                acc_abs += hw * total_abs
-                x_prev = x
-            current, magnitude = D[m] * acc, abs(D[m] * acc_abs)
-            if pieces > first_pieces and abs(current - previous) <= rtol * _nan_max(magnitude, TINY):
-                out[m], done = current, True
-                break
-            previous = current
-            pieces *= 2
-        if not done:
-            out[m] = previous
+        out[m] = _end_integral(SK, s, anchor[m], D[m], first_pieces, max_pieces, mu, cp, xg, wg, rtol)
     return out
+
+
+def _end_integral(K, s, anchor, D, first_pieces, max_pieces, mu, cp, xg, wg, rtol):
+    """``Integral_{anchor}^{anchor + D} dF_s'/dmu dq`` of one interval (:func:`end_integrals_kernel`)."""
+    previous, pieces = np.nan, first_pieces
+    while pieces <= max_pieces:
+        acc, acc_abs, x_prev = 0.0, 0.0, 0.0
+        for i in range(1, pieces + 1):
+            x = i / pieces
+            mid, hw = (x_prev + x) / 2, (x - x_prev) / 2
+            total, total_abs = 0.0, 0.0
+            for t in range(xg.shape[0]):
+                v = _df_dmu(K, s, anchor + D * (mid + hw * xg[t]), mu, cp)
+                total += v * wg[t]
+                total_abs += abs(v) * wg[t]
+            acc += hw * total
+            acc_abs += hw * total_abs
+            x_prev = x
+        current, magnitude = D * acc, abs(D * acc_abs)
+        if pieces > first_pieces and abs(current - previous) <= rtol * _nan_max(magnitude, TINY):
+            return current
+        previous = current
+        pieces *= 2
+    return previous
+
+
+def slide_kernel(codes, q_at, at_values, w_a0, k, mu, g, m, cp, sigma_in, limiter, Dmu, Dk, Dq_a0, Dw_a0, with_mu,
+                 first_pieces, max_pieces, integral_rtol, U, Dd, Wt, order, n_start, offsets, xg, wg, batch_levels,
+                 levels, rtol, accept, chunk):
+    """Passes 1 to 4 of :func:`symvib.numeric.sensitivity._slide` for ``n`` differentiable events (codes
+    ``codes``, positions ``q_at[1:]`` after the start ``q_at[0]`` with ``w_a0``) without an event that needs the
+    curve's jets, in one call: the scalar pass of :func:`symvib.numeric.sensitivity._plan` (its operations in
+    its order; ``at_values``: its kernel values, NumPy's, rows ``alpha`` at the events then at the middles,
+    ``alpha'``, ``F_+``, ``F_-`` (as ``alpha``), ``F_+'``, ``F_-'``, ``E_+``, ``E_-`` at the events), the integrals
+    of :func:`end_integrals_kernel`, :func:`event_tangents_kernel` and :func:`time_derivatives_kernel` in chunks
+    of ``chunk`` intervals (none after a chunk with a failure).  The same numbers as those, bit for bit.
+
+    Returns the intervals' scalars (shape (n, 14): :data:`INTERVAL_SCALARS`, ``q_a, q_e, w_a``), whether an
+    interval leads to each event, ``w`` before each, the rows and tail of :func:`event_tangents_kernel`, the
+    time derivatives (shape (n, P); 0 where no interval leads to the event, NaN from a failure on) and the
+    integrals of ``dF_s'/dp`` (shape (n, P)).
+    """
+    n, P = codes.shape[0], Dmu.shape[0]
+    half = n + 1                     # (at_values' columns: the events and the start, then the middles)
+    scalars = np.zeros((n, 14))
+    moving = np.zeros(n, dtype=np.bool_)
+    turning = np.zeros(n, dtype=np.bool_)
+    is_impact = np.zeros(n, dtype=np.bool_)
+    w_minus = np.zeros(n)
+    k2 = k * k
+    q_a, w_a = q_at[0], w_a0
+    for j in range(n):               # 1. the path in scalars (_plan's loop)
+        q_e = q_at[j + 1]
+        kind = codes[j]
+        turning[j] = kind == REVERSAL_CODE or kind == ARREST_CODE
+        is_impact[j] = kind == IMPACT_CODE
+        if q_e == q_a:
+            w_minus[j] = w_a
+        else:
+            moving[j] = True
+            sigma = 1.0 if q_e > q_a else -1.0
+            F_row = 2 if sigma > 0 else 3
+            G_a = w_a * math.exp(2 * sigma * mu * at_values[0, j])       # (_branch)
+            G_mid = G_a - 2 * g * (at_values[F_row, half + j] - at_values[F_row, j])
+            w_mid = G_mid / math.exp(2 * sigma * mu * at_values[0, half + j])
+            mid_q = q_at[j] + (q_at[j + 1] - q_at[j]) / 2
+            s = sigma if SK.N(mid_q, w_mid, g, *cp) >= 0 else -sigma
+            F_row, f_row, E_row = (2, 4, 6) if s > 0 else (3, 5, 7)
+            E_a = math.exp(2 * s * mu * at_values[0, j])
+            G_a = w_a * E_a
+            G_e = 0.0 if turning[j] else G_a - 2 * g * (at_values[F_row, j + 1] - at_values[F_row, j])
+            E_e = at_values[E_row, j + 1]
+            row = scalars[j]
+            row[0], row[1], row[2], row[3], row[4] = s, E_a, G_a, at_values[0, j], at_values[1, j]
+            row[5], row[6], row[7], row[8], row[9] = at_values[f_row, j], at_values[f_row, j + 1], G_e, \
+                at_values[0, j + 1], at_values[1, j + 1]
+            row[10], row[11], row[12], row[13] = E_e, q_a, q_e, w_a
+            w_minus[j] = 0.0 if turning[j] else G_e / E_e
+        q_a, w_a = q_e, (k2 * w_minus[j] if is_impact[j] else w_minus[j])
+    I_p_e = np.zeros((n, P))
+    if with_mu:                      # 2. the integrals of dF_s'/dp over whole intervals
+        for j in range(n):
+            if moving[j]:
+                value = _end_integral(SK, scalars[j, 0], scalars[j, 11], scalars[j, 12] - scalars[j, 11],
+                                      first_pieces, max_pieces, mu, cp, xg, wg, integral_rtol)
+                for p in range(P):
+                    I_p_e[j, p] = value * Dmu[p]
+    rows, tail = event_tangents_kernel(is_impact, turning, moving, sigma_in, w_minus, scalars, I_p_e, limiter, mu,
+                                       g, k, m, Dmu, Dk, Dq_a0, Dw_a0)        # 3.
+    dT = np.zeros((n, P))            # 4. the time derivatives, chunk by chunk
+    for lo in range(0, n, chunk):
+        hi = min(lo + chunk, n)
+        M = 0
+        for j in range(lo, hi):
+            if moving[j]:
+                M += 1
+        if M > 0:
+            ends, tangents, index = np.empty((M, 7)), np.empty((4, M, P)), np.empty(M, dtype=np.int64)
+            i = 0
+            for j in range(lo, hi):
+                if moving[j]:
+                    index[i] = j
+                    for c in range(7):
+                        ends[i, c] = scalars[j, ENDS_COLUMNS[c]]
+                    for t in range(4):
+                        for p in range(P):
+                            tangents[t, i, p] = rows[TANGENT_ROWS[t], j, p]
+                    i += 1
+            out = time_derivatives_kernel(ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n_start,
+                                          offsets, xg, wg, batch_levels, levels, rtol, accept)
+            for i in range(M):
+                for p in range(P):
+                    dT[index[i], p] = out[i, p]
+        finite = True
+        for j in range(lo, hi):
+            for p in range(P):
+                if not math.isfinite(dT[j, p]):
+                    finite = False
+        if not finite:
+            break
+    return scalars, moving, w_minus, rows, tail, dT, I_p_e
 
 
 #: Columns of the interval scalars :func:`event_tangents_kernel` reads (each interval's, from :func:`_plan`).
 INTERVAL_SCALARS = ("s", "E_a", "G_a", "alpha_a", "dalpha_a", "f_a", "f_e", "G_e", "alpha_e", "dalpha_e", "E_e")
-#: Event codes :func:`event_tangents_kernel` reads (:class:`symvib.numeric.layout.EventCode`).
+#: Event codes :func:`event_tangents_kernel` and :func:`slide_kernel` read (:class:`symvib.numeric.layout.EventCode`).
 IMPACT_CODE = EventCode.IMPACT.value
+REVERSAL_CODE, ARREST_CODE = EventCode.REVERSAL.value, EventCode.ARREST.value
+#: Columns ``s, q_a, q_e, G_a, G_e, f_a, f_e`` of the interval scalars, and the rows ``Dq_a, Dq_e, DG_a, DG_e`` of
+#: :func:`event_tangents_kernel`'s, that :func:`time_derivatives_kernel` reads (:func:`slide_kernel`).
+ENDS_COLUMNS, TANGENT_ROWS = (0, 11, 12, 2, 7, 5, 6), (0, 4, 2, 5)
 
 
 def event_tangents_kernel(is_impact, turning, moving, sigma_in, w_minus, scalars, I_p_e, limiter, mu, g, k, m, Dmu,
@@ -381,6 +492,14 @@ class Quadratures:
             float(c.g), np.ascontiguousarray(c.Dmu, dtype=float), bool(c.f_depends), self._cp, *level_tables(),
             BATCH_LEVELS, LEVELS, RTOL, ACCEPT)
 
+    def slide(self, c, codes, q_at, at_values, w_a0, k, m, sigma_in, limiter, Dmu, Dk, Dq_a0, Dw_a0, chunk):
+        """:func:`slide_kernel` for the run's curve ``c``."""
+        return self._entries["slide_kernel"](
+            codes, q_at, at_values, float(w_a0), float(k), float(c.mu), float(c.g), float(m), self._cp, sigma_in,
+            limiter, np.array(Dmu, dtype=float), np.array(Dk, dtype=float), Dq_a0, Dw_a0, bool(c.f_depends),
+            FIRST_PIECES, int(MAX_PANELS * NODES), INTEGRAL_RTOL, *level_tables(), BATCH_LEVELS, LEVELS, RTOL, ACCEPT,
+            int(chunk))
+
     def end_integrals(self, c, s, anchor, D, max_pieces):
         """:func:`symvib.numeric.sensitivity_batch.end_integrals` (the same arguments and result)."""
         _, _, _, _, _, _, xg, wg = level_tables()
@@ -402,14 +521,20 @@ def quadratures_for(result, kernels, c, *, compile: bool = False):
     """
     if result.stats.get("backend") != "numba" or c.has_curve_parameters or not getattr(kernels, "__file__", None):
         return None
-    import importlib.util
-
-    if importlib.util.find_spec("numba") is None:
+    if not _numba_installed():
         return None
     if not (compile or getattr(kernels, "_symvib_sensitivity_quadratures", None) is not None
             or compiled_on_disk(kernels)):
         return None
     return Quadratures(quadratures(kernels), c._cp)
+
+
+@cache
+def _numba_installed() -> bool:
+    """Whether numba can be imported (asked once per process)."""
+    import importlib.util
+
+    return importlib.util.find_spec("numba") is not None
 
 
 #: The compiled functions whose disk-cache markers :func:`compiled_on_disk` asks for.
@@ -476,7 +601,7 @@ def quadratures(module) -> dict:
         extra[name].compile(geometry)
     kernels = SensitivityKernels(
         **{name: engine_kernels[name] for name in ("dF_p", "dF_m", "ddF_p", "ddF_m", "alpha", "h", "dx", "dz")},
-        dalpha=extra["dalpha_scalar"], dh=extra["dh_scalar"])
+        dalpha=extra["dalpha_scalar"], dh=extra["dh_scalar"], N=engine_kernels["N_w"])
     tag = curve_tag(module)
     options = {name: {"cache": True, **ERRORS} for name in ENTRIES}
     compiled = compiled_functions([sys.modules[__name__]], lambda n: n in COMPILED,
@@ -485,8 +610,28 @@ def quadratures(module) -> dict:
     compiled = {name: compiled[name] for name in ENTRIES}
     flush_if_stale(compiled.values(), cache_dir() / "engines" / f"sensitivity-{_digest()}-{tag}")
     compiled = {name: marking(fn, compiled_marker(module, name)) for name, fn in compiled.items()}
+    if not compiled_on_disk(module):
+        _compile_all(compiled, ncp)
     module._symvib_sensitivity_quadratures = compiled
     return compiled
+
+
+def _compile_all(compiled, ncp: int) -> None:
+    """Compile every entry of ``compiled`` (and :func:`event_tangents`) by a call on no interval, with the types
+    of a real call: a run's sensitivities use :func:`slide_kernel`, a run with an event that needs the curve's jets
+    the others, and a later process takes the compiled path only where all are on disk (:func:`compiled_on_disk`)."""
+    cp, Dmu = (1.0,) * ncp, np.zeros(1)
+    tables = level_tables()
+    compiled["time_derivatives_kernel"](np.zeros((0, 7)), np.zeros((4, 0, 1)), 0.0, 1.0, Dmu, True, cp, *tables,
+                                        BATCH_LEVELS, LEVELS, RTOL, ACCEPT)
+    compiled["end_integrals_kernel"](1.0, np.zeros(0), np.zeros(0), FIRST_PIECES, int(MAX_PANELS * NODES), 0.0, cp,
+                                     tables[6], tables[7], INTEGRAL_RTOL)
+    compiled["slide_kernel"](np.zeros(0, dtype=np.int64), np.zeros(1), np.zeros((8, 1)), 0.0, 1.0, 0.0, 1.0, 1.0, cp,
+                             np.zeros(0), np.zeros((0, 1)), Dmu, Dmu, Dmu, Dmu, True, FIRST_PIECES,
+                             int(MAX_PANELS * NODES), INTEGRAL_RTOL, *tables, BATCH_LEVELS, LEVELS, RTOL, ACCEPT, 64)
+    no = np.zeros(0, dtype=np.bool_)
+    event_tangents()(no, no, no, np.zeros(0), np.zeros(0), np.zeros((0, 13)), np.zeros((0, 1)), np.zeros((0, 1)),
+                     0.0, 1.0, 1.0, 1.0, Dmu, Dmu, Dmu, Dmu)
 
 
 @cache

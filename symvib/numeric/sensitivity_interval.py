@@ -50,6 +50,18 @@ class Interval:
         if Dq_a is not None:
             self.set_start(Dq_a, Dw_a, Dmu)
 
+    @classmethod
+    def of_scalars(cls, curve, row, turning_end):
+        """The interval whose scalars :func:`symvib.numeric.sensitivity._plan` computed (``row``: ``s, E_a, G_a,
+        alpha_a, alpha'_a, f_a, f_e, G_e, alpha_e, alpha'_e, E_e, q_a, q_e, w_a``; the same numbers as
+        :meth:`__init__` from the kernels at both ends), its integral of ``dF_s'/dp`` 0 until set."""
+        self = cls.__new__(cls)
+        (s, self.E_a, self.G_a, self.alpha_a, self.dalpha_a, self.f_a, self.f_e, self.G_e, alpha_e, dalpha_e, E_e,
+         self.q_a, self.q_e, self.w_a) = row
+        self.c, self.s, self.turning_end, self.I_p_e = curve, s, turning_end, 0.0
+        self.alpha_e, self.dalpha_e, self.E_e = np.array([alpha_e]), np.array([dalpha_e]), np.array([E_e])
+        return self
+
     def set_start(self, Dq_a, Dw_a, Dmu):
         """The start's tangents ``Dq_a``, ``Dw_a`` (and ``Dmu``): the total derivative of ``G`` there."""
         c, s = self.c, self.s
