@@ -43,8 +43,11 @@ def build_installed_engines(build_lib, environ=None, python=sys.executable) -> b
             return False
         curves = [c.strip() for c in choice.split(",") if c.strip()]
         with tempfile.TemporaryDirectory(prefix="symvib-build-") as tmp:
-            env = {k: v for k, v in environ.items() if k not in ("SYMVIB_BACKEND", "PYTHONPATH")}
-            env.update(PYTHONPATH=str(Path(build_lib).resolve()), SYMVIB_CACHE=str(Path(tmp) / "kernels"),
+            env = {k: v for k, v in environ.items() if k != "SYMVIB_BACKEND"}
+            # (the build folder first; pip's isolated build environment reaches its packages through
+            # PYTHONPATH too, so that stays behind it)
+            path = [str(Path(build_lib).resolve()), *filter(None, [environ.get("PYTHONPATH")])]
+            env.update(PYTHONPATH=os.pathsep.join(path), SYMVIB_CACHE=str(Path(tmp) / "kernels"),
                        NUMBA_CACHE_DIR=str(Path(tmp) / "numba"), SYMVIB_TIER="off")
             done = subprocess.run([python, "-m", "symvib.install_engines", str(folder.resolve()), *curves],
                                   env=env, cwd=tmp, capture_output=True, text=True, timeout=TIMEOUT)
