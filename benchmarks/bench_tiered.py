@@ -12,10 +12,10 @@ one after the other, each timed from its start to its exit (start-up included):
    folders), ``--n`` calls; reports the wall time, the call at which the compiled engine took
    over (``Result.stats["backend"]``), when, and the compile child's CPU time (the process's
    reaped children, ``RUSAGE_CHILDREN``);
-2. **plain only**: ``$SYMVIB_TIER=off`` and ``$SYMVIB_INSTALLED_ENGINES=off``, the first ``--plain-prefix`` calls of the same
-   sequence, on new empty caches; the plain-only time of ``--n`` calls is **extrapolated**
-   from that prefix (its per-call time times ``--n``; measured outright when the prefix is
-   ``--n``), since 100,000 plain calls take minutes;
+2. **plain only**: ``$SYMVIB_TIER=off`` and ``$SYMVIB_INSTALLED_ENGINES=off``, the first
+   ``--plain-prefix`` calls of the same sequence, on new empty caches; the plain-only time of
+   ``--n`` calls is **extrapolated** from that prefix (its per-call time times ``--n``;
+   measured outright when the prefix is ``--n``), since 100,000 plain calls take minutes;
 3. **cached**: ``--n`` calls again with the caches of (1), whose numba cache now holds the
    parabola's compiled engine: every call takes it from the first.
 

@@ -66,6 +66,8 @@ def compile_curve(folder: Path, curve: str) -> None:
 
 
 def main(argv=None) -> int:
+    """The command: compile ``FOLDER [CURVE ...]`` (each curve a child), or ``--one FOLDER CURVE``;
+    the exit code is 1 when a curve failed."""
     args = list(sys.argv[1:] if argv is None else argv)
     if args[:1] == ["--one"]:
         compile_curve(Path(args[1]), args[2])
