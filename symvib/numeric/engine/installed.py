@@ -129,14 +129,29 @@ def has(module, entry: str) -> bool:
     if not enabled() or _BUILD or not getattr(module, "__file__", None):
         return False
     try:
-        record = json.loads(record_path(module).read_text(encoding="utf-8"))
-        if record.get("format") != FORMAT or record.get("key") != content_key(module):
+        record = _record(record_path(module))
+        if record is None or record.get("format") != FORMAT or record.get("key") != content_key(module):
             return False
         if entry not in record.get("entries", ()):
             return False
         return tuple(record.get("magic", ())) == magic()
-    except (OSError, ValueError, TypeError):
+    except (OSError, ValueError, TypeError, AttributeError):   # (a record that is not a mapping too)
         return False
+
+
+#: Records read in this process, by path (the installed folder is not written after the install; a
+#: plain run asks :func:`has` each time, so the file is read once).
+_RECORDS: dict = {}
+
+
+def _record(path: Path):
+    """The record at ``path`` (``None`` when there is none or it does not parse), read once."""
+    if path not in _RECORDS:
+        try:
+            _RECORDS[path] = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            _RECORDS[path] = None
+    return _RECORDS[path]
 
 
 def write_record(module, entries) -> Path:
