@@ -175,7 +175,12 @@ def attach(dispatcher, module) -> None:
     folder in the build step)."""
     if not getattr(module, "__file__", None) or not enabled() and not _BUILD:
         return
-    dispatcher._cache = _cache_class()(dispatcher.py_func, content_key(module))
+    try:
+        dispatcher._cache = _cache_class()(dispatcher.py_func, content_key(module))
+    except Exception as exc:   # noqa: BLE001 - numba's caching internals not as expected: its own cache, as before
+        if _BUILD:
+            raise
+        _log.debug("installed engines not read for %s: %s", dispatcher.py_func.__qualname__, exc)
 
 
 @cache
