@@ -12,12 +12,17 @@ one after the other, each timed from its start to its exit (start-up included):
    folders), ``--n`` calls; reports the wall time, the call at which the compiled engine took
    over (``Result.stats["backend"]``), when, and the compile child's CPU time (the process's
    reaped children, ``RUSAGE_CHILDREN``);
-2. **plain only**: ``$SYMVIB_TIER=off``, the first ``--plain-prefix`` calls of the same
-   sequence, on new empty caches; the plain-only time of ``--n`` calls is **extrapolated**
-   from that prefix (its per-call time times ``--n``; measured outright when the prefix is
-   ``--n``), since 100,000 plain calls take minutes;
+2. **plain only**: ``$SYMVIB_TIER=off`` and ``$SYMVIB_INSTALLED_ENGINES=off``, the first
+   ``--plain-prefix`` calls of the same sequence, on new empty caches; the plain-only time of
+   ``--n`` calls is **extrapolated** from that prefix (its per-call time times ``--n``;
+   measured outright when the prefix is ``--n``), since 100,000 plain calls take minutes;
 3. **cached**: ``--n`` calls again with the caches of (1), whose numba cache now holds the
    parabola's compiled engine: every call takes it from the first.
+
+Each process runs in a temporary folder, so that it imports the installed package, not the
+checkout (engines compiled at install time ship only in an installed package); the JSON names the
+``symvib`` it imported.  ``SYMVIB_INSTALLED_ENGINES=off python benchmarks/bench_tiered.py`` measures
+without the installed engines.
 
 ``--compile`` measures instead what the compile child costs, each in a fresh process on empty
 caches: the CPU time of binding the parabola's engine and running it once, for the specialized
@@ -59,7 +64,7 @@ for i in range(n):
         first, t_first = i, time.perf_counter() - t0
 loop = time.perf_counter() - t0
 child = resource.getrusage(resource.RUSAGE_CHILDREN)
-print(json.dumps({"n": n, "seconds_in_process": loop, "first_compiled_call": first,
+print(json.dumps({"n": n, "seconds_in_process": loop, "symvib": symvib.__file__, "first_compiled_call": first,
                   "compiled_from_second": t_first, "events": events,
                   "child_cpu": child.ru_utime + child.ru_stime}))
 """
@@ -96,7 +101,7 @@ def compile_cpu(binding: str, entries: str, caches: Path) -> float:
     """CPU seconds of one compile (:data:`COMPILE`) in a fresh process on the empty caches under ``caches``."""
     environ = {k: v for k, v in os.environ.items() if k not in ("SYMVIB_BACKEND", "SYMVIB_TIER")}
     environ.update(SYMVIB_CACHE=str(caches / "kernels"), NUMBA_CACHE_DIR=str(caches / "numba"))
-    done = subprocess.run([sys.executable, "-c", COMPILE, binding, entries], env=environ, cwd=ROOT,
+    done = subprocess.run([sys.executable, "-c", COMPILE, binding, entries], env=environ, cwd=caches.parent,
                           capture_output=True, text=True, check=True)
     return json.loads(done.stdout.strip().splitlines()[-1])["cpu"]
 
@@ -106,7 +111,7 @@ def run(n: int, caches: Path, **env) -> dict:
     environ = {k: v for k, v in os.environ.items() if k not in ("SYMVIB_BACKEND", "SYMVIB_TIER")}
     environ.update(SYMVIB_CACHE=str(caches / "kernels"), NUMBA_CACHE_DIR=str(caches / "numba"), **env)
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-c", WORKER, str(n)], env=environ, cwd=ROOT, capture_output=True,
+    done = subprocess.run([sys.executable, "-c", WORKER, str(n)], env=environ, cwd=caches.parent, capture_output=True,
                           text=True, check=True)
     wall = time.perf_counter() - start
     out = json.loads(done.stdout.strip().splitlines()[-1])
@@ -135,8 +140,8 @@ def main(argv=None) -> None:
         tiered = run(args.n, Path(tmp) / "tiered")
         print("tiered, empty caches:", json.dumps(tiered), flush=True)
         prefix = min(args.plain_prefix, args.n)
-        plain = run(prefix, Path(tmp) / "plain", SYMVIB_TIER="off")
-        print("plain only (SYMVIB_TIER=off):", json.dumps(plain), flush=True)
+        plain = run(prefix, Path(tmp) / "plain", SYMVIB_TIER="off", SYMVIB_INSTALLED_ENGINES="off")
+        print("plain only (SYMVIB_TIER=off, SYMVIB_INSTALLED_ENGINES=off):", json.dumps(plain), flush=True)
         cached = run(args.n, Path(tmp) / "tiered")
         print("cached engine, second process:", json.dumps(cached), flush=True)
     per_call = plain["seconds_in_process"] / prefix

@@ -22,3 +22,7 @@ def pytest_configure(config):
     import os
 
     os.environ.setdefault("SYMVIB_BACKEND", "python")
+    # The suite's own processes and children (the CLI in a subprocess imports the installed package,
+    # whose engines compiled at install time would decide where today's compile does) keep today's
+    # behaviour; tests/test_installed_engines.py switches them on where it tests them.
+    os.environ.setdefault("SYMVIB_INSTALLED_ENGINES", "off")

@@ -261,6 +261,11 @@ def compiled_kernels(module, ncp: int) -> tuple:
     cache = _cacheable(module)
     compiled = compiled_functions([module], lambda n: n.endswith("_scalar") or n in wanted,
                                    options={f: {"cache": cache, **ERRORS} for f in wanted}, default=ERRORS)
+    if cache:   # an engine compiled at install time holds them too (engine/installed.py)
+        from symvib.numeric.engine import installed
+
+        for fname in wanted:
+            installed.attach(compiled[fname], module)
     out = []
     for name, (fname, _, _) in KERNEL_INTERFACE.items():
         dispatcher = compiled[fname]
@@ -374,19 +379,28 @@ def compiled_marker(module, entry: str) -> Path:
 
 
 def is_compiled(module, entry: str = "simulate_bound") -> bool:
-    """Whether the curve's compiled ``entry`` was compiled before (and so loads from disk, not compiles)."""
-    return compiled_marker(module, entry).exists()
+    """Whether the curve's compiled ``entry`` was compiled before (and so loads from disk, not compiles):
+    into the user's cache (its marker), or at install time (:func:`symvib.numeric.engine.installed.has`)."""
+    if compiled_marker(module, entry).exists():
+        return True
+    from symvib.numeric.engine import installed
+
+    return installed.has(module, entry)
 
 
 def marking(fn, marker: Path):
-    """``fn`` that leaves ``marker`` after its first call (numba has compiled and cached it then)."""
+    """``fn`` that leaves ``marker`` after its first call (numba has compiled and cached it then);
+    not after a call that loaded an engine compiled at install time (the user's cache does not hold it)."""
     done = [marker.exists()]
 
     def call(*args):
         out = fn(*args)
         if not done[0]:
-            marker.parent.mkdir(parents=True, exist_ok=True)
-            marker.touch()
+            from symvib.numeric.engine.installed import from_installed
+
+            if not from_installed(fn):
+                marker.parent.mkdir(parents=True, exist_ok=True)
+                marker.touch()
             done[0] = True
         return out
 
@@ -426,6 +440,11 @@ def _specialized_engine(module, ncp: int) -> dict:
     compiled = compiled_functions(ENGINE_MODULES, lambda n: n != "params_of", names=names, options=options,
                                    default=INNER,
                                    qualnames={name: f"{name}__{tag}" for name in BOUND_ENTRIES})
+    if cache:   # read an engine compiled at install time first (engine/installed.py)
+        from symvib.numeric.engine import installed
+
+        for name in BOUND_ENTRIES:
+            installed.attach(compiled[name], module)
     flush_if_stale([compiled[name] for name in BOUND_ENTRIES],
                     cache_dir() / "engines" / f"engine-{engine_digest()}-{tag}")
     module._symvib_specialized_engine = compiled
