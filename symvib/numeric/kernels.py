@@ -49,7 +49,7 @@ from symvib.shapes import CATALOGUE, Shape
 _log = logging.getLogger(__name__)
 
 __all__ = ["load", "load_generated", "generated_dir", "cache_dir", "read_cached", "cache_generated", "check_text",
-           "verify_text", "check_interface", "KernelError", "DIGEST_PREFIX"]
+           "verify_text", "check_interface", "KernelError", "DIGEST_PREFIX", "curve_tag"]
 
 #: Environment variable naming the cache folder for user curves.
 CACHE_ENV = cachetrust.CACHE_ENV
@@ -78,6 +78,14 @@ def cache_dir() -> Path:
     ``~/.cache/symvib/kernels``), created ``0700`` and used only while it is the user's alone
     (:func:`symvib.cachetrust.kernel_cache`; else a private temporary folder, with a warning)."""
     return cachetrust.kernel_cache()
+
+
+def curve_tag(module) -> str:
+    """The name of a curve's compiled engine and of its records: its kernel module's name and input
+    hash (an identifier)."""
+    import re
+
+    return re.sub(r"\W", "_", f"{module.__name__.rsplit('.', 1)[-1]}_{module.INPUT_HASH[:16]}")
 
 
 def module_name(name: str) -> str:

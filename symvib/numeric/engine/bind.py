@@ -85,6 +85,7 @@ from symvib.numeric.engine import loop, timing
 from symvib.numeric.engine.plain import plain_entries
 from symvib.numeric.engine.rebind import ENGINE_MODULES, rebound_functions
 from symvib.numeric.engine.state import KERNEL_INTERFACE, Kernels, Rules
+from symvib.numeric.kernels import curve_tag
 
 __all__ = ["Engine", "bind", "kernel_functions", "is_compiled", "compiled_marker", "threaded_sweep", "guided_blocks",
            "own_rules", "rebound_functions", "compiled_functions", "compiled_kernels", "kernel_signatures",
@@ -362,13 +363,6 @@ def _compiled_engine(ncp: int) -> dict:
 
 #: Entry points of an engine specialized to one curve (:func:`_specialized_engine`).
 BOUND_ENTRIES = ("simulate_bound", "sample_bound", "sweep_bound")
-
-
-def curve_tag(module) -> str:
-    """The name of a curve's compiled engine: its module's name and input hash (an identifier)."""
-    import re
-
-    return re.sub(r"\W", "_", f"{module.__name__.rsplit('.', 1)[-1]}_{module.INPUT_HASH[:16]}")
 
 
 def compiled_marker(module, entry: str) -> Path:

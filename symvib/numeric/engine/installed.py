@@ -8,11 +8,12 @@ as numba loads its own disk cache, in about a second, instead of compiling for 2
 What makes an installed engine safe to load:
 
 * **A content key, not a path or a time.** Every file is named by :func:`content_key`: a
-  SHA-256 of the engine's code and compile options (:func:`installed_digest`: the engine's
-  sources through :func:`~symvib.numeric.engine.bind.engine_digest`, and the binding's own
-  modules), the kernel module's bytes, Python's cache tag and the numba, llvmlite and NumPy
-  releases.  The same key is the index's source stamp.  A package built in ``build/lib`` works
-  from ``site-packages``; an engine, a kernel module or a release that changed misses.
+  SHA-256 of the engine's code and compile options (:func:`installed_digest`: every module of
+  the engine package, the binding's included, a superset of what
+  :func:`~symvib.numeric.engine.bind.engine_digest` reads, and the layout), the kernel module's
+  bytes, Python's cache tag and the numba, llvmlite and NumPy releases.  The same key is the
+  index's source stamp.  A package built in ``build/lib`` works from ``site-packages``; an
+  engine, a kernel module or a release that changed misses.
 * **numba's own index.** Inside a file, numba keys each compiled function by its signature,
   its bytecode and the code generator's magic tuple (target triple, CPU name and features): an
   engine built for another CPU misses too.
@@ -77,16 +78,13 @@ def _folder() -> Path:
 @cache
 def installed_digest() -> str:
     """SHA-256 (hex) of what the compiled code depends on besides a curve's module: the engine
-    (:func:`~symvib.numeric.engine.bind.engine_digest`), the binding's modules, Python, numba,
-    llvmlite and NumPy (their versions read from their metadata: nothing is imported)."""
-    import importlib
+    package's sources and the layout (:func:`_engine_sources`), Python, numba, llvmlite and NumPy
+    (their versions read from their metadata: nothing is imported)."""
     from importlib.metadata import PackageNotFoundError, version
 
-    bind = importlib.import_module("symvib.numeric.engine.bind")   # (the package's name bind is the function)
-    static = importlib.import_module("symvib.numeric.engine.static")
-    digest = hashlib.sha256(bind.engine_digest().encode())
-    for path in (bind.__file__, static.__file__, __file__):
-        digest.update(Path(path).read_bytes())
+    digest = hashlib.sha256()
+    for path in _engine_sources():
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
     digest.update(sys.implementation.cache_tag.encode())
     for package in ("numba", "llvmlite", "numpy"):
         try:
@@ -94,6 +92,18 @@ def installed_digest() -> str:
         except PackageNotFoundError:
             digest.update(f"{package}=?".encode())
     return digest.hexdigest()
+
+
+def _engine_sources() -> list:
+    """Every source file the compiled code can depend on besides a curve's module: all of the engine
+    package's modules (the engine, its binding, this module; a superset of what
+    :func:`~symvib.numeric.engine.bind.engine_digest` reads, so nothing it keys on is missed) and the
+    layout and kernel interface the engine takes as compile-time constants.  Found, not imported."""
+    import importlib.util
+
+    here = Path(__file__).resolve().parent
+    extra = [Path(importlib.util.find_spec(name).origin) for name in ("symvib.numeric.layout", "symvib.kernelformat")]
+    return sorted(here.glob("*.py")) + extra
 
 
 def content_key(module) -> str:
@@ -109,7 +119,7 @@ def content_key(module) -> str:
 
 def record_path(module) -> Path:
     """The record of ``module``'s installed engine (its entries, key and magic tuple)."""
-    from symvib.numeric.engine.bind import curve_tag
+    from symvib.numeric.kernels import curve_tag
 
     return _folder() / f"{curve_tag(module)}.json"
 
