@@ -565,27 +565,30 @@ def _slide_compiled(c, scene, segment_of, start, last, path, units):
     T, Q, VB, VA = path.table
     segment, codes, n, first, broken, values = segment_of
     evs = segment[:n]
-    zeros = np.zeros(len(Dmu))
     limiter = np.zeros((n, len(Dmu)))
     for j, ev in enumerate(evs):
         if codes[j] in LIMITER_EVENTS:
-            limiter[j] = limiter_D.get(ev.q, zeros)
+            D = limiter_D.get(ev.q)
+            if D is not None:       # (else the row stays 0)
+                limiter[j] = D
     scalars, moving, w_minus, rows, tail, dT, I_p_e = c.quadratures.slide(
         c, np.array(codes[:n], dtype=np.int64), np.array([path.q] + [ev.q for ev in evs]),
         _at_values(values, len(segment), n), path.w, scene.k, c.m,
         np.array([1.0 if ev.qdot_before >= 0 else -1.0 for ev in evs]), limiter, Dmu, Dk,
         np.asarray(path.Dq, dtype=float), np.asarray(path.Dw, dtype=float), CHUNK)
     Q[start:start + n], VB[start:start + n], VA[start:start + n] = rows[4], rows[6], rows[7]
-    failed = np.flatnonzero(~np.all(np.isfinite(dT), axis=1))
+    finite = np.isfinite(dT).all(axis=1)
     count = n
-    if len(failed):
-        count = int(failed[0])
+    if not finite.all():
+        count = int(np.flatnonzero(~finite)[0])
         first, broken = start + count, "the time derivative's quadrature did not converge"
     if broken and first is not None:       # (the rows written past the first event without derivatives)
         for column in (Q, VB, VA):
             column[first:last + 1] = np.nan
     if count:    # each event's time tangent: the one before plus its interval's (summed in time order)
-        Dt = np.cumsum(np.vstack((path.Dt[None, :], dT[:count])), axis=0)
+        Dt = np.empty((count + 1, dT.shape[1]))
+        Dt[0], Dt[1:] = path.Dt, dT[:count]
+        np.cumsum(Dt, axis=0, out=Dt)
         T[start:start + count] = Dt[1:]
         if want_legs:
             t_a = [path.t] + [ev.t for ev in evs[:count - 1]]
