@@ -475,30 +475,33 @@ def _segment(events, start, last, scene, c, q_a):
     index or None, and why), and the kernels at the start, at every event and every interval's middle
     (``at``, ``middle``; each kernel called once for all of them: ``alpha`` at both, ``alpha'``, ``F_s`` at both,
     ``F_s'`` and ``E_s = exp(2 s mu alpha)`` at the events, NumPy's exp as :class:`Interval`'s)."""
-    codes, n, first, broken, q_before = [], None, None, "", q_a
+    codes = []
     landing, lift_off, impact = EventCode.LANDING, EventCode.LIFT_OFF, EventCode.IMPACT
-    for j, ev in enumerate(events[start:last + 1]):
-        kind = _CODES.get(ev.kind)
+    for ev in events[start:last + 1]:
+        kind = _CODES.get(id(ev.kind))
         if kind is None:
             kind = _code(ev.kind)
         if kind == landing:     # (a landing ends the slide before it, a lift-off with it)
             break
         codes.append(kind)
-        if n is None:
-            # (an impact has derivatives unless it ends a Zeno accumulation, which its detail says)
-            own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_before) \
-                if kind != impact or ev.detail else ""
-            if own:
-                n, first, broken = j, start + j, own
-            q_before = ev.q
         if kind == lift_off:
             break
     segment = events[start:start + len(codes)]
-    n = len(segment) if n is None else n
     at = np.array([q_a] + [ev.q for ev in segment])
     middle = at[:-1] + (at[1:] - at[:-1]) / 2
     both = np.concatenate((at, middle))      # (alpha and F_s at both in one call each)
     alpha_at = c.alpha(both)
+    n, first, broken, q_before = None, None, "", q_a
+    for j, ev in enumerate(segment):
+        kind = codes[j]
+        # (an impact has derivatives unless it ends a Zeno accumulation, which its detail says)
+        own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_before, alpha=alpha_at[j + 1]) \
+            if kind != impact or ev.detail else ""
+        if own:
+            n, first, broken = j, start + j, own
+            break
+        q_before = ev.q
+    n = len(segment) if n is None else n
     values = {"alpha": alpha_at, "dalpha": c.dalpha(at), "middle": middle,
               **{("E", s): np.exp(2 * s * c.mu * alpha_at[:len(at)]) for s in (1, -1)},
               **{("F", s): c.F(s, both) for s in (1, -1)}, **{("f", s): c.f(s, at) for s in (1, -1)}}
@@ -607,15 +610,16 @@ def _slide_compiled(c, scene, segment_of, start, last, path, units):
     return start + count, broken, first, None
 
 
-#: The engine's code of each event kind seen (``EventKind.code`` looks it up by name on every read).
+#: The engine's code of each event kind seen (``EventKind.code`` looks it up by name on every read), by the
+#: kind's ``id`` (the members live as long as the process; an enum member's hash is a Python call).
 _CODES = {}
 
 
 def _code(kind) -> EventCode:
     """``kind.code``, looked up once per kind."""
-    code = _CODES.get(kind)
+    code = _CODES.get(id(kind))
     if code is None:
-        code = _CODES[kind] = kind.code
+        code = _CODES[id(kind)] = kind.code
     return code
 
 #: Events that end at a turning point of ``G``.
@@ -649,9 +653,10 @@ def _on_cone_edge(alpha: float, mu: float) -> bool:
     return edge <= CONE_EDGE * max(abs(math.sin(alpha)), mu * abs(math.cos(alpha)), 1e-300)
 
 
-def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
+def _not_differentiable(ev, scene, c, kind, *, moved: bool = True, alpha=None) -> str:
     """Why event ``ev`` has no derivatives (empty when it has); ``moved``: the particle moved to it
-    (a turning point of ``G``, not a rest test where it already was)."""
+    (a turning point of ``G``, not a rest test where it already was); ``alpha``: the curve's ``alpha`` at
+    it, if known."""
     if kind == EventCode.LEFT_CURVE:
         return "the particle leaves the curve"
     if kind == EventCode.LANDING:
@@ -659,7 +664,7 @@ def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
     if ev.detail and "zeno" in ev.detail.lower():
         return "a Zeno accumulation of impacts (infinitely many events); this event and the ones after it"
     if kind in (EventCode.REVERSAL, EventCode.ARREST):
-        a = float(c.alpha(ev.q))
+        a = float(c.alpha(ev.q) if alpha is None else alpha)
         if _on_cone_edge(a, scene.mu_static):   # the rest test's (static) cone: the decision flips there
             return "a turning point on the edge of the friction cone (arrest or reversal changes with the parameters)"
         if moved and scene.mu_static != scene.mu and _on_cone_edge(a, scene.mu):
