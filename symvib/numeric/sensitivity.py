@@ -204,10 +204,13 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     if qdot0 == 0 and "qdot0" in [t[2] for t in targets if t[1] == "scene"]:
         notes[next(t[0] for t in targets if t[1:] == ("scene", "qdot0"))] = \
             "the run starts at rest: the sign of qdot0 chooses the direction (no derivative)"
-    DE0 = c.m * (Dw_a / 2 + c.g * (dz0 * Dq_a + c.geometry_dp("z", q_a)[0]))
 
     n = len(result.events)
     last = n - 1 if through is None else _checked_through(through, n)
+    # (the final state's derivatives only where they are asked for: the start's energy only then)
+    at_end = bool(n) and last == n - 1 and result.status.code in FINAL_STATUSES
+    if at_end:
+        DE0 = c.m * (Dw_a / 2 + c.g * (dz0 * Dq_a + c.geometry_dp("z", q_a)[0]))
     events = result.events
     path = _Path(q_a, w_a, Dq_a, Dw_a, np.zeros(P), 0.0, tuple(np.full((4, n, P), np.nan)), [], np.zeros(P),
                  np.zeros(P))
@@ -244,7 +247,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     final_names = ("t_final", "q_final", "friction_work", "impact_loss") + (
         ("landing_loss",) if scene.contact == "unilateral" else ())
     final = {name: np.full(P, np.nan) for name in final_names}
-    if not broken and n and last == n - 1 and result.status.code in FINAL_STATUSES:
+    if not broken and at_end:
         q_f = events[-1].q
         DE_final = c.m * (path.Dw / 2 + c.g * (float(c.dz(q_f)) * path.Dq + c.geometry_dp("z", q_f)[0]))
         final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=path.D_impact_loss,
