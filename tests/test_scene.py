@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from symvib.numeric.scene import Scene, SceneError, load_scene, scene_from_dict
+from symvib.numeric.scene import Scene, SceneError, load_scene, resolve_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "symvib" / "scenes"
 
@@ -63,6 +63,37 @@ def test_replace_revalidates():
     with pytest.raises(SceneError, match=r"parameters.R: not a parameter"):
         s.replace(params={"R": 1.0})
 
+
+
+WITH_NUMBERS = [dict(mu=0.2), dict(k=0.3, qdot0=-2.0), dict(q0=0.1, left=-0.4, right=0.45), dict(mu=0.0, k=1.0),
+                dict(mu=math.nan), dict(k=1.5), dict(k=-0.1), dict(mu=-0.1), dict(mu=0.9), dict(qdot0=math.inf),
+                dict(q0=math.nan), dict(q0=0.6), dict(left=0.2), dict(right=-0.2), dict(right=math.nan),
+                dict(left=-1e9), dict(right=1e9), dict(left=0.3, right=0.2)]
+
+
+@pytest.mark.parametrize("changes", WITH_NUMBERS)
+@pytest.mark.parametrize("mu_s", [None, 0.5])
+def test_with_numbers_is_replace(changes, mu_s):
+    """A fit's trial points: ``with_numbers`` makes the scene ``replace`` makes, or refuses it with the same error
+    (the checks that read the changed numbers only)."""
+    s = resolve_scene("paper-parabola").replace(left=-0.5, right=0.5, mu_s=mu_s)
+    try:
+        expected = s.replace(**changes)
+    except SceneError as err:
+        with pytest.raises(SceneError) as got:
+            s.with_numbers(**changes)
+        assert (got.value.field, str(got.value)) == (err.field, str(err))
+        return
+    new = s.with_numbers(**changes)
+    assert new == expected and vars(new) == vars(expected) and new.alpha0 == expected.alpha0
+
+
+def test_with_numbers_refuses_other_fields():
+    s = resolve_scene("paper-parabola")
+    with pytest.raises(TypeError, match="only mu"):
+        s.with_numbers(g=9.0)
+    with pytest.raises(SceneError, match="limiters.left"):
+        s.replace(left=None).with_numbers(left=0.1)
 
 @pytest.mark.parametrize("over, field, text", [
     (dict(physics__restitution=1.2), "physics.restitution", "must be in [0, 1]"),

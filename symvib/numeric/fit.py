@@ -205,37 +205,47 @@ def _default_bounds(scene: Scene, name: str, kind: str = "scene") -> tuple:
 _KINDS = {kind.value: kind for kind in EventKind}
 
 
-def _model(scene, observed, free, run):
+def _matching(observed) -> tuple:
+    """What matching reads of ``observed`` events besides the model's (the same at every trial point, so
+    computed once a fit stage): the kinds as :class:`EventKind` members (or ``None``), the kinds the
+    model's events are picked by, and the fixed residual of an unmatched time."""
+    # (the kinds as EventKind members: a tuple's `in` finds a member by identity, without the enum's value)
+    kinds = [_KINDS[v] for v in observed.kinds] if observed.kinds is not None else None
+    wanted = tuple(_KINDS[v] for v in set(observed.kinds)) if kinds else None   # (str hashes are kept)
+    span_t = max(float(observed.t[-1] - observed.t[0]), float(observed.t[-1]), 1e-300)
+    return kinds, wanted, span_t
+
+
+def _model(scene, observed, free, run, matching=None):
     """Residuals (model - observed, unweighted), how many events matched, and a function that gives
     their Jacobian and which rows have one (the exact sensitivities cost more than the run: a
-    Levenberg-Marquardt step asks for them only once a trial is accepted)."""
+    Levenberg-Marquardt step asks for them only once a trial is accepted).  ``matching`` is
+    :func:`_matching` of ``observed`` (computed here when not given)."""
     result = run(scene)
     if result.status.is_error:
         raise ValueError(f"scene: the run at {_at(scene, free)} failed "
                          f"({result.status.value}): {result.message}")
     events = result.events
-    # (the kinds as EventKind members: a tuple's `in` finds a member by identity, without the enum's value)
-    kinds = [_KINDS[v] for v in observed.kinds] if observed.kinds is not None else None
-    if kinds:
-        wanted = tuple(_KINDS[v] for v in set(observed.kinds))    # (a set of the names: str hashes are kept)
+    kinds, wanted, span_t = matching or _matching(observed)
+    if wanted:
         index = [i for i, e in enumerate(events) if e.kind in wanted]
     else:
         index = list(range(len(events)))
     n_obs = len(observed.t)
     matched = min(n_obs, len(index))
     if kinds is not None:
-        for j in range(matched):
-            if events[index[j]].kind is not kinds[j]:
-                matched = j
-                break
-    span_t = max(float(observed.t[-1] - observed.t[0]), float(observed.t[-1]), 1e-300)
+        made = [events[i].kind for i in index[:matched]]
+        if made != kinds[:matched]:     # (members compare by identity first: the first that differs ends it)
+            matched = next(j for j, (a, b) in enumerate(zip(made, kinds)) if a is not b)
     rows = index[:matched]
-    r = [np.full(n_obs, span_t)]
-    r[0][:matched] = np.array([events[i].t for i in rows], dtype=float) - observed.t[:matched]
+    r = np.full(n_obs if observed.q is None else 2 * n_obs, span_t)
+    r[:matched] = [events[i].t for i in rows]
+    r[:matched] -= observed.t[:matched]
     if observed.q is not None:
         span_q = max(float(np.max(np.abs(observed.q - scene.q0))), 1e-300)
-        r.append(np.full(n_obs, span_q))
-        r[1][:matched] = np.array([events[i].q for i in rows], dtype=float) - observed.q[:matched]
+        r[n_obs:] = span_q
+        r[n_obs:n_obs + matched] = [events[i].q for i in rows]
+        r[n_obs:n_obs + matched] -= observed.q[:matched]
 
     def jacobian():
         # (the events after the last matched one are not differentiated: no row needs them)
@@ -245,13 +255,14 @@ def _model(scene, observed, free, run):
         for block, values in zip(J, columns):
             block[:matched] = values[rows]
         usable = np.isfinite(J).all(axis=2)       # (the rows past the matched ones are 0: usable)
-        J[~usable] = 0.0
+        if not usable.all():
+            J[~usable] = 0.0
         return J.reshape(-1, len(free)), usable.ravel()
 
-    return np.concatenate(r), matched, jacobian
+    return r, matched, jacobian
 
 
-def _sample_model(scene, observed, free, run):
+def _sample_model(scene, observed, free, run, matching=None):
     """As :func:`_model` for a sampled trajectory: the model's coordinates at the sample times minus the
     observed ones (column by column: ``x`` then ``z``), every sample matched."""
     result = run(scene)
@@ -462,28 +473,32 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
     Jacobian at a last step that ends it on ``xtol`` is not computed (its covariance is that of the
     step before)."""
     free, lo, hi = problem.free, problem.lo, problem.hi
-    r, matched, jacobian = problem.model(problem.at(x), observed, free, problem.run)
+    matching = _matching(observed) if problem.model is _model else None
+    r, matched, jacobian = problem.model(problem.at(x), observed, free, problem.run, matching)
     J, usable = jacobian()
     if matched == 0:
         return _result("no_events", STATUSES["no_events"], problem.at(x), free, x, J, r, w, problem.absolute,
                        matched, 0, ())
     cost = 0.5 * float(np.sum((w * r) ** 2))
     lam, history, status = 1e-3, [(x.copy(), cost)], "max_iterations"
-    iterations = 0
+    iterations, eye, w_col = 0, np.eye(len(x)), w[:, None]
     while iterations < max_iterations:
         iterations += 1
-        A = w[:, None] * J
-        scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
-        g, H = A.T @ (w * r), A.T @ A
-        D2, minus_g = np.diag(scale ** 2), -g        # (the same for every lambda)
+        A = w_col * J
+        scale = np.maximum(np.sqrt((A * A).sum(axis=0)), 1e-300)     # (np.linalg.norm(A, axis=0)'s arithmetic)
+        # The damped normal equations in Moré's scaled variables y = scale * step: (A_s^T A_s + lambda I) y =
+        # -A_s^T (w r), A_s = A / scale (unit columns), the same for every lambda.
+        A /= scale
+        H, minus_g = A.T @ A, -(A.T @ (w * r))
         ran, failure = False, ""
         while True:
-            step = np.linalg.lstsq(H + lam * D2, minus_g, rcond=None)[0]
+            step = _damped_step(H, eye, lam, minus_g) / scale
             trial = np.minimum(np.maximum(x + step, lo), hi)     # (np.clip's result, without its overhead)
             try:
-                r_new, m_new, jacobian_new = problem.model(problem.at(trial), observed, free, problem.run)
-                new_cost = 0.5 * float(np.sum((w * r_new) ** 2))
-                ran = ran or bool(np.any(trial != x))
+                r_new, m_new, jacobian_new = problem.model(problem.at(trial), observed, free, problem.run, matching)
+                wr = w * r_new
+                new_cost = 0.5 * float((wr * wr).sum())     # (np.sum((w * r) ** 2)'s arithmetic)
+                ran = ran or bool((trial != x).any())
             except ValueError as err:               # a run that failed there: as if the cost rose
                 new_cost, failure = math.inf, str(err)
             if new_cost <= cost:
@@ -497,13 +512,13 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
         if new_cost > cost or (stuck and np.array_equal(trial, x)):
             status = "runs_failed" if stuck else "converged"
             break
-        moved = np.abs(trial - x) <= xtol * (np.abs(x) + xtol)
-        if final or not np.all(moved):
+        settled = bool((np.abs(trial - x) <= xtol * (np.abs(x) + xtol)).all())
+        if final or not settled:
             J, usable = jacobian_new()
         x, r, matched, cost = trial, r_new, m_new, new_cost
         lam = max(lam * LAMBDA_DOWN, LAMBDA_MIN)
         history.append((x.copy(), cost))
-        if np.all(moved):
+        if settled:
             status = "converged"
             break
     if matched < len(observed.t):
@@ -520,6 +535,19 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
             message += f"; {name} = {v:g} is at its bound ({'low' if v == low else 'high'})"
     return _result(status, message, problem.at(x), free, x, J, r, w, problem.absolute, matched, iterations,
                    tuple(history))
+
+
+def _damped_step(H, eye, lam, minus_g):
+    """The solution of ``(H + lam I) y = -g`` (``H`` the scaled Gauss-Newton matrix, positive semidefinite):
+    by ``solve`` where the matrix is regular, else the least-squares solution (a zero column)."""
+    M = H + lam * eye
+    try:
+        y = np.linalg.solve(M, minus_g)
+        if np.isfinite(y).all():
+            return y
+    except np.linalg.LinAlgError:
+        pass
+    return np.linalg.lstsq(M, minus_g, rcond=None)[0]
 
 
 def _result(status, message, scene, free, x, J, r, w, absolute, matched, iterations, history) -> FitResult:

@@ -333,13 +333,35 @@ def check_numbers(n: SceneNumbers) -> None:
     ...
     symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5
     """
-    for c in checks(n):
+    run_checks(n, checks(n))
+
+
+def run_checks(n: SceneNumbers, cs) -> None:
+    """Make the checks ``cs`` of the numbers ``n`` in order; the first that fails raises a :class:`SceneError`."""
+    for c in cs:
         if c.when is not None and not c.when(n):
             continue
         if c.test is None:
             finite(c.value(n), c.field)
         elif not c.test(n):
             raise SceneError(c.field, c.message(n))
+
+
+#: The fields of the :data:`CHECKS` that read each scene number a fit changes (``Scene.with_numbers``): every
+#: check reading that number names one of these fields (``mu_s >= mu`` is ``physics.mu_s``'s, ``left < right``
+#: the ``limiters``', ``left <= q0 <= right`` ``initial.q``'s).
+READ_BY = {"mu": ("physics.mu", "physics.mu_s"), "k": ("physics.restitution",), "qdot0": ("initial.qdot",),
+           "q0": ("initial.q",), "left": ("limiters.left", "limiters", "initial.q"),
+           "right": ("limiters.right", "limiters", "initial.q")}
+
+
+@lru_cache(maxsize=64)
+def checks_reading(names: frozenset) -> tuple:
+    """The :data:`CHECKS` that read any of the numbers ``names`` (keys of :data:`READ_BY`), in their order:
+    on a scene whose other numbers passed every check, these make the same first failure as
+    :func:`check_numbers` after those numbers change."""
+    fields = {f for name in names for f in READ_BY[name]}
+    return tuple(c for c in CHECKS if c.field in fields)
 
 
 def declared_domain(s, values=None) -> tuple:

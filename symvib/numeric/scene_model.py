@@ -31,7 +31,16 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
-from symvib.numeric.scene_checks import SceneError, SceneNumbers, check_name, check_numbers, finite
+from symvib.numeric.scene_checks import (
+    READ_BY,
+    SceneError,
+    SceneNumbers,
+    check_name,
+    check_numbers,
+    checks_reading,
+    finite,
+    run_checks,
+)
 from symvib.numeric.scene_units import friction_coefficient
 from symvib.shapes import Shape
 
@@ -186,6 +195,29 @@ class Scene:
         if "alpha0_s" in changes and changes["alpha0_s"] is not None and "mu_s" not in changes:
             changes["mu_s"] = friction_coefficient(changes["alpha0_s"], "physics.alpha0_s")
         return dataclasses.replace(self, **changes)
+
+    def with_numbers(self, **values) -> Scene:
+        """A copy with some of ``mu``, ``k``, ``qdot0``, ``q0``, ``left``, ``right`` changed (numbers; a
+        fit's trial points), checked only by the checks that read them
+        (:func:`~symvib.numeric.scene_checks.checks_reading`): this scene's other numbers passed every
+        check already, so the copy is the one :meth:`replace` makes, and a value it refuses (NaN,
+        out of range, a limiter past ``q0`` or out of the curve's domain) is refused with the same
+        :class:`SceneError` naming the field.  A limiter the scene does not have cannot be set here.
+        """
+        unknown = set(values) - set(READ_BY)
+        if unknown:
+            raise TypeError(f"with_numbers: only {', '.join(READ_BY)}, got {sorted(unknown)[0]!r}")
+        new = object.__new__(Scene)
+        state = dict(self.__dict__)
+        for name, v in values.items():
+            if name in ("left", "right") and state[name] is None:
+                raise SceneError(f"limiters.{name}", "the scene has no such limiter to move")
+            state[name] = float(v)
+        if "mu" in values:      # (as replace(mu=...): the friction angle no longer describes mu)
+            state["alpha0"] = None
+        new.__dict__.update(state)
+        run_checks(SceneNumbers.of(new), checks_reading(frozenset(values)))
+        return new
 
     def to_dict(self) -> dict:
         """The scene as TOML-ready data: ``scene_from_dict(s.to_dict()) == s``.

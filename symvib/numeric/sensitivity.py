@@ -204,10 +204,13 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     if qdot0 == 0 and "qdot0" in [t[2] for t in targets if t[1] == "scene"]:
         notes[next(t[0] for t in targets if t[1:] == ("scene", "qdot0"))] = \
             "the run starts at rest: the sign of qdot0 chooses the direction (no derivative)"
-    DE0 = c.m * (Dw_a / 2 + c.g * (dz0 * Dq_a + c.geometry_dp("z", q_a)[0]))
 
     n = len(result.events)
     last = n - 1 if through is None else _checked_through(through, n)
+    # (the final state's derivatives only where they are asked for: the start's energy only then)
+    at_end = bool(n) and last == n - 1 and result.status.code in FINAL_STATUSES
+    if at_end:
+        DE0 = c.m * (Dw_a / 2 + c.g * (dz0 * Dq_a + c.geometry_dp("z", q_a)[0]))
     events = result.events
     path = _Path(q_a, w_a, Dq_a, Dw_a, np.zeros(P), 0.0, tuple(np.full((4, n, P), np.nan)), [], np.zeros(P),
                  np.zeros(P))
@@ -244,7 +247,7 @@ def interval_tangents(result, wrt=PARAMETERS, *, prepared=None, jets=None, throu
     final_names = ("t_final", "q_final", "friction_work", "impact_loss") + (
         ("landing_loss",) if scene.contact == "unilateral" else ())
     final = {name: np.full(P, np.nan) for name in final_names}
-    if not broken and n and last == n - 1 and result.status.code in FINAL_STATUSES:
+    if not broken and at_end:
         q_f = events[-1].q
         DE_final = c.m * (path.Dw / 2 + c.g * (float(c.dz(q_f)) * path.Dq + c.geometry_dp("z", q_f)[0]))
         final.update(t_final=T[-1].copy(), q_final=Q[-1].copy(), impact_loss=path.D_impact_loss,
@@ -475,30 +478,33 @@ def _segment(events, start, last, scene, c, q_a):
     index or None, and why), and the kernels at the start, at every event and every interval's middle
     (``at``, ``middle``; each kernel called once for all of them: ``alpha`` at both, ``alpha'``, ``F_s`` at both,
     ``F_s'`` and ``E_s = exp(2 s mu alpha)`` at the events, NumPy's exp as :class:`Interval`'s)."""
-    codes, n, first, broken, q_before = [], None, None, "", q_a
+    codes = []
     landing, lift_off, impact = EventCode.LANDING, EventCode.LIFT_OFF, EventCode.IMPACT
-    for j, ev in enumerate(events[start:last + 1]):
-        kind = _CODES.get(ev.kind)
+    for ev in events[start:last + 1]:
+        kind = _CODES.get(id(ev.kind))
         if kind is None:
             kind = _code(ev.kind)
         if kind == landing:     # (a landing ends the slide before it, a lift-off with it)
             break
         codes.append(kind)
-        if n is None:
-            # (an impact has derivatives unless it ends a Zeno accumulation, which its detail says)
-            own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_before) \
-                if kind != impact or ev.detail else ""
-            if own:
-                n, first, broken = j, start + j, own
-            q_before = ev.q
         if kind == lift_off:
             break
     segment = events[start:start + len(codes)]
-    n = len(segment) if n is None else n
     at = np.array([q_a] + [ev.q for ev in segment])
     middle = at[:-1] + (at[1:] - at[:-1]) / 2
     both = np.concatenate((at, middle))      # (alpha and F_s at both in one call each)
     alpha_at = c.alpha(both)
+    n, first, broken, q_before = None, None, "", q_a
+    for j, ev in enumerate(segment):
+        kind = codes[j]
+        # (an impact has derivatives unless it ends a Zeno accumulation, which its detail says)
+        own = _not_differentiable(ev, scene, c, kind, moved=ev.q != q_before, alpha=alpha_at[j + 1]) \
+            if kind != impact or ev.detail else ""
+        if own:
+            n, first, broken = j, start + j, own
+            break
+        q_before = ev.q
+    n = len(segment) if n is None else n
     values = {"alpha": alpha_at, "dalpha": c.dalpha(at), "middle": middle,
               **{("E", s): np.exp(2 * s * c.mu * alpha_at[:len(at)]) for s in (1, -1)},
               **{("F", s): c.F(s, both) for s in (1, -1)}, **{("f", s): c.f(s, at) for s in (1, -1)}}
@@ -565,27 +571,30 @@ def _slide_compiled(c, scene, segment_of, start, last, path, units):
     T, Q, VB, VA = path.table
     segment, codes, n, first, broken, values = segment_of
     evs = segment[:n]
-    zeros = np.zeros(len(Dmu))
     limiter = np.zeros((n, len(Dmu)))
     for j, ev in enumerate(evs):
         if codes[j] in LIMITER_EVENTS:
-            limiter[j] = limiter_D.get(ev.q, zeros)
+            D = limiter_D.get(ev.q)
+            if D is not None:       # (else the row stays 0)
+                limiter[j] = D
     scalars, moving, w_minus, rows, tail, dT, I_p_e = c.quadratures.slide(
         c, np.array(codes[:n], dtype=np.int64), np.array([path.q] + [ev.q for ev in evs]),
         _at_values(values, len(segment), n), path.w, scene.k, c.m,
         np.array([1.0 if ev.qdot_before >= 0 else -1.0 for ev in evs]), limiter, Dmu, Dk,
         np.asarray(path.Dq, dtype=float), np.asarray(path.Dw, dtype=float), CHUNK)
     Q[start:start + n], VB[start:start + n], VA[start:start + n] = rows[4], rows[6], rows[7]
-    failed = np.flatnonzero(~np.all(np.isfinite(dT), axis=1))
+    finite = np.isfinite(dT).all(axis=1)
     count = n
-    if len(failed):
-        count = int(failed[0])
+    if not finite.all():
+        count = int(np.flatnonzero(~finite)[0])
         first, broken = start + count, "the time derivative's quadrature did not converge"
     if broken and first is not None:       # (the rows written past the first event without derivatives)
         for column in (Q, VB, VA):
             column[first:last + 1] = np.nan
     if count:    # each event's time tangent: the one before plus its interval's (summed in time order)
-        Dt = np.cumsum(np.vstack((path.Dt[None, :], dT[:count])), axis=0)
+        Dt = np.empty((count + 1, dT.shape[1]))
+        Dt[0], Dt[1:] = path.Dt, dT[:count]
+        np.cumsum(Dt, axis=0, out=Dt)
         T[start:start + count] = Dt[1:]
         if want_legs:
             t_a = [path.t] + [ev.t for ev in evs[:count - 1]]
@@ -604,15 +613,16 @@ def _slide_compiled(c, scene, segment_of, start, last, path, units):
     return start + count, broken, first, None
 
 
-#: The engine's code of each event kind seen (``EventKind.code`` looks it up by name on every read).
+#: The engine's code of each event kind seen (``EventKind.code`` looks it up by name on every read), by the
+#: kind's ``id`` (the members live as long as the process; an enum member's hash is a Python call).
 _CODES = {}
 
 
 def _code(kind) -> EventCode:
     """``kind.code``, looked up once per kind."""
-    code = _CODES.get(kind)
+    code = _CODES.get(id(kind))
     if code is None:
-        code = _CODES[kind] = kind.code
+        code = _CODES[id(kind)] = kind.code
     return code
 
 #: Events that end at a turning point of ``G``.
@@ -646,9 +656,10 @@ def _on_cone_edge(alpha: float, mu: float) -> bool:
     return edge <= CONE_EDGE * max(abs(math.sin(alpha)), mu * abs(math.cos(alpha)), 1e-300)
 
 
-def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
+def _not_differentiable(ev, scene, c, kind, *, moved: bool = True, alpha=None) -> str:
     """Why event ``ev`` has no derivatives (empty when it has); ``moved``: the particle moved to it
-    (a turning point of ``G``, not a rest test where it already was)."""
+    (a turning point of ``G``, not a rest test where it already was); ``alpha``: the curve's ``alpha`` at
+    it, if known."""
     if kind == EventCode.LEFT_CURVE:
         return "the particle leaves the curve"
     if kind == EventCode.LANDING:
@@ -656,7 +667,7 @@ def _not_differentiable(ev, scene, c, kind, *, moved: bool = True) -> str:
     if ev.detail and "zeno" in ev.detail.lower():
         return "a Zeno accumulation of impacts (infinitely many events); this event and the ones after it"
     if kind in (EventCode.REVERSAL, EventCode.ARREST):
-        a = float(c.alpha(ev.q))
+        a = float(c.alpha(ev.q) if alpha is None else alpha)
         if _on_cone_edge(a, scene.mu_static):   # the rest test's (static) cone: the decision flips there
             return "a turning point on the edge of the friction cone (arrest or reversal changes with the parameters)"
         if moved and scene.mu_static != scene.mu and _on_cone_edge(a, scene.mu):
