@@ -347,21 +347,8 @@ def run_checks(n: SceneNumbers, cs) -> None:
             raise SceneError(c.field, c.message(n))
 
 
-#: The fields of the :data:`CHECKS` that read each scene number a fit changes (``Scene.with_numbers``): every
-#: check reading that number names one of these fields (``mu_s >= mu`` is ``physics.mu_s``'s, ``left < right``
-#: the ``limiters``', ``left <= q0 <= right`` ``initial.q``'s).
-READ_BY = {"mu": ("physics.mu", "physics.mu_s"), "k": ("physics.restitution",), "qdot0": ("initial.qdot",),
-           "q0": ("initial.q",), "left": ("limiters.left", "limiters", "initial.q"),
-           "right": ("limiters.right", "limiters", "initial.q")}
-
-
-@lru_cache(maxsize=64)
-def checks_reading(names: frozenset) -> tuple:
-    """The :data:`CHECKS` that read any of the numbers ``names`` (keys of :data:`READ_BY`), in their order:
-    on a scene whose other numbers passed every check, these make the same first failure as
-    :func:`check_numbers` after those numbers change."""
-    fields = {f for name in names for f in READ_BY[name]}
-    return tuple(c for c in CHECKS if c.field in fields)
+#: The numbers a fit's trial point may change (``Scene.with_numbers``).
+TRIAL_NUMBERS = ("mu", "k", "qdot0", "q0", "left", "right")
 
 
 def declared_domain(s, values=None) -> tuple:

@@ -32,14 +32,12 @@ import dataclasses
 from dataclasses import dataclass, field
 
 from symvib.numeric.scene_checks import (
-    READ_BY,
+    TRIAL_NUMBERS,
     SceneError,
     SceneNumbers,
     check_name,
     check_numbers,
-    checks_reading,
     finite,
-    run_checks,
 )
 from symvib.numeric.scene_units import friction_coefficient
 from symvib.shapes import Shape
@@ -198,15 +196,16 @@ class Scene:
 
     def with_numbers(self, **values) -> Scene:
         """A copy with some of ``mu``, ``k``, ``qdot0``, ``q0``, ``left``, ``right`` changed (numbers; a
-        fit's trial points), checked only by the checks that read them
-        (:func:`~symvib.numeric.scene_checks.checks_reading`): this scene's other numbers passed every
-        check already, so the copy is the one :meth:`replace` makes, and a value it refuses (NaN,
-        out of range, a limiter past ``q0`` or out of the curve's domain) is refused with the same
-        :class:`SceneError` naming the field.  A limiter the scene does not have cannot be set here.
+        fit's trial points), checked by every check of the scene's numbers
+        (:func:`~symvib.numeric.scene_checks.check_numbers`) but without rebuilding the rest (the
+        curve, its parameters, the sections): the copy is the one :meth:`replace` makes, and a value
+        it refuses (NaN, out of range, a limiter past ``q0`` or out of the curve's domain) is refused
+        with the same :class:`SceneError` naming the field.  A limiter the scene does not have cannot
+        be set here.
         """
-        unknown = set(values) - set(READ_BY)
+        unknown = set(values) - set(TRIAL_NUMBERS)
         if unknown:
-            raise TypeError(f"with_numbers: only {', '.join(READ_BY)}, got {sorted(unknown)[0]!r}")
+            raise TypeError(f"with_numbers: only {', '.join(TRIAL_NUMBERS)}, got {sorted(unknown)[0]!r}")
         new = object.__new__(Scene)
         state = dict(self.__dict__)
         for name, v in values.items():
@@ -216,7 +215,7 @@ class Scene:
         if "mu" in values:      # (as replace(mu=...): the friction angle no longer describes mu)
             state["alpha0"] = None
         new.__dict__.update(state)
-        run_checks(SceneNumbers.of(new), checks_reading(frozenset(values)))
+        check_numbers(SceneNumbers.of(new))
         return new
 
     def to_dict(self) -> dict:

@@ -90,7 +90,7 @@ def parameter_value(scene, target) -> float:
 
 def with_parameters(scene, targets, values):
     """``scene`` with the resolved parameters ``targets`` set to ``values`` (scene numbers only: by
-    ``Scene.with_numbers``, the checks that read them; with a curve parameter: by ``replace``, every check)."""
+    ``Scene.with_numbers``, every check of the numbers; with a curve parameter: by ``replace``, every check)."""
     changes, params = {}, {}
     for (_, kind, p), v in zip(targets, values):
         (params if kind == "curve" else changes)[p] = float(v)
