@@ -197,6 +197,10 @@ def test_a_simplified_geometry_never_overflows_where_the_plain_derivative_does_n
             far = np.array([fn(x) for x in (-1.5, -1.0, 1.0, 1.5)], dtype=float)
         assert np.all(np.isfinite(far)), (name, getattr(c, name))
         assert np.all(np.abs(far) < 1e-100), (name, far)
+        # ... and nothing overflows on the way: a scalar kernel's math.exp raises where NumPy gives inf
+        # (h' simplified to exp(-x^2/b^2) / sqrt(... + b^4 exp(2 x^2/b^2)): finite in NumPy, not in math).
+        scalar = sp.lambdify([c.q], getattr(c, name).subs(values), "math")
+        assert all(abs(scalar(x)) < 1e-100 for x in (-1.5, -1.0, 1.0, 1.5)), name
     # Where they are finite, the forms agree with the plain derivative (60 digits).
     raw = sp.diff(c.alpha, c.q)
     for x in (0.01, 0.04, 0.1):

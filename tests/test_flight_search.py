@@ -19,8 +19,13 @@ from symvib.numeric.scene import scene_from_dict
 WELL = {"curve": {"z": "-a*exp(-x**2/b**2)", "name": "gauss-well"}, "parameters": {"a": 0.1449, "b": 0.1840},
         "physics": {"mu": 0.2507, "restitution": 0.8, "contact": "unilateral", "restitution_curve": 0.3},
         "initial": {"q": -0.2830, "qdot": 2.5785}, "run": {"t_max": 5.0, "max_events": 2000}}
-#: Fast enough to fly past x = 2.9 m, where exp(x^2/b^2) overflows.
+#: Fast enough to fly out of the well and land on its flat tail near x = 2.95 m (where the kernels
+#: once overflowed: SymPy's simplified curvature held exp(2 x^2/b^2); symbolic.curve.tamed).
 OUT_OF_THE_WELL = {**WELL, "parameters": {"a": 0.1077, "b": 0.1875}, "initial": {"q": 0.2713, "qdot": 8.1019}}
+#: A well of the same depth and width whose kernels overflow in every form SymPy gives them (a
+#: hyperbolic secant of x^2/b^2: sums of exp(+-x^2/b^2) in every derivative), beyond about 1.45 m.
+OVERFLOWING_WELL = {**OUT_OF_THE_WELL, "curve": {"z": "-2*a/(exp(x**2/b**2) + exp(-x**2/b**2))",
+                                                 "name": "sech-well"}}
 #: A search this short resolved the well's flights (before the cubic test, 200,000 were not enough).
 FEW = 3000
 
@@ -46,10 +51,28 @@ def test_a_landing_search_out_of_distances_ends_the_run_with_a_status(monkeypatc
 
 
 def test_a_flight_past_where_the_kernels_overflow_leaves_the_stretch_saying_why():
-    r = symvib.simulate(_scene(OUT_OF_THE_WELL), samples=False)
+    r = symvib.simulate(_scene(OVERFLOWING_WELL), samples=False)
     assert r.status.value == "left_domain", r.message
     assert "kernels are not finite" in r.message
     assert [e.kind for e in r.events] == [EventKind.LIFT_OFF]
+
+
+def test_a_flight_out_of_a_well_lands_where_the_ballistic_parabola_meets_the_curve():
+    # The free flight x = x0 + vx t, z = z0 + vz t - g t^2/2 meets z = -a exp(-x^2/b^2): its root at 30
+    # digits (mpmath), independent of the engine's landing search.
+    import mpmath as mp
+
+    r = symvib.simulate(_scene(OUT_OF_THE_WELL), samples=False)
+    lift, land = r.events[0], r.events[1]
+    assert (lift.kind, land.kind) == (EventKind.LIFT_OFF, EventKind.LANDING), r.events[:2]
+    with mp.workdps(30):
+        a, b, g = (mp.mpf(str(v)) for v in (0.1077, 0.1875, 9.81))
+        z = lambda x: -a * mp.exp(-x**2 / b**2)    # noqa: E731
+        x0, vx = mp.mpf(str(lift.q)), mp.mpf(str(lift.qdot_after))
+        vz = mp.diff(z, x0) * vx
+        t = mp.findroot(lambda t: z(x0) + vz * t - g * t**2 / 2 - z(x0 + vx * t), mp.mpf(land.t - lift.t))
+        assert abs(float(t) - (land.t - lift.t)) <= 1e-13 and abs(float(x0 + vx * t) - land.q) <= 1e-13
+    assert r.status.value == "arrested" and r.energy_budget.relative_residual < 1e-12, r.message
 
 
 def test_the_plain_engine_sets_up_a_curve_whose_kernels_overflow_far_out():

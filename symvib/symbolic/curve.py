@@ -399,14 +399,16 @@ def far_points(curve: Curve, values=None) -> list:
 
 
 def _finite_at(expr: sp.Expr, curve: Curve, points, values) -> np.ndarray:
-    """Whether ``expr`` (the curve's parameters at ``values``) is finite in double precision at ``points``."""
+    """Whether ``expr`` (the curve's parameters at ``values``) evaluates in double precision at
+    ``points`` without overflowing on the way (a scalar kernel's ``math.exp`` raises where NumPy's
+    gives ``inf``, so a form whose ``inf`` cancels later still fails a plain run)."""
     fn = sp.lambdify([curve.q], expr.subs(values), "numpy")
     out = []
-    with np.errstate(all="ignore"):
+    with np.errstate(over="raise", invalid="ignore", divide="ignore", under="ignore"):
         for qv in points:
             try:
                 v = complex(fn(np.float64(qv)))
-            except (ArithmeticError, ValueError, TypeError):
+            except (ArithmeticError, ValueError, TypeError):   # (FloatingPointError is an ArithmeticError)
                 out.append(False)
                 continue
             out.append(math.isfinite(v.real) and math.isfinite(v.imag))

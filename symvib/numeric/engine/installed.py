@@ -149,16 +149,21 @@ def has(module, entry: str) -> bool:
         return False
 
 
+#: Largest record read (a record names a curve's entries, key and magic tuple: well under a kilobyte).
+MAX_RECORD_BYTES = 64 * 1024
 #: Records read in this process, by path (the installed folder is not written after the install; a
 #: plain run asks :func:`has` each time, so the file is read once).
 _RECORDS: dict = {}
 
 
 def _record(path: Path):
-    """The record at ``path`` (``None`` when there is none or it does not parse), read once."""
+    """The record at ``path`` (``None`` when there is none, it is larger than :data:`MAX_RECORD_BYTES`
+    or it does not parse as JSON), read once.  Data, never code: the engine reads no source text."""
     if path not in _RECORDS:
         try:
-            _RECORDS[path] = json.loads(path.read_text(encoding="utf-8"))
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_RECORD_BYTES + 1)
+            _RECORDS[path] = json.loads(data) if len(data) <= MAX_RECORD_BYTES else None
         except (OSError, ValueError):
             _RECORDS[path] = None
     return _RECORDS[path]
