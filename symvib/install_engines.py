@@ -27,28 +27,28 @@ ENTRIES = ("simulate_bound", "sample_bound", "sweep_bound")
 JOBS = 2
 
 
-def paper_curves() -> list:
-    """The catalogue shapes of :data:`PAPER_SCENES`, each once, in order."""
+def _paper_scenes() -> dict:
+    """The first scene of :data:`PAPER_SCENES` of each of their catalogue shapes, by shape name, in order."""
     import symvib
 
-    names = []
+    out = {}
     for name in PAPER_SCENES:
-        shape = symvib.load_scene(name).shape
-        shape = getattr(shape, "name", shape)
-        if shape not in names:
-            names.append(shape)
-    return names
+        scene = symvib.load_scene(name)
+        out.setdefault(scene.shape.name, scene)
+    return out
+
+
+def paper_curves() -> list:
+    """The catalogue shapes of :data:`PAPER_SCENES`, each once, in order."""
+    return list(_paper_scenes())
 
 
 def _scene_of(curve: str):
     """A packaged paper scene of ``curve``."""
-    import symvib
-
-    for name in PAPER_SCENES:
-        scene = symvib.load_scene(name)
-        if getattr(scene.shape, "name", scene.shape) == curve:
-            return scene
-    raise SystemExit(f"install_engines: no paper scene of curve {curve!r} (one of {paper_curves()})")
+    scenes = _paper_scenes()
+    if curve not in scenes:
+        raise SystemExit(f"install_engines: no paper scene of curve {curve!r} (one of {list(scenes)})")
+    return scenes[curve]
 
 
 def compile_curve(folder: Path, curve: str) -> None:

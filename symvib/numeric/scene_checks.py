@@ -333,12 +333,7 @@ def check_numbers(n: SceneNumbers) -> None:
     ...
     symvib.numeric.scene.SceneError: physics.restitution: must be in [0, 1] (1 = ideally elastic, 0 = plastic), got 1.5
     """
-    run_checks(n, checks(n))
-
-
-def run_checks(n: SceneNumbers, cs) -> None:
-    """Make the checks ``cs`` of the numbers ``n`` in order; the first that fails raises a :class:`SceneError`."""
-    for c in cs:
+    for c in checks(n):
         if c.when is not None and not c.when(n):
             continue
         if c.test is None:

@@ -481,9 +481,7 @@ def _segment(events, start, last, scene, c, q_a):
     codes = []
     landing, lift_off, impact = EventCode.LANDING, EventCode.LIFT_OFF, EventCode.IMPACT
     for ev in events[start:last + 1]:
-        kind = _CODES.get(id(ev.kind))
-        if kind is None:
-            kind = _code(ev.kind)
+        kind = _code(ev.kind)
         if kind == landing:     # (a landing ends the slide before it, a lift-off with it)
             break
         codes.append(kind)

@@ -314,15 +314,23 @@ def _floor(fn, m: float, spacing: float) -> float:
     for ``h`` written as the square root of a difference, and next to nothing for ``h`` computed
     without cancellation (the semicubical parabola's ``|q| sqrt(9 q**2 + 4)``).
     """
-    last = LEVEL_FLOOR * np.spacing(max(1.0, abs(m)))
-    step, before = spacing / LEVEL_STEP, math.inf
-    while step >= last:
+    before = math.inf
+    for step in _probes(m, spacing):
         now = float(np.max(np.abs(_real(fn, np.array([m - step, m + step])))))
         if not now * FLOOR_FALL <= before:
             return before
         before = now
-        step /= LEVEL_STEP
     return before
+
+
+def _probes(m: float, spacing: float):
+    """Distances from ``m`` closing in on it: ``spacing / LEVEL_STEP``, each :data:`LEVEL_STEP` times
+    closer than the last, down to :data:`LEVEL_FLOOR` rounding units of ``m``."""
+    last = LEVEL_FLOOR * np.spacing(max(1.0, abs(m)))
+    step = spacing / LEVEL_STEP
+    while step >= last:
+        yield step
+        step /= LEVEL_STEP
 
 
 def _levels_off(fn, m: float, h_m: float, spacing: float) -> bool:
@@ -336,13 +344,10 @@ def _levels_off(fn, m: float, h_m: float, spacing: float) -> bool:
     million times its value at a minimum of ``h = sqrt(1 + z'^2) >= 1``.  Near a cusp the speed
     from its components keeps falling towards ``h_m`` as the probes close in, down to rounding.
     """
-    floor = LEVEL_FLOOR * np.spacing(max(1.0, abs(m)))
-    step = spacing / LEVEL_STEP
-    while step >= floor:
+    for step in _probes(m, spacing):
         around = np.abs(_real(fn, np.array([m - step, m + step])))
         if np.all(around <= LEVEL_RATIO * h_m):
             return True
-        step /= LEVEL_STEP
     return False
 
 
