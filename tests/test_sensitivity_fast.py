@@ -124,3 +124,38 @@ def test_early_samples_are_differentiated_as_among_later_ones(scene):
     a, b = alone.derivatives, among.derivatives[:len(early)]
     assert np.array_equal(np.isnan(a), np.isnan(b))
     assert np.all(np.nan_to_num(np.abs(a - b)) <= SAME * (np.nanmax(np.abs(b), axis=0) + 1e-300))
+
+
+@pytest.mark.parametrize("scene", [resolve_scene(n).replace(k=0.8) for n in ("paper-parabola", "paper-circle-3.8")]
+                         + [scene_from_dict(USER)], ids=["paper-parabola", "paper-circle-3.8", "user-hump"])
+def test_the_difference_of_f_gives_what_the_integral_of_its_derivative_does(scene, monkeypatch):
+    # f(q) - f(q_c) away from the ends is F_s' itself, not the integral of F_s'': the same time derivatives
+    # as integrating everywhere (DIFFERENCE_RTOL = 0 never switches), within the levels' own agreement
+    # (RTOL: a short swing between two turning points, paper-circle-3.8's arrest, differs by 1.3e-11).
+    from symvib.numeric import sensitivity, sensitivity_batch
+
+    monkeypatch.setattr(sensitivity, "quadratures_for", lambda *args, **_: None)     # (NumPy's levels)
+    res = _run(scene)
+    switching = interval_tangents(res, _wrt(scene)).sensitivities
+    monkeypatch.setattr(sensitivity_batch, "DIFFERENCE_RTOL", 0.0)
+    integrating = interval_tangents(res, _wrt(scene)).sensitivities
+    for a, b in ((switching.t, integrating.t), (switching.q, integrating.q), (switching.v_after, integrating.v_after)):
+        scale = np.nanmax(np.abs(b), axis=0, initial=0.0) + 1e-300
+        assert np.array_equal(np.isnan(a), np.isnan(b))
+        assert np.all(np.nan_to_num(np.abs(a - b)) <= sensitivity_batch.RTOL * scale), (a - b) / scale
+    assert np.any(np.abs(switching.t - integrating.t) > 0)      # (the switch was taken)
+
+
+def test_the_difference_of_f_is_taken_only_where_it_rises_above_its_rounding():
+    from symvib.numeric.sensitivity_batch import DIFFERENCE_RTOL, EPS, NEAR_END, switched
+
+    x = np.array([0.2 * NEAR_END, 0.5 * NEAR_END, NEAR_END, 2 * NEAR_END, 0.3, 0.5])
+    f_c = 2.0
+    rising = f_c + np.array([1e-3, 1e-2, 0.05, 0.1, 0.3, 0.0])      # (back at f_c at the last node)
+    assert switched(x, rising, f_c).tolist() == [False, False, True, True, True, True]
+    tiny = f_c + 1e4 * EPS * x                 # an interval of a few ulps: the difference is rounding
+    assert not switched(x, tiny, f_c).any()
+    edge = f_c + 4 * EPS / DIFFERENCE_RTOL * np.array([0.0, 0.0, 0.5, 1.5, 1.5, 1.5])
+    assert switched(x, edge, f_c).tolist() == [False, False, False, True, True, True]
+    rows = switched(x, np.vstack([rising, tiny]), np.array([f_c, f_c]))     # (one row per interval)
+    assert rows[0].tolist() == switched(x, rising, f_c).tolist() and not rows[1].any()

@@ -28,7 +28,8 @@ from functools import cache
 
 import numpy as np
 
-__all__ = ["NODES", "RTOL", "ACCEPT", "MAX_PANELS", "INNER_NODES", "INTEGRAL_RTOL", "gauss", "theta_level",
+__all__ = ["NODES", "RTOL", "ACCEPT", "MAX_PANELS", "FIRST_PANELS", "INNER_NODES", "NEAR_END",
+           "DIFFERENCE_RTOL", "EPS", "switched", "INTEGRAL_RTOL", "gauss", "theta_level",
            "cumulative", "end_integrals", "time_derivatives"]
 
 #: Gauss-Legendre nodes per panel of the time derivative's integral in ``theta``.
@@ -41,8 +42,35 @@ RTOL = 1e-10
 ACCEPT = 1e-8
 #: Most panels a time derivative may take (then its entries are NaN and the reason says why).
 MAX_PANELS = 256
+#: Panels of a time derivative's first level (then 2, 4, ...): on the paper's scenes four intervals in
+#: five reach ``RTOL`` between one panel and two, and the others cost one panel more than from two.
+FIRST_PANELS = 1
 #: Nodes of the fixed rule that integrates ``F_s'``, ``F_s''`` and ``df/dmu`` between neighbouring nodes.
 INNER_NODES = 8
+#: Where ``f(q) - f(q_c)`` (item 5 of physics.md's "Sensitivities") is that difference of ``F_s'`` itself
+#: instead of the integral of ``F_s''`` from the nearer end ``q_c``: from the first node at least
+#: ``NEAR_END`` of the interval's length from ``q_c`` whose difference is at least ``1 / DIFFERENCE_RTOL``
+#: times its rounding (``eps (|f(q)| + |f(q_c)|)``), and at every node beyond it.  Closer to the end,
+#: where ``G`` and ``W`` vanish together at a turning point and the integrand's ``W / w^(3/2)`` magnifies
+#: an absolute error, and on an interval too short for the difference to rise above its rounding, the
+#: Gauss rule between neighbouring nodes keeps the relative accuracy.
+NEAR_END = 0.05
+DIFFERENCE_RTOL = 1e-12
+#: Rounding unit of a double.
+EPS = float(np.finfo(float).eps)
+
+
+def switched(x, f, f_c):
+    """Which of a half's nodes (offsets ``x`` from the anchor, ascending along the last axis) take
+    ``f(q) - f(q_c)`` as that difference (``f``: ``F_s'`` at them, ``f_c``: at the anchor): the first
+    that :data:`NEAR_END` and :data:`DIFFERENCE_RTOL` allow and all after it.
+
+    >>> switched(np.array([0.01, 0.1, 0.2]), np.array([1.0, 1.1, 1.0 + 1e-16]), 1.0).tolist()
+    [False, True, True]
+    """
+    f_c = np.asarray(f_c)[..., None] if np.ndim(f_c) else f_c
+    ok = (x >= NEAR_END) & (np.abs(f - f_c) * DIFFERENCE_RTOL >= EPS * (np.abs(f) + np.abs(f_c)))
+    return np.logical_or.accumulate(ok, axis=-1)
 #: Agreement of two piece counts that ends the integral of ``df/dmu`` over a whole interval.
 INTEGRAL_RTOL = 1e-14
 #: Finest level (panels) of :func:`time_derivatives` evaluated for many intervals at once.
@@ -177,8 +205,8 @@ def time_derivatives(c, ends):
     out = np.full((M, P), np.nan)
     if M == 0:
         return out
-    state = _Refinement(M, P, _level(c, ends, np.arange(M), 2)[0])
-    active, panels = np.arange(M), 2
+    state = _Refinement(M, P, _level(c, ends, np.arange(M), FIRST_PANELS)[0])
+    active, panels = np.arange(M), FIRST_PANELS
     while panels < min(BATCH_PANELS, MAX_PANELS) and len(active):
         panels *= 2
         active = state.step(out, active, *_level(c, ends, active, panels))
@@ -241,11 +269,14 @@ def _level(c, ends, rows, panels):
         x = u[order] if from_start else d[order]
         inner.append(_nodes(q_a if from_start else q_e, delta if from_start else -delta, x))
     values = [_on_branches(fn, s, [nodes for nodes, _ in inner]) for fn in fns]
+    at_nodes = _on_branches(c.f, s, [q[:, order, None] for _, order in halves])
     for h, ((from_start, order), (_, half)) in enumerate(zip(halves, inner)):
         x = u[order] if from_start else d[order]
         q_c, D, G_c, DG_c, f_c = ((q_a, delta, e["G_a"], e["DG_a"], e["f_a"]) if from_start
                                   else (q_e, -delta, e["G_e"], e["DG_e"], e["f_e"]))
         int_f, int_df, *int_dp = (_summed(v[h], D, half) for v in values)
+        f_q = at_nodes[h][:, :, 0]
+        int_df = np.where(switched(x, f_q, f_c), f_q - f_c[:, None], int_df)     # (f(q) - f(q_c): switched)
         G[:, order] = G_c[:, None] - 2 * c.g * int_f
         step = (x if from_start else -x)[None, :, None] * (Dq_e - Dq_a)[:, None, :]
         dg = DG_c[:, None, :] - 2 * c.g * (int_df[:, :, None] * Dq[:, order] + f_c[:, None, None] * step)

@@ -11,7 +11,7 @@ compile-time constant, :mod:`symvib.numeric.engine.static`), and the compiled fu
 disk under the curve's module and input hash.
 
 The arithmetic is the NumPy path's, node by node: the same ``theta`` levels (``NODES`` nodes a
-panel, 2, 4, ... panels), the same inner rule between neighbouring nodes, the same anchors, the
+panel, 1, 2, 4, ... panels), the same inner rule between neighbouring nodes, the same anchors, the
 same convergence rules (``RTOL``, ``ACCEPT``, ``MAX_PANELS``, a non-finite level fails, the first
 interval that fails past ``BATCH_PANELS`` ends the derivatives); only sums are taken in another
 order, so the two agree to rounding (``tests/test_sensitivity_compiled.py``).  The NumPy path
@@ -32,7 +32,7 @@ Python between them (a fit differentiates about 40 runs, each in about a millise
 Examples
 --------
 >>> LEVELS, BATCH_LEVELS
-(8, 4)
+(9, 5)
 """
 from __future__ import annotations
 
@@ -48,10 +48,14 @@ from symvib.numeric.layout import EventCode
 from symvib.numeric.sensitivity_batch import (
     ACCEPT,
     BATCH_PANELS,
+    DIFFERENCE_RTOL,
+    EPS,
+    FIRST_PANELS,
     FIRST_PIECES,
     INNER_NODES,
     INTEGRAL_RTOL,
     MAX_PANELS,
+    NEAR_END,
     NODES,
     RTOL,
     gauss,
@@ -62,16 +66,17 @@ __all__ = ["SensitivityKernels", "Quadratures", "quadratures_for", "quadratures"
            "compiled_marker", "compiled_on_disk",
            "event_tangents", "event_tangents_kernel", "LEVELS", "BATCH_LEVELS", "ENTRIES", "INTERVAL_SCALARS"]
 
-#: Levels of the time derivative's refinement (``2, 4, ..., MAX_PANELS`` panels).
-LEVELS = int(round(math.log2(MAX_PANELS)))
+#: Levels of the time derivative's refinement (``FIRST_PANELS, 2 FIRST_PANELS, ..., MAX_PANELS`` panels).
+LEVELS = int(round(math.log2(MAX_PANELS / FIRST_PANELS))) + 1
 #: Of those, the levels evaluated before any interval's refinement may end the others' (up to ``BATCH_PANELS``).
-BATCH_LEVELS = int(round(math.log2(min(BATCH_PANELS, MAX_PANELS))))
+BATCH_LEVELS = int(round(math.log2(min(BATCH_PANELS, MAX_PANELS) / FIRST_PANELS))) + 1
 #: Floor of a magnitude that a difference of two levels is divided by (as the NumPy path's).
 TINY = 1e-300
 #: The compiled entry points, cached on disk per curve.
 ENTRIES = ("time_derivatives_kernel", "end_integrals_kernel", "slide_kernel")
 #: This module's functions that numba compiles (the entry points and what they call).
-COMPILED = ("_f_df", "_df_dmu", "_nan_max", "_level", "_step", "_end_integral", "event_tangents_kernel", *ENTRIES)
+COMPILED = ("_f", "_f_df", "_f_dmu", "_df_dmu", "_nan_max", "_level", "_step", "_end_integral", "event_tangents_kernel",
+            *ENTRIES)
 
 
 class SensitivityKernels(NamedTuple):
@@ -104,6 +109,22 @@ def _f_df(K, s, q, mu, cp):
     return K.dF_m(q, mu, *cp), K.ddF_m(q, mu, *cp)
 
 
+def _f(K, s, q, mu, cp):
+    """``F_s'`` at ``q`` on branch ``s``."""
+    if s > 0:
+        return K.dF_p(q, mu, *cp)
+    return K.dF_m(q, mu, *cp)
+
+
+def _f_dmu(K, s, q, mu, cp):
+    """``F_s'`` and ``d F_s' / d mu`` at ``q`` from one evaluation of ``alpha``, ``x'``, ``z'`` and ``E``
+    (:func:`_df_dmu`; ``F_s'`` so written differs from the ``dF`` kernel's at rounding)."""
+    alpha, dx = K.alpha(q, *cp), K.dx(q, *cp)
+    E = math.exp(2 * s * mu * alpha)
+    slope = K.dz(q, *cp) + s * mu * dx
+    return E * slope, E * (2 * s * alpha * slope + s * dx)
+
+
 def _df_dmu(K, s, q, mu, cp):
     """``d F_s' / d mu`` at fixed ``q`` (:meth:`symvib.numeric.sensitivity_curve.CurveFunctions.df_dmu`)."""
     alpha, dx = K.alpha(q, *cp), K.dx(q, *cp)
@@ -118,8 +139,8 @@ def _nan_max(a, b):
 
 def _level(K, m, k, ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n_start, offsets, xg, wg, cur, mag):
     """The integral of interval ``m``'s time-derivative integrand and of its magnitude on level ``k``
-    (``2 << k`` panels) into ``cur`` and ``mag`` (shape (P,)): :func:`symvib.numeric.sensitivity_batch._level`
-    for one interval."""
+    (``FIRST_PANELS << k`` panels) into ``cur`` and ``mag`` (shape (P,)):
+    :func:`symvib.numeric.sensitivity_batch._level` for one interval."""
     s, q_a, q_e = ends[m, 0], ends[m, 1], ends[m, 2]
     delta = q_e - q_a
     length = abs(delta)
@@ -137,6 +158,7 @@ def _level(K, m, k, ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n
         else:
             lo, hi, anchor, D, G_c, f_c, DG_c = n0 + n_start[k], n1, q_e, -delta, ends[m, 4], ends[m, 6], tangents[3, m]
         x_prev, acc_f, acc_df, acc_dp = 0.0, 0.0, 0.0, 0.0
+        switch = False        # (f(q) - f(q_c) as that difference from here on: batch.switched)
         for j in range(lo, hi):
             i = n0 + order[j]
             u, d = U[i], Dd[i]
@@ -145,11 +167,17 @@ def _level(K, m, k, ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n
             sum_f, sum_df, sum_dp = 0.0, 0.0, 0.0
             for t in range(xg.shape[0]):
                 qn = anchor + D * (mid + hw * xg[t])
-                f, df = _f_df(K, s, qn, mu, cp)
+                if switch and with_mu:
+                    f, dp = _f_dmu(K, s, qn, mu, cp)
+                    sum_dp += dp * wg[t]
+                elif switch:
+                    f = _f(K, s, qn, mu, cp)
+                else:
+                    f, df = _f_df(K, s, qn, mu, cp)
+                    sum_df += df * wg[t]
+                    if with_mu:
+                        sum_dp += _df_dmu(K, s, qn, mu, cp) * wg[t]
                 sum_f += f * wg[t]
-                sum_df += df * wg[t]
-                if with_mu:
-                    sum_dp += _df_dmu(K, s, qn, mu, cp) * wg[t]
             acc_f += hw * sum_f
             acc_df += hw * sum_df
             acc_dp += hw * sum_dp
@@ -157,6 +185,10 @@ def _level(K, m, k, ends, tangents, mu, g, Dmu, with_mu, cp, U, Dd, Wt, order, n
             int_f, int_df, int_dp = D * acc_f, D * acc_df, D * acc_dp
             G = G_c - 2 * g * int_f
             q = q_a + delta * u if u <= 0.5 else q_e - delta * d
+            f_q = _f(K, s, q, mu, cp)
+            switch = switch or (x >= NEAR_END and abs(f_q - f_c) * DIFFERENCE_RTOL >= EPS * (abs(f_q) + abs(f_c)))
+            if switch:
+                int_df = f_q - f_c
             alpha, dalpha = K.alpha(q, *cp), K.dalpha(q, *cp)
             h, dh = K.h(q, *cp), K.dh(q, *cp)
             E = math.exp(2 * s * mu * alpha)
@@ -455,11 +487,11 @@ def event_tangents_kernel(is_impact, turning, moving, sigma_in, w_minus, scalars
 # --- binding (Python) ----------------------------------------------------------------------------
 @cache
 def level_tables():
-    """The ``theta`` levels of :func:`symvib.numeric.sensitivity_batch.theta_level` (2, 4, ...,
+    """The ``theta`` levels of :func:`symvib.numeric.sensitivity_batch.theta_level` (1, 2, 4, ...,
     ``MAX_PANELS`` panels) as flat arrays: ``u``, ``1 - u``, weights, each level's nodes in the order
     they are integrated (the start's half by ``u``, then the end's by ``1 - u``: indices within the
     level), the number of the start's, and each level's first node."""
-    parts = [theta_level(2 << k) for k in range(LEVELS)]
+    parts = [theta_level(FIRST_PANELS << k) for k in range(LEVELS)]
     U = np.concatenate([p[0] for p in parts])
     Dd = np.concatenate([p[1] for p in parts])
     Wt = np.concatenate([p[2] for p in parts])

@@ -14,7 +14,17 @@ import math
 
 import numpy as np
 
-from symvib.numeric.sensitivity_batch import ACCEPT, INNER_NODES, INTEGRAL_RTOL, MAX_PANELS, NODES, RTOL, gauss
+from symvib.numeric.sensitivity_batch import (
+    ACCEPT,
+    FIRST_PANELS,
+    INNER_NODES,
+    INTEGRAL_RTOL,
+    MAX_PANELS,
+    NODES,
+    RTOL,
+    gauss,
+    switched,
+)
 
 __all__ = ["Interval"]
 
@@ -146,7 +156,9 @@ class Interval:
             q_c, D, G_c, DG_c, f_c = ((self.q_a, delta, self.G_a, self.DG_a, self.f_a) if from_start
                                       else (self.q_e, -delta, self.G_e, self.DG_e, self.f_e))
             int_f = self.cumulative(lambda v: c.f(s, v), q_c, D, x)
-            int_df = self.cumulative(lambda v: c.df(s, v), q_c, D, x)          # f(q) - f(q_c)
+            f_q = c.f(s, q[order])                                  # f(q) - f(q_c): integrated, or
+            int_df = np.where(switched(x, f_q, f_c), f_q - f_c,     # that difference (switched)
+                              self.cumulative(lambda v: c.df(s, v), q_c, D, x))
             G[order] = G_c - 2 * c.g * int_f
             # Dq(u) - Dq(anchor): u (Dq_e - Dq_a) from the start, -(1 - u) (Dq_e - Dq_a) from the end
             step = np.outer(x if from_start else -x, self.Dq_e - self.Dq_a)
@@ -189,7 +201,7 @@ class Interval:
         # short swing between two turning points), converges to rounding noise, not to 0.  Next to
         # the roots the rounding grows as panels shrink, so the level whose difference from the
         # one before is smallest is kept once no level reaches RTOL, if it is within ACCEPT.
-        panels = 2
+        panels = FIRST_PANELS
         previous, _ = integral(panels)
         best, best_gap = None, math.inf
         while panels < MAX_PANELS:
