@@ -13,6 +13,12 @@ a binary), runs the benchmark sweep of ``bench_sweep.py`` (``phidot0`` in
 ``perf record`` samples this process, and prints ``perf report``'s share of
 the samples per function: the core's functions (``quad``, ``map_extend``,
 ``root_G``, ...) and the C library's (``__tan_fma``, ``__cos_fma``, ...).
+
+``--callers`` samples the call stacks too (``perf record --call-graph dwarf``): under each
+function above 2 %, the compiled function that called it (the C library's functions unwind
+one frame into the compiled code, which is as far as ``perf`` can follow it) and the C library's
+own inlined parts (``libc_feholdsetround_sse_ctx``: the rounding-mode guard every ``sin``,
+``cos``, ``sincos`` and ``tan`` of glibc 2.36 enters with).
 """
 from __future__ import annotations
 
@@ -68,6 +74,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=5.0, help="sampling time")
     ap.add_argument("--threads", type=int, default=1, help="numba threads")
+    ap.add_argument("--callers", action="store_true", help="who calls each function (call stacks; slower)")
     args = ap.parse_args(argv)
     if shutil.which("perf") is None:
         sys.exit("profile_sweep: needs Linux perf (Debian: apt-get install linux-perf)")
@@ -101,8 +108,9 @@ def main(argv=None):
 
     worker = threading.Thread(target=work)
     worker.start()
+    stacks = ["-F", "1000", "--call-graph", "dwarf,4096"] if args.callers else ["-F", "2000"]
     try:
-        subprocess.run(["perf", "record", "-q", "-e", "cpu-clock", "-F", "2000", "-p", str(os.getpid()),
+        subprocess.run(["perf", "record", "-q", "-e", "cpu-clock", *stacks, "-p", str(os.getpid()),
                         "-o", str(data), "--", "sleep", str(args.seconds)], check=True)
     finally:
         done.set()
@@ -110,8 +118,9 @@ def main(argv=None):
     if sweeps[0]:
         per_event = sweeps[1] / sweeps[0] / events * 1e6
         print(f"# {sweeps[0]} sweeps while sampling: {per_event:.2f} microseconds per event and sweep")
-    report = subprocess.run(["perf", "report", "-i", str(data), "--no-children", "--sort", "sym", "-g", "none",
-                             "--percent-limit", "0.5", "--stdio"], capture_output=True, text=True, check=True)
+    graph = ["-G", "--percent-limit", "2"] if args.callers else ["-g", "none", "--percent-limit", "0.5"]
+    report = subprocess.run(["perf", "report", "-i", str(data), "--no-children", "--sort", "sym", *graph, "--stdio"],
+                            capture_output=True, text=True, check=True)
     for line in report.stdout.splitlines():
         if "%" in line and not line.startswith("#"):
             print(line.rstrip()[:100])
