@@ -45,6 +45,24 @@ def test_a_scene_with_static_friction_fits_mu_as_without_it():
     assert result.status == "converged" and result.estimates["mu"] == pytest.approx(0.03, rel=1e-9)
 
 
+def test_a_fit_at_its_minimum_stops_without_trying_steps_shorter_than_xtol():
+    # Near the minimum, a step within xtol that does not lower the cost ends the fit: a larger lambda
+    # would only shorten it (before, lambda climbed towards its cap, a forward run per factor 10).
+    times = np.array(impact_times(TRUTH, 6)) + np.random.default_rng(3).normal(0.0, 1e-3, 6)
+    trials = []
+
+    def run(scene):
+        trials.append((scene.mu, scene.k))
+        return simulate(scene, samples=False)
+
+    result = fit(TRUTH.replace(mu=0.04, k=0.75), observed_events(times, kinds=["impact"] * 6), free=("mu", "k"),
+                 weights=np.full(6, 1e3), run=run)
+    assert result.status == "converged", result.message
+    best = np.array([result.estimates["mu"], result.estimates["k"]])
+    near = [t for t in trials if np.all(np.abs(np.array(t) - best) <= 1e-10 * (np.abs(best) + 1e-10))]
+    assert 1 <= len(near) <= 2, near           # the minimum itself, and at most one trial beside it
+
+
 def test_noisy_impacts_give_estimates_within_their_standard_errors_and_errors_that_match_the_spread():
     # 1 ms of noise on 6 impact times; over 12 noise draws the estimates scatter as their reported
     # standard errors say (within the sampling error of 12 draws) and cover the truth.

@@ -503,6 +503,8 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
                 new_cost, failure = math.inf, str(err)
             if new_cost <= cost:
                 break
+            if not failure and bool((np.abs(trial - x) <= xtol * (np.abs(x) + xtol)).all()):
+                break       # (a step within xtol that does not lower the cost: a larger lambda only shortens it)
             lam *= LAMBDA_UP
             if lam > LAMBDA_MAX:
                 break
