@@ -17,8 +17,9 @@ entry where it is about 0.
 
 Verdicts per scene: ``agree`` (every compared derivative), ``said`` (some events have no
 derivative and the table says why, the others agree), ``no study`` (every perturbed run changed
-the events, nothing to compare), ``DISAGREE`` (a derivative given as a number that no estimate
-matches: a silent error).  The worst disagreements are printed as scene dicts.
+the events, nothing to compare), ``run <status>`` (the run itself failed, for example
+``tolerance_not_met`` at a near-stop, and says so: no derivatives), ``DISAGREE`` (a derivative given
+as a number that no estimate matches: a silent error).  The worst disagreements are printed as scene dicts.
 """
 from __future__ import annotations
 
@@ -86,6 +87,8 @@ def check(scene, tol=TOL):
     wrt = [p for p in ("mu", "k", "qdot0", "q0", "left", "right") if not (
         p in ("left", "right") and getattr(scene, p) is None) and not (p == "k" and scene.k in (0.0, 1.0))
         and not (p == "qdot0" and scene.qdot0 == 0.0) and not (p == "mu" and scene.mu == 0.0)]
+    if res.status.is_error:      # (its events have no derivatives, and the status says why)
+        return f"run {res.status.value}", 0, 0.0
     if not res.events or not wrt:
         return "no study", 0, 0.0
     sens = res.sensitivities(wrt=wrt)
