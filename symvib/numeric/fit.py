@@ -503,7 +503,7 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
                 new_cost, failure = math.inf, str(err)
             if new_cost <= cost:
                 break
-            if not failure and bool((np.abs(trial - x) <= xtol * (np.abs(x) + xtol)).all()):
+            if not failure and _settled(trial, x, xtol):
                 break       # (a step within xtol that does not lower the cost: a larger lambda only shortens it)
             lam *= LAMBDA_UP
             if lam > LAMBDA_MAX:
@@ -514,7 +514,7 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
         if new_cost > cost or (stuck and np.array_equal(trial, x)):
             status = "runs_failed" if stuck else "converged"
             break
-        settled = bool((np.abs(trial - x) <= xtol * (np.abs(x) + xtol)).all())
+        settled = _settled(trial, x, xtol)
         if final or not settled:
             J, usable = jacobian_new()
         x, r, matched, cost = trial, r_new, m_new, new_cost
@@ -537,6 +537,11 @@ def _levenberg_marquardt(problem: _Problem, observed: Observed, w, x, xtol: floa
             message += f"; {name} = {v:g} is at its bound ({'low' if v == low else 'high'})"
     return _result(status, message, problem.at(x), free, x, J, r, w, problem.absolute, matched, iterations,
                    tuple(history))
+
+
+def _settled(trial, x, xtol) -> bool:
+    """Whether the step from ``x`` to ``trial`` is within ``xtol`` of ``x`` in every parameter (relative)."""
+    return bool((np.abs(trial - x) <= xtol * (np.abs(x) + xtol)).all())
 
 
 def _damped_step(H, eye, lam, minus_g):

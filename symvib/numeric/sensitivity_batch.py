@@ -58,6 +58,12 @@ NEAR_END = 0.05
 DIFFERENCE_RTOL = 1e-12
 #: Rounding unit of a double.
 EPS = float(np.finfo(float).eps)
+#: Agreement of two piece counts that ends the integral of ``df/dmu`` over a whole interval.
+INTEGRAL_RTOL = 1e-14
+#: Finest level (panels) of :func:`time_derivatives` evaluated for many intervals at once.
+BATCH_PANELS = 16
+#: Fewest pieces of :func:`end_integrals`' first level.
+FIRST_PIECES = 8
 
 
 def switched(x, f, f_c):
@@ -71,12 +77,6 @@ def switched(x, f, f_c):
     f_c = np.asarray(f_c)[..., None] if np.ndim(f_c) else f_c
     ok = (x >= NEAR_END) & (np.abs(f - f_c) * DIFFERENCE_RTOL >= EPS * (np.abs(f) + np.abs(f_c)))
     return np.logical_or.accumulate(ok, axis=-1)
-#: Agreement of two piece counts that ends the integral of ``df/dmu`` over a whole interval.
-INTEGRAL_RTOL = 1e-14
-#: Finest level (panels) of :func:`time_derivatives` evaluated for many intervals at once.
-BATCH_PANELS = 16
-#: Fewest pieces of :func:`end_integrals`' first level.
-FIRST_PIECES = 8
 
 
 @cache

@@ -118,7 +118,7 @@ def _f(K, s, q, mu, cp):
 
 def _f_dmu(K, s, q, mu, cp):
     """``F_s'`` and ``d F_s' / d mu`` at ``q`` from one evaluation of ``alpha``, ``x'``, ``z'`` and ``E``
-    (:func:`_df_dmu`; ``F_s'`` so written differs from the ``dF`` kernel's at rounding)."""
+    (``F_s'`` so written differs from the ``dF`` kernel's at rounding)."""
     alpha, dx = K.alpha(q, *cp), K.dx(q, *cp)
     E = math.exp(2 * s * mu * alpha)
     slope = K.dz(q, *cp) + s * mu * dx
@@ -127,9 +127,7 @@ def _f_dmu(K, s, q, mu, cp):
 
 def _df_dmu(K, s, q, mu, cp):
     """``d F_s' / d mu`` at fixed ``q`` (:meth:`symvib.numeric.sensitivity_curve.CurveFunctions.df_dmu`)."""
-    alpha, dx = K.alpha(q, *cp), K.dx(q, *cp)
-    E = math.exp(2 * s * mu * alpha)
-    return E * (2 * s * alpha * (K.dz(q, *cp) + s * mu * dx) + s * dx)
+    return _f_dmu(K, s, q, mu, cp)[1]
 
 
 def _nan_max(a, b):
