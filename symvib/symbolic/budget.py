@@ -21,6 +21,8 @@ import os
 import signal
 import threading
 import time
+import weakref
+import _weakrefset
 from dataclasses import dataclass
 
 import sympy as sp
@@ -161,7 +163,18 @@ class _Expired(BaseException):
     """The budget of :func:`simplify` is spent (a BaseException: SymPy's ``except Exception`` lets it by)."""
 
 
+#: Files whose code Python runs as callbacks it cannot pass an exception out of (a weak
+#: reference's callback, as SymPy's caches' ``WeakKeyDictionary`` run, or a finalizer): the alarm
+#: raised there would be printed as "Exception ignored" and lost.
+_CALLBACK_FILES = frozenset({weakref.__file__, _weakrefset.__file__})
+
+
 def _expire(signum, frame):
+    """The alarm of :func:`simplify`: raise :class:`_Expired`, except inside a weak reference's
+    callback or a finalizer (``__del__``), which cannot pass it on; there it returns, and the alarm
+    repeated :data:`_REALARM_SECONDS` later raises in SymPy's own code."""
+    if frame is not None and (frame.f_code.co_filename in _CALLBACK_FILES or frame.f_code.co_name == "__del__"):
+        return
     raise _Expired
 
 
