@@ -17,12 +17,12 @@ Examples
 """
 from __future__ import annotations
 
+import _weakrefset
 import os
 import signal
 import threading
 import time
 import weakref
-import _weakrefset
 from dataclasses import dataclass
 
 import sympy as sp
