@@ -549,7 +549,7 @@ def _plan(segment_of, start, scene, c, q_a, w_a):
 
 def _at_values(values, n, count) -> np.ndarray:
     """:func:`_segment`'s kernel values of its first ``count`` events (of ``n``) as the rows of
-    :func:`symvib.numeric.sensitivity_compiled.slide_kernel`'s ``at_values`` (shape (8, 2 count + 1))."""
+    :func:`symvib.numeric.sensitivity_kernels.slide_kernel`'s ``at_values`` (shape (8, 2 count + 1))."""
     out = np.zeros((8, 2 * count + 1))
     events, middles = slice(0, count + 1), slice(n + 1, n + 1 + count)
     for r, name in enumerate(("alpha", ("F", 1), ("F", -1))):
@@ -563,7 +563,7 @@ def _at_values(values, n, count) -> np.ndarray:
 def _slide_compiled(c, scene, segment_of, start, last, path, units):
     """:func:`_slide` of ``segment_of`` (:func:`_segment`; no event of :data:`JETS_EVENTS` among its
     differentiable ones, no curve parameter) in one compiled call
-    (:func:`symvib.numeric.sensitivity_compiled.slide_kernel`: the operations of :func:`_plan` and of the four
+    (:func:`symvib.numeric.sensitivity_kernels.slide_kernel`: the operations of :func:`_plan` and of the four
     passes, bit for bit)."""
     Dmu, Dk, limiter_D, want_legs = units
     T, Q, VB, VA = path.table
