@@ -72,7 +72,7 @@ def _budget(value, option: str = "--budget"):
 
 def _refuse_corners(curve) -> None:
     """A curve with a corner (kink) has no derivation across it: one line naming the point (exit 2)."""
-    from symvib.symbolic.curve import CurveError
+    from symvib.symbolic.branches import CurveError
     from symvib.symbolic.singular import corners
 
     found = corners(curve)

@@ -52,7 +52,7 @@ _INPUT_HASH_LINE = re.compile(r"^INPUT_HASH = '([0-9a-f]{64})'$", re.M)
 
 #: Statement and expression nodes a generated module may contain (:func:`verify_text`).  No
 #: conditional (``IfExp``, ``If``) and no comparison (``Compare``): the generator decides every
-#: ``Piecewise`` symbolically (:func:`symvib.symbolic.curve.generic_branch`) and writes none.
+#: ``Piecewise`` symbolically (:func:`symvib.symbolic.branches.generic_branch`) and writes none.
 ALLOWED_NODES = frozenset({
     "Module", "FunctionDef", "arguments", "arg", "Return", "Assign", "AugAssign", "For", "Expr", "Import",
     "alias", "BinOp", "UnaryOp", "Add", "Sub", "Mult", "Div", "Pow", "USub", "UAdd", "Call", "keyword",

@@ -126,7 +126,7 @@ def interval_in(pieces, q0: float, lo: float, hi: float) -> Regular:
 def reference_point(lo: float, hi: float, scale: float) -> float:
     """A finite point inside ``(lo, hi)``: 0 when it is inside, else the middle, or one ``scale``
     inside the finite end of a half-infinite interval (as the symbolic wing's
-    :func:`symvib.symbolic.curve.reference_point` for a declared domain)."""
+    :func:`symvib.symbolic.angle.reference_point` for a declared domain)."""
     if lo < 0.0 < hi:
         return 0.0
     if math.isinf(hi):

@@ -193,7 +193,8 @@ def test_user_curve_generated_once_and_cached(tmp_path, monkeypatch):
 
 
 def test_reserved_parameter_names():
-    from symvib.symbolic.curve import CurveError, graph
+    from symvib.symbolic.branches import CurveError
+    from symvib.symbolic.curve import graph
 
     with pytest.raises(CurveError, match="reserved in kernel modules"):
         codegen.module_text(derive(graph("x**2/numpy")), {"name": "bad"})

@@ -5,6 +5,7 @@ import pytest
 import sympy as sp
 
 from symvib.shapes import CATALOGUE, shape
+from symvib.symbolic import angle, branches, identity
 from symvib.symbolic import curve as cv
 
 
@@ -91,7 +92,7 @@ A = sp.Symbol("a", real=True)
     (sp.diff(sp.Abs(Q) ** 3, Q, 2), 6 * sp.Abs(Q)),
 ])
 def test_generic_branch_drops_branches_on_sets_of_measure_zero(expr, want):
-    got = cv.generic_branch(expr)
+    got = branches.generic_branch(expr)
     assert not got.has(sp.Piecewise, sp.DiracDelta)
     for q in (-1.3, -0.2, 0.7, 2.1):
         values = {Q: q, A: 0.8}
@@ -104,13 +105,13 @@ def test_generic_branch_drops_branches_on_sets_of_measure_zero(expr, want):
     sp.Piecewise((1, sp.Eq(Q, 0) | (Q > 1)), (Q, True)),
 ])
 def test_generic_branch_refuses_inequalities_naming_the_field(expr):
-    with pytest.raises(cv.CurveError, match=r"^kernel dh: .*Piecewise .*hint \(curve.h / curve.alpha\)"):
-        cv.generic_branch(expr, "kernel dh")
+    with pytest.raises(branches.CurveError, match=r"^kernel dh: .*Piecewise .*hint \(curve.h / curve.alpha\)"):
+        branches.generic_branch(expr, "kernel dh")
 
 
 def test_generic_branch_refuses_a_piecewise_defined_on_a_null_set_only():
-    with pytest.raises(cv.CurveError, match="measure zero"):
-        cv.generic_branch(sp.Piecewise((1, sp.Eq(Q, 0)), (2, sp.Eq(Q, 1))))
+    with pytest.raises(branches.CurveError, match="measure zero"):
+        branches.generic_branch(sp.Piecewise((1, sp.Eq(Q, 0)), (2, sp.Eq(Q, 1))))
 
 
 def test_the_paper_parabola_in_expressions_has_a_geometry_without_piecewise():
@@ -143,8 +144,8 @@ def test_the_ellipse_gets_a_continuous_rotated_form_and_not_atan_of_tan():
     turned = np.unwrap(np.arctan2(0.3 * np.sin(qs), 0.5 * np.cos(qs)))   # the tangent, loop after loop
     np.testing.assert_allclose(values - values[10000], turned - turned[10000], atol=1e-12)
     a, b = c.params
-    assert cv.angle_jump(sp.atan(b * sp.tan(c.q) / a), c, c.default_values()) is not None   # off by pi
-    jump = cv.angle_jump(sp.atan2(b * sp.sin(c.q), a * sp.cos(c.q)), c, c.default_values())
+    assert angle.angle_jump(sp.atan(b * sp.tan(c.q) / a), c, c.default_values()) is not None   # off by pi
+    jump = angle.angle_jump(sp.atan2(b * sp.sin(c.q), a * sp.cos(c.q)), c, c.default_values())
     assert np.cos(jump) == pytest.approx(-1.0, abs=1e-9)       # 2 pi where the tangent points along -x
 
 
@@ -157,7 +158,7 @@ def test_a_curve_without_a_continuous_closed_form_keeps_atan2_and_says_so():
 
 def test_a_hint_that_jumps_is_refused():
     message = r"hint alpha = atan2\(sin\(q\), cos\(q\)\) jumps at q = -?[\d.]+ \(parameters = 1\), where"
-    with pytest.raises(cv.CurveError, match=message):
+    with pytest.raises(branches.CurveError, match=message):
         cv.parametric("R*sin(q)", "R*(1 - cos(q))", alpha="atan2(sin(q), cos(q))", h="R")
 
 
@@ -208,4 +209,4 @@ def test_a_simplified_geometry_never_overflows_where_the_plain_derivative_does_n
         assert abs(c.alphap.subs({**values, c.q: x}).evalf(60) - exact) <= 1e-50 * (1 + abs(exact))
     # A simplification that overflows nowhere is kept.
     q = c.q
-    assert cv.tamed(sp.cos(q) ** 2, 1 - sp.sin(q) ** 2, c) == sp.cos(q) ** 2
+    assert identity.tamed(sp.cos(q) ** 2, 1 - sp.sin(q) ** 2, c) == sp.cos(q) ** 2

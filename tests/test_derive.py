@@ -2,8 +2,8 @@
 import pytest
 import sympy as sp
 
-from symvib.symbolic import curve as dv
 from symvib.symbolic.derive import derive
+from symvib.symbolic.identity import identity_holds
 from symvib.symbolic.symbols import C, g, m, mu
 
 
@@ -22,7 +22,7 @@ def test_paper_equations_of_motion_by_hand():
         for s in (1, -1):
             A, B = ab(s)
             for got, want in ((d.branches[s].A, A), (d.branches[s].B, B)):
-                assert dv.identity_holds(got - want, d.curve, extra={mu: (0.01, 0.5), g: (1, 20)}), (name, s)
+                assert identity_holds(got - want, d.curve, extra={mu: (0.01, 0.5), g: (1, 20)}), (name, s)
 
 
 @pytest.mark.parametrize("name", ["parabola", "parabola-x", "cycloid", "circle"])
@@ -59,7 +59,7 @@ def test_residual_detects_a_wrong_trajectory():
     d = derive("circle")
     wrong = sp.Eq(d.curve.qdot**2, d.branches[1].qdot2 * (1 + mu))
     res = sp.diff(wrong.rhs, d.curve.q) / 2 + d.branches[1].A * wrong.rhs + d.branches[1].B
-    assert dv.identity_holds(res, d.curve, extra={mu: (0.01, 0.5), g: (1, 20), C: (5, 50)}) is None
+    assert identity_holds(res, d.curve, extra={mu: (0.01, 0.5), g: (1, 20), C: (5, 50)}) is None
 
 
 def test_general_qddot_agrees_with_branches():
@@ -159,14 +159,15 @@ NEW_CURVES = {"sine-track": ("a*(1 - cos(x/b))", None), "tilted-parabola": ("x**
 def test_direct_forms_satisfy_the_equations_and_equal_the_simplest(name):
     """A user curve's "direct" forms (as differentiated, no simplification): eq. 2 substituted back
     into eq. 1 vanishes at random points at 30 digits, and A, B equal the "simplest" forms there."""
-    from symvib.symbolic.curve import graph, numeric_zero
+    from symvib.symbolic.curve import graph
+    from symvib.symbolic.identity import numeric_zero
 
     z, domain = NEW_CURVES[name]
     c = graph(z, name=name, **({"domain": domain} if domain else {}))
     direct, simplest = derive(c, forms="direct", routes=()), derive(c, forms="simplest", routes=())
     extra = {mu: (0.01, 0.5), g: (1.0, 20.0), C: (5.0, 50.0)}
     for s in (1, -1):
-        assert dv.identity_holds(direct.residual(s), c, extra={**extra, sp.Symbol("Phi", real=True): (-1, 1)},
+        assert identity_holds(direct.residual(s), c, extra={**extra, sp.Symbol("Phi", real=True): (-1, 1)},
                                  simplify=False) == "numeric", s
         for got, want in ((direct.branches[s].A, simplest.branches[s].A),
                           (direct.branches[s].B, simplest.branches[s].B)):

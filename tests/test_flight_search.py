@@ -20,7 +20,7 @@ WELL = {"curve": {"z": "-a*exp(-x**2/b**2)", "name": "gauss-well"}, "parameters"
         "physics": {"mu": 0.2507, "restitution": 0.8, "contact": "unilateral", "restitution_curve": 0.3},
         "initial": {"q": -0.2830, "qdot": 2.5785}, "run": {"t_max": 5.0, "max_events": 2000}}
 #: Fast enough to fly out of the well and land on its flat tail near x = 2.95 m (where the kernels
-#: once overflowed: SymPy's simplified curvature held exp(2 x^2/b^2); symbolic.curve.tamed).
+#: once overflowed: SymPy's simplified curvature held exp(2 x^2/b^2); symbolic.identity.tamed).
 OUT_OF_THE_WELL = {**WELL, "parameters": {"a": 0.1077, "b": 0.1875}, "initial": {"q": 0.2713, "qdot": 8.1019}}
 #: A well of the same depth and width whose kernels overflow in every form SymPy gives them (a
 #: hyperbolic secant of x^2/b^2: sums of exp(+-x^2/b^2) in every derivative), beyond about 1.45 m.

@@ -13,8 +13,8 @@ import pytest
 import sympy as sp
 
 from symvib.symbolic import notation
-from symvib.symbolic.curve import numeric_zero
 from symvib.symbolic.derive import derive
+from symvib.symbolic.identity import numeric_zero
 from symvib.symbolic.symbols import C, g, mu
 
 #: Ranges of the physics symbols at the random points.

@@ -29,7 +29,7 @@ from symvib.numeric.sensitivity import sensitivities
 from symvib.numeric.sensitivity_curve import parameter_value, resolve_wrt, with_parameters
 from symvib.numeric.sensitivity_normal import normal_sign_change_tangent
 from symvib.shapes import CATALOGUE, Shape
-from symvib.symbolic.curve import sample_points
+from symvib.symbolic.identity import sample_points
 from symvib.symbolic.symbols import mu as MU
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -18,7 +18,7 @@ from symvib.expr import ExpressionError
 from symvib.numeric import kernels
 from symvib.numeric.backends import backend_available
 from symvib.prepare import load_kernels
-from symvib.symbolic.curve import CurveError
+from symvib.symbolic.branches import CurveError
 
 #: Whether the numba backend can run here (the numba tests skip otherwise).
 NUMBA = backend_available("numba")

@@ -677,7 +677,8 @@ def test_dots_in_strings_and_numbers_are_not_keys(tmp_path):
 def test_coordinate_and_parameter_names_are_plain(name):
     """``symvib derive --q __class__`` was accepted (harmless in SymPy; the code generator
     refused it later): the curve refuses it at construction, for the coordinate and parameters."""
-    from symvib.symbolic.curve import CurveError, graph, parametric
+    from symvib.symbolic.branches import CurveError
+    from symvib.symbolic.curve import graph, parametric
 
     with pytest.raises(CurveError, match=r"keyword or starts with '_'"):
         parametric("cos(t)", "sin(t)", q=name)

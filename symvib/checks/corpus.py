@@ -13,7 +13,7 @@ Tags (``tests/test_corpus.py`` checks each against the curve and its scene): ``g
 ``Abs`` or ``sign``); ``loop`` (the tangent turns by more than ``pi`` over the range the
 scene can use: between its limiters, else 64 ``q_scale`` around the start); ``cut`` (over
 that range the tangent points along ``-x``, where ``atan2(z', x')`` jumps by ``2 pi``:
-the continuous tangent angle matters, :func:`symvib.symbolic.curve.tangent_angle`);
+the continuous tangent angle matters, :func:`symvib.symbolic.angle.tangent_angle`);
 ``inflection`` (the curvature changes sign over that range); ``short`` / ``long`` (the
 chord between the limiters is below 1 cm / above 100 m); ``numeric`` (no closed-form
 ``F_sigma``: every route of :mod:`symvib.symbolic.integrals` ran out of its default budget

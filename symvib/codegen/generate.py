@@ -5,13 +5,13 @@ of a Python module that needs only NumPy (and :mod:`math` for the scalar
 path): one function per kernel and per branch, common subexpressions
 eliminated (:func:`sympy.cse`), and no conditional: every ``Piecewise`` is
 replaced by its generic branch before cse
-(:func:`~symvib.symbolic.curve.generic_branch`: the branches SymPy adds on
+(:func:`~symvib.symbolic.branches.generic_branch`: the branches SymPy adds on
 equalities such as ``Eq(cos(phi), 0)`` hold on a set of measure zero, a singular
 point or a removable value), ``sign(f)`` prints as ``math.copysign(1.0, f)`` /
 ``numpy.copysign(1.0, f)`` and ``Abs`` as ``abs`` / ``numpy.abs`` (a power of ``Abs(u)``
 in a denominator as one of ``u sign(u)``, so that a removable value such as ``q**2 /
-|q|`` at 0 is finite: :func:`~symvib.symbolic.curve.removable_form`); a condition that is an
-inequality is a :class:`~symvib.symbolic.curve.CurveError`.  Functions
+|q|`` at 0 is finite: :func:`~symvib.symbolic.branches.removable_form`); a condition that is an
+inequality is a :class:`~symvib.symbolic.branches.CurveError`.  Functions
 broadcast over NumPy arrays of ``q``, the state and the parameters; every
 kernel also has a ``*_scalar`` twin built on :mod:`math`, which is several
 times faster for one float (root finding in the driver).
@@ -78,7 +78,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from symvib import antiderivative, provenance, safeio
 from symvib.codegen import gauss
 from symvib.kernelformat import DIGEST_PREFIX, verify_text
-from symvib.symbolic.curve import CurveError, generic_branch, removable_form
+from symvib.symbolic.branches import CurveError, generic_branch, removable_form
 from symvib.symbolic.derive import Derivation, derive
 from symvib.symbolic.symbols import C, g, mu
 
@@ -149,7 +149,7 @@ class _BigNumbers:
 class _NoConditionals:
     """Printing that never writes a conditional: a kernel module holds no ``if`` and no comparison.
 
-    Every ``Piecewise`` is decided before printing (:func:`~symvib.symbolic.curve.generic_branch`);
+    Every ``Piecewise`` is decided before printing (:func:`~symvib.symbolic.branches.generic_branch`);
     what reaches a printer as a condition is a generator error, raised here with its name
     rather than written as ``(a) if (c) else (b)`` for the whitelist to refuse later.
     """
@@ -293,7 +293,7 @@ def _may_be_int(expr) -> bool:
 
 def _generic(expr, field: str):
     """A kernel's expression (or its ``(placeholders, Tuple)`` form) with every ``Piecewise``
-    decided once, before cse (:func:`~symvib.symbolic.curve.generic_branch`)."""
+    decided once, before cse (:func:`~symvib.symbolic.branches.generic_branch`)."""
     if isinstance(expr, tuple):
         pre, body = expr
         return {k: _generic(v, field) for k, v in pre.items()}, _generic(body, field)

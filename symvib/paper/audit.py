@@ -41,8 +41,8 @@ import sympy as sp
 
 from symvib.paper.seed import OCR_EDITS, SEED_TEXT
 from symvib.shapes import shape
-from symvib.symbolic.curve import CHECK_DIGITS, identity_holds, sample_points
 from symvib.symbolic.derive import coefficients, derive, pm_latex
+from symvib.symbolic.identity import CHECK_DIGITS, identity_holds, sample_points
 from symvib.symbolic.symbols import C, g, m, mu, sigma
 
 __all__ = ["Printed", "Verdict", "PRINTED", "GENERAL", "audit", "derivation", "errata_markdown", "seed_differences",

@@ -34,7 +34,8 @@ from functools import cached_property
 import sympy as sp
 
 from symvib.symbolic import budget
-from symvib.symbolic.curve import Curve, identity_holds
+from symvib.symbolic.curve import Curve
+from symvib.symbolic.identity import identity_holds
 from symvib.symbolic.integrals import ROUTE_SECONDS, ROUTES, Antiderivative, antiderivatives
 from symvib.symbolic.symbols import LATEX_NAMES, C, g, m, mu, sigma
 

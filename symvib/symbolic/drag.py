@@ -39,8 +39,10 @@ from dataclasses import dataclass
 import sympy as sp
 
 from symvib.symbolic import budget
-from symvib.symbolic.curve import Curve, identity_holds, numeric_zero, reference_point
+from symvib.symbolic.angle import reference_point
+from symvib.symbolic.curve import Curve
 from symvib.symbolic.derive import derive
+from symvib.symbolic.identity import identity_holds, numeric_zero
 from symvib.symbolic.symbols import C, g, mu
 
 #: Quadratic air drag per unit mass, ``gamma = c / m`` (drag force ``-c v |v|``).  A distinctive
@@ -129,7 +131,7 @@ class DragDerivation:
         ``qddot = (w / h**2)' / 2``; with ``S' = h`` and ``D' = integrand`` (``S`` and
         ``D`` kept as functions, so the check holds whether or not a closed form exists)
         ``qddot + A qdot**2 + B`` must vanish.  Returns ``{(sigma, n): "symbolic" |
-        "numeric" | None}`` as :func:`symvib.symbolic.curve.identity_holds` does.
+        "numeric" | None}`` as :func:`symvib.symbolic.identity.identity_holds` does.
         """
         c = self.curve
         S_f, D_f = sp.Function("S")(c.q), sp.Function("D")(c.q)

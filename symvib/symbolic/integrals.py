@@ -49,14 +49,9 @@ import mpmath
 import sympy as sp
 
 from symvib.symbolic import budget
-from symvib.symbolic.curve import (
-    CHECK_DIGITS,
-    CHECK_TOLERANCE,
-    Curve,
-    numeric_zero,
-    reference_point,
-    sample_points,
-)
+from symvib.symbolic.angle import reference_point
+from symvib.symbolic.curve import Curve
+from symvib.symbolic.identity import CHECK_DIGITS, CHECK_TOLERANCE, numeric_zero, sample_points
 from symvib.symbolic.symbols import mu
 
 __all__ = ["Attempt", "Antiderivative", "antiderivative", "antiderivatives", "integrand", "ROUTES", "ROUTE_SECONDS",

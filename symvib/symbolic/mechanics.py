@@ -20,8 +20,8 @@ from __future__ import annotations
 import sympy as sp
 from sympy.physics import mechanics as me
 
-from symvib.symbolic.curve import numeric_zero
 from symvib.symbolic.drag import gamma_drag
+from symvib.symbolic.identity import numeric_zero
 from symvib.symbolic.symbols import g, mu
 
 __all__ = ["first_principles", "agrees", "on_branch", "check_eq1", "BRANCHES"]
@@ -83,7 +83,7 @@ def first_principles(curve, friction: int = -1, *, drag: bool = False):
 
 def agrees(a, b, curve, seed: int = 0) -> bool:
     """``a == b`` at :data:`POINTS` random points (``q``, ``qdot``, ``g``, ``mu``, ``gamma``,
-    parameters), at 30 digits (:func:`symvib.symbolic.curve.numeric_zero`)."""
+    parameters), at 30 digits (:func:`symvib.symbolic.identity.numeric_zero`)."""
     extra = {curve.qdot: QDOT_RANGE, g: G_RANGE, mu: MU_RANGE, gamma_drag: GAMMA_RANGE}
     return numeric_zero(a - b, curve, extra=extra, points=POINTS, seed=seed + 1)
 
