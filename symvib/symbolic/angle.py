@@ -3,12 +3,14 @@
 ``atan2(z', x')`` jumps by ``2 pi`` where the tangent points along ``-x``;
 :func:`tangent_angle` looks for a closed form without that jump, and
 :func:`angle_jump` checks one densely in double precision.
+
+``curve`` is a :class:`~symvib.symbolic.curve.Curve` throughout (not imported here: the curve
+imports this module).
 """
 from __future__ import annotations
 
 import math
 import random
-from typing import TYPE_CHECKING
 
 import numpy as np
 import sympy as sp
@@ -16,9 +18,6 @@ import sympy as sp
 from symvib.symbolic import budget
 from symvib.symbolic.branches import CurveError, generic_branch
 from symvib.symbolic.identity import identity_holds
-
-if TYPE_CHECKING:
-    from symvib.symbolic.curve import Curve
 
 __all__ = ["tangent_angle", "reference_point", "angle_jump"]
 
@@ -46,7 +45,7 @@ ANGLE_CUSP_RTOL = 1e-6
 _ANGLES: dict = {}
 
 
-def tangent_angle(curve: Curve):
+def tangent_angle(curve):
     """A closed form of the tangent angle of ``curve`` continuous on its domain, or ``None``.
 
     ``atan2(z', x')`` is the tangent angle only up to ``2 pi``: it jumps where the
@@ -99,7 +98,7 @@ def tangent_angle(curve: Curve):
     return found
 
 
-def reference_point(curve: Curve) -> sp.Expr:
+def reference_point(curve) -> sp.Expr:
     """A finite point inside the domain: 0 when it is inside, else the middle, or one
     ``q_scale`` inside the finite end of a half-infinite domain (whose middle is infinite)."""
     lo, hi = curve.domain
@@ -154,7 +153,7 @@ def _rotation_job(xp: str, zp: str, qname: str, q0: str):
     return sp.Tuple(*out)
 
 
-def _accepted(candidate: sp.Expr, curve: Curve, q0: sp.Expr):
+def _accepted(candidate: sp.Expr, curve, q0: sp.Expr):
     """``candidate`` shifted to equal ``atan2(z', x')`` at ``q0``, if it passes the checks (a), (b)."""
     unwanted = (sp.I, sp.nan, sp.zoo, sp.oo, sp.Integral, sp.Piecewise, sp.AccumBounds)
     if not isinstance(candidate, sp.Expr) or candidate.has(*unwanted):
@@ -181,7 +180,7 @@ def _accepted(candidate: sp.Expr, curve: Curve, q0: sp.Expr):
     return alpha
 
 
-def angle_jump(alpha: sp.Expr, curve: Curve, values: dict):
+def angle_jump(alpha: sp.Expr, curve, values: dict):
     """Where ``alpha`` jumps at a regular point of ``curve`` with parameter ``values``, or ``None``.
 
     ``alpha`` is sampled at :data:`ANGLE_POINTS` points of the domain (its infinite

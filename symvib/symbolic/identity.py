@@ -4,21 +4,20 @@ SymPy does not always simplify a true identity to zero; :func:`identity_holds` t
 evaluates it at :data:`CHECK_DIGITS` digits at :func:`sample_points`, with random
 parameters.  :func:`tamed` keeps a simplified form only where it evaluates in double
 precision as its original does (:func:`far_points`).
+
+``curve`` is a :class:`~symvib.symbolic.curve.Curve` throughout (not imported here: the curve
+imports this module).
 """
 from __future__ import annotations
 
 import math
 import random
-from typing import TYPE_CHECKING
 
 import mpmath
 import numpy as np
 import sympy as sp
 
 from symvib.symbolic import budget
-
-if TYPE_CHECKING:
-    from symvib.symbolic.curve import Curve
 
 __all__ = ["IDENTITY_CHECK_POINTS", "CHECK_DIGITS", "CHECK_TOLERANCE", "sample_points", "far_points", "tamed",
            "identity_holds", "numeric_zero"]
@@ -36,7 +35,7 @@ SAMPLE_HALF_WIDTH = 2
 FAR_WIDTHS = (30.0, 1e3, 1e6)
 
 
-def sample_points(curve: Curve, n: int, *, seed: int = 0, margin: float = 0.1, values=None) -> list:
+def sample_points(curve, n: int, *, seed: int = 0, margin: float = 0.1, values=None) -> list:
     """Reproducible random coordinates inside ``curve.domain`` (mpmath numbers).
 
     A finite domain end is approached no closer than ``margin`` of its width;
@@ -53,7 +52,7 @@ def sample_points(curve: Curve, n: int, *, seed: int = 0, margin: float = 0.1, v
     return [mpmath.mpf(lo + (hi - lo) * rng.random()) for _ in range(n)]
 
 
-def far_points(curve: Curve, values=None) -> list:
+def far_points(curve, values=None) -> list:
     """Coordinates far out on the infinite ends of ``curve.domain`` (:data:`FAR_WIDTHS` times
     ``q_scale``), and the sample points in between; none beyond a finite end, where a curve may
     well be singular."""
@@ -68,7 +67,7 @@ def far_points(curve: Curve, values=None) -> list:
     return far + [float(v) for v in sample_points(curve, IDENTITY_CHECK_POINTS, seed=3, values=values)]
 
 
-def _finite_at(expr: sp.Expr, curve: Curve, points, values) -> np.ndarray:
+def _finite_at(expr: sp.Expr, curve, points, values) -> np.ndarray:
     """Whether ``expr`` (the curve's parameters at ``values``) evaluates in double precision at
     ``points`` without overflowing on the way (a scalar kernel's ``math.exp`` raises where NumPy's
     gives ``inf``, so a form whose ``inf`` cancels later still fails a plain run)."""
@@ -85,7 +84,7 @@ def _finite_at(expr: sp.Expr, curve: Curve, points, values) -> np.ndarray:
     return np.array(out, dtype=bool)
 
 
-def tamed(simplified: sp.Expr, raw: sp.Expr, curve: Curve) -> sp.Expr:
+def tamed(simplified: sp.Expr, raw: sp.Expr, curve) -> sp.Expr:
     """``simplified``, unless it overflows in double precision where ``raw`` (the same function
     before simplification) does not: then ``raw``.
 
@@ -115,7 +114,7 @@ def tamed(simplified: sp.Expr, raw: sp.Expr, curve: Curve) -> sp.Expr:
     return raw if worse.any() else simplified
 
 
-def identity_holds(expr: sp.Expr, curve: Curve, *, extra=None, points: int = IDENTITY_CHECK_POINTS,
+def identity_holds(expr: sp.Expr, curve, *, extra=None, points: int = IDENTITY_CHECK_POINTS,
                    seed: int = 1, simplify: bool = True) -> str | None:
     """Check that ``expr`` vanishes identically on the curve's domain.
 
@@ -135,7 +134,7 @@ def identity_holds(expr: sp.Expr, curve: Curve, *, extra=None, points: int = IDE
     return "numeric" if numeric_zero(expr, curve, extra=extra, points=points, seed=seed) else None
 
 
-def numeric_zero(expr: sp.Expr, curve: Curve, *, extra=None, points: int = IDENTITY_CHECK_POINTS,
+def numeric_zero(expr: sp.Expr, curve, *, extra=None, points: int = IDENTITY_CHECK_POINTS,
                  seed: int = 1) -> bool:
     """``True`` when ``expr`` is zero to ``CHECK_TOLERANCE`` at random points (30 digits)."""
     rng = random.Random(seed)
