@@ -35,7 +35,7 @@ from symvib.checks.accuracy import (
 )
 from symvib.checks.arclength import ReferenceRun, curve_frame, reference_run, scene_scales
 from symvib.checks.shipped import shipped
-from symvib.cli import build_bench_parser
+from symvib.cli.bench import build_bench_parser
 from symvib.numeric.events import EventKind, Status
 from symvib.numeric.scene import scene_from_dict
 

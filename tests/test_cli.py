@@ -99,18 +99,18 @@ def test_forwarded_subcommands_take_a_leading_option():
 
 
 def test_the_command_leaves_with_its_status_after_exit_handlers_and_every_byte_of_output():
-    # symvib.cli.leave skips the interpreter's teardown (os._exit): the exit handlers must
+    # symvib.cli.command.leave skips the interpreter's teardown (os._exit): the exit handlers must
     # still run, both streams reach the reader whole, and the status is the command's.
     code = ("import atexit, sys\n"
             "atexit.register(lambda: print('handler ran', file=sys.stderr))\n"
-            "from symvib.cli import leave\n"
+            "from symvib.cli.command import leave\n"
             "sys.stdout.write('x' * 200_000)\n"
             "leave(3)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 3
     assert out.stdout == "x" * 200_000
     assert "handler ran" in out.stderr
-    none = subprocess.run([sys.executable, "-c", "from symvib.cli import leave; leave(None)"], timeout=120)
+    none = subprocess.run([sys.executable, "-c", "from symvib.cli.command import leave; leave(None)"], timeout=120)
     assert none.returncode == 0
 
 
@@ -121,7 +121,7 @@ def test_the_command_reports_output_it_could_not_deliver_as_a_failure():
             "    def write(self, text): return len(text)\n"
             "    def flush(self): raise BrokenPipeError(32, 'Broken pipe')\n"
             "sys.stdout = Closed()\n"
-            "from symvib.cli import leave\n"
+            "from symvib.cli.command import leave\n"
             "leave(0)\n")
     assert subprocess.run([sys.executable, "-c", code], timeout=120).returncode == 1
 

@@ -142,7 +142,7 @@ class _Terminal(io.StringIO):
 
 
 def test_progress_lines_show_on_a_terminal_only():
-    from symvib.cli import _progress_on_terminal
+    from symvib.cli.command import _progress_on_terminal
 
     logger = logging.getLogger("symvib")
     before, level = list(logger.handlers), logger.level

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from symvib import sweep
-from symvib.cli import EXIT_BAD_INPUT, EXIT_RUN_FAILED, main
+from symvib.cli import main
+from symvib.cli.common import EXIT_BAD_INPUT, EXIT_RUN_FAILED
 from symvib.numeric import driver
 from symvib.numeric.events import ERROR_STATUSES, EventKind, Status, json_safe, kind_of, status_of
 from symvib.numeric.layout import ERROR_CODES, STATUSES, SceneRow, StatusCode, Summary

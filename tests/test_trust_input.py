@@ -468,7 +468,7 @@ def test_bad_sweep_files_are_one_line_errors(kind, tmp_path, capsys):
 
     make, message = BAD_SCENE_FILES[kind]
     path = make(tmp_path)
-    assert sweep_main(["--file", str(path), "-o", str(tmp_path / "out"), "--quiet"]) == cli.EXIT_BAD_INPUT
+    assert sweep_main(["--file", str(path), "-o", str(tmp_path / "out"), "--quiet"]) == common.EXIT_BAD_INPUT
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and re.search(message, err)
     assert not (tmp_path / "out").exists()
@@ -477,6 +477,7 @@ def test_bad_sweep_files_are_one_line_errors(kind, tmp_path, capsys):
 # --------------------------------------------------------------------------- command line
 
 from symvib import cli  # noqa: E402
+from symvib.cli import common  # noqa: E402
 
 
 def run_cli(capsys, *args):
@@ -527,7 +528,7 @@ def test_bad_paths_are_one_line_errors_before_any_work(case, tmp_path, capsys):
     argv = args(tmp_path, scene)
     before = listing(tmp_path)
     code, out, err = run_cli(capsys, *argv)
-    assert code == cli.EXIT_BAD_INPUT
+    assert code == common.EXIT_BAD_INPUT
     assert out == ""  # nothing ran: no event table, no "wrote"
     assert err.startswith(f"symvib {argv[0]}: error: ") and err.count("\n") == 1, err
     assert re.search(message, err), err
@@ -581,7 +582,7 @@ def test_generate_name_stays_inside_out(name, tmp_path, capsys):
     (KeyError("k"), "'k'"), ("tab\there", "tab\\there"),
 ])
 def test_one_line(message, expected):
-    assert cli.one_line(message) == expected
+    assert common.one_line(message) == expected
 
 
 def test_module_names_of_hostile_curve_names_are_short_identifiers():
@@ -630,9 +631,9 @@ def test_bad_scene_files_through_the_cli(case, tmp_path, capsys):
     path = tmp_path / "s.toml"
     path.write_text(USER_CURVE_TOML.format(curve=curve, q=q, qdot=qdot), encoding="utf-8")
     code, out, err = run_cli(capsys, "run", path)
-    assert code == cli.EXIT_BAD_INPUT and out == ""
+    assert code == common.EXIT_BAD_INPUT and out == ""
     assert re.match(rf"symvib run: error: {field}: ", err), err
-    assert err.count("\n") == 1 and len(err) <= cli.MAX_MESSAGE_LENGTH + 40
+    assert err.count("\n") == 1 and len(err) <= common.MAX_MESSAGE_LENGTH + 40
 
 
 @pytest.mark.parametrize("args, message", [
@@ -652,7 +653,7 @@ def test_hostile_command_lines_are_one_line_errors(args, message, tmp_path, caps
     args = [a.replace("OUT", str(tmp_path / "out")).replace("SCENE", str(scene)) for a in args]
     before = listing(tmp_path)
     code, out, err = run_cli(capsys, *args)
-    assert code == cli.EXIT_BAD_INPUT and out == ""
+    assert code == common.EXIT_BAD_INPUT and out == ""
     assert err.startswith(f"symvib {args[0]}: error: ") and err.count("\n") == 1 and message in err, err
     assert listing(tmp_path) == before
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from symvib import simulate, sweep
-from symvib.cli import EXIT_RUN_FAILED
 from symvib.cli import sweep_main as main
+from symvib.cli.common import EXIT_RUN_FAILED
 from symvib.numeric.scene import SceneError, scene_from_dict
 from symvib.shapes import CATALOGUE
 
@@ -118,7 +118,7 @@ import time  # noqa: E402
 import tracemalloc  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from symvib import cli  # noqa: E402
+from symvib.cli.common import EXIT_FAILED_SCENES  # noqa: E402
 from symvib.numeric.sweep import FORMAT, MAX_LIST_VALUES, SweepError, WriterLock, load_sweep, make_spec, sweep_id  # noqa: E402
 from symvib.numeric.sweep import lock as lock_mod  # noqa: E402
 from symvib.numeric.sweep import result as result_mod  # noqa: E402
@@ -662,7 +662,7 @@ def test_cli_exits_nonzero_when_scenes_failed(tmp_path, capsys, monkeypatch):
     assert main(args) == 0
     monkeypatch.setattr(result_mod, "ERROR_CODES", (STATUSES.index("arrested"),))
     capsys.readouterr()
-    assert main(args) == cli.EXIT_FAILED_SCENES == EXIT_RUN_FAILED
+    assert main(args) == EXIT_FAILED_SCENES == EXIT_RUN_FAILED
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "3 of 3 scenes failed (arrested; first: row 0)" in err
     assert load_sweep(tmp_path / "o").failed.all()
@@ -680,7 +680,7 @@ def test_the_issues_overflow_inputs_fail_a_sweep(tmp_path, capsys):
     for args, failed in (([str(scene), "--vary", "k=0.6,0.8"], [True, True]),
                          (["paper-parabola", "--vary", "mu=0.05,1e60"], [False, True])):
         out = tmp_path / f"o{len(failed)}{failed[0]}"
-        assert main([*args, "-o", str(out), "--quiet"]) == cli.EXIT_FAILED_SCENES
+        assert main([*args, "-o", str(out), "--quiet"]) == EXIT_FAILED_SCENES
         assert "scenes failed" in capsys.readouterr().err
         res = load_sweep(out)
         assert list(res.failed) == failed

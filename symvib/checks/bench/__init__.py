@@ -1,6 +1,6 @@
 """``symvib bench``: work-precision charts and the stability suite.
 
-The jobs of the command line (its options are parsed by :mod:`symvib.cli`,
+The jobs of the command line (its options are parsed by :mod:`symvib.cli.bench`,
 ``symvib bench SUBCOMMAND --help``)::
 
     symvib bench work-precision --out DIR [--quick] [--random N] [--workers 2]

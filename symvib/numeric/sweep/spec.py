@@ -1,7 +1,7 @@
 """The sweep definition: a base scene, the axes it varies, grid or random, chunking (validated).
 
 :func:`make_spec` checks a definition given in Python values (the command
-line, :mod:`symvib.cli`, passes its options here); :meth:`SweepSpec.from_dict`
+line, :mod:`symvib.cli.sweep`, passes its options here); :meth:`SweepSpec.from_dict`
 checks one read from a manifest or received by a Dask worker; both refuse a
 sweep beyond :mod:`symvib.numeric.sweep.limits` before anything of its size is
 built.  :meth:`SweepSpec.rows` gives a chunk's row numbers and varied values.
