@@ -58,7 +58,7 @@ def main(argv=None):
 
     import sympy as sp
 
-    from symvib.codegen.generate import _kernel_exprs
+    from symvib.codegen.kernel_text import kernel_exprs
     from symvib.symbolic.derive import derive
     from symvib.symbolic.integrals import ROUTES
     from symvib.symbolic.symbols import C, g, mu
@@ -71,7 +71,7 @@ def main(argv=None):
     for name, pvals in (("parabola", (1.0,)), ("cycloid", (0.05,)), ("catenary", (1.0,))):
         mod = kernels.load(name)
         d = derive(name, routes=() if mod.F_ROUTES[1] == "numeric" else ROUTES)
-        exprs = {k: (a, e) for k, a, e, _ in _kernel_exprs(d)}
+        exprs = {k: (a, e) for k, a, e, _ in kernel_exprs(d)}
         lo, hi = mod.domain(*pvals)
         lo, hi = max(lo, -2.0), min(hi, 2.0)
         q = rng.uniform(lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo), args.n)

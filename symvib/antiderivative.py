@@ -2,7 +2,7 @@
 
 Where a curve's ``F_sigma`` has no closed form (physics.md, eq. 2), its
 kernels ``F_p``/``F_m`` integrate ``F_s'`` from the module's ``Q_REF`` with this rule;
-the code generator (:mod:`symvib.codegen.generate`) writes it into the module, and a
+the code generator (:mod:`symvib.codegen.kernel_text`) writes it into the module, and a
 run on a narrowed domain (:func:`symvib.numeric.prepared.kernel_view`) uses the same
 rule from its own reference point.  Both wings read the constants here (ground floor:
 no NumPy at import).

@@ -24,8 +24,8 @@ __all__ = ["GENERATOR_VERSION", "GENERATOR_SOURCES", "generator_digest", "input_
 GENERATOR_VERSION = "2"
 #: Modules whose code decides what a generated kernel module contains.
 GENERATOR_SOURCES = ("symbolic/symbols.py", "expr.py", "symbolic/curve.py", "symbolic/branches.py",
-                     "symbolic/identity.py", "symbolic/angle.py", "symbolic/integrals.py",
-                     "symbolic/derive.py", "codegen/generate.py", "antiderivative.py")
+                     "symbolic/identity.py", "symbolic/angle.py", "symbolic/integrals.py", "symbolic/derive.py",
+                     "codegen/printers.py", "codegen/kernel_text.py", "codegen/generate.py", "antiderivative.py")
 #: Modules whose code decides what a curve's jets module contains besides :data:`GENERATOR_SOURCES`
 #: (kept apart so that the kernel modules' hash, and so ``generated/``, stay as they are).
 JETS_SOURCES = ("codegen/jets.py",)

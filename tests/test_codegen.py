@@ -11,6 +11,7 @@ import pytest
 import sympy as sp
 
 from symvib.codegen import generate as codegen
+from symvib.codegen import kernel_text
 from symvib.numeric import kernels
 from symvib.prepare import load_kernels
 from symvib.shapes import CATALOGUE, shape
@@ -46,7 +47,7 @@ def test_every_kernel_matches_mpmath(name):
     rng = np.random.default_rng(abs(hash(name)) % 2**32)
     defaults = shape(name).defaults
     q_sym = sp.Symbol("q", real=True)
-    exprs = {k: (args, expr) for k, args, expr, _ in codegen._kernel_exprs(d)}
+    exprs = {k: (args, expr) for k, args, expr, _ in kernel_text.kernel_exprs(d)}
     for b, s in {"p": 1, "m": -1}.items():
         if not d.branches[s].F.closed:
             exprs[f"F_{b}"] = (("q", "mu", *mod.PARAMS), d.branches[s].F.expr.xreplace({c.q: q_sym}))
@@ -197,7 +198,7 @@ def test_reserved_parameter_names():
     from symvib.symbolic.curve import graph
 
     with pytest.raises(CurveError, match="reserved in kernel modules"):
-        codegen.module_text(derive(graph("x**2/numpy")), {"name": "bad"})
+        kernel_text.module_text(derive(graph("x**2/numpy")), {"name": "bad"})
 
 
 def test_a_kernel_takes_each_sine_and_cosine_once_and_its_tangent_from_them():

@@ -163,7 +163,7 @@ def test_a_hint_that_jumps_is_refused():
 
 
 def test_the_kernel_module_says_whether_alpha_has_a_branch_cut():
-    from symvib.codegen.generate import module_text
+    from symvib.codegen.kernel_text import module_text
     from symvib.symbolic.derive import derive
 
     for x, z, cut in (("q - a*sin(q)", "a*(1 - cos(q))", True), ("R*sin(q)", "R*(1 - cos(q))", False)):

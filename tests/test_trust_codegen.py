@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from symvib.codegen import generate as codegen
+from symvib.codegen import kernel_text, printers
 from symvib.expr import ExpressionError
 from symvib.numeric import kernels
 from symvib.numeric.backends import backend_available
@@ -78,8 +79,8 @@ def test_hostile_name_module_imports_and_defines_nothing_else(label, bowl, tmp_p
     d, source = bowl
     marker = tmp_path / MARKER_NAME
     name = HOSTILE_NAMES[label].format(marker=str(marker))
-    expected = _public(_import_text(codegen.module_text(d, source), tmp_path / "plain", "plain"))
-    module = _import_text(codegen.module_text(d, {**source, "name": name}), tmp_path / "hostile")
+    expected = _public(_import_text(kernel_text.module_text(d, source), tmp_path / "plain", "plain"))
+    module = _import_text(kernel_text.module_text(d, {**source, "name": name}), tmp_path / "hostile")
     assert module.NAME == name and module.SOURCE["name"] == name
     assert _public(module) == expected
     assert not marker.exists()
@@ -109,7 +110,7 @@ def test_parameter_names_that_would_shadow_kernel_names_are_refused(param, cache
                                         ("_t0", "'_'"), ("p q", "ASCII"), ("", "ASCII"), (3, "ASCII")])
 def test_check_param_names_refuses_non_identifiers(param, why):
     with pytest.raises(CurveError, match=rf"^curve\.params: parameter name .* {why}"):
-        codegen.check_param_names(["p", param])
+        kernel_text.check_param_names(["p", param])
 
 
 @pytest.mark.parametrize("field, value", [
@@ -130,11 +131,11 @@ def test_hostile_expressions_are_refused_or_harmless(field, value, cache):
 @pytest.mark.parametrize("value", [object(), b"bytes", {1: "a"}, complex(1, 2)])
 def test_source_literal_takes_plain_data_only(value):
     with pytest.raises(CurveError, match=r"^source\.extra"):
-        codegen._py_literal({"extra": value})
+        printers.py_literal({"extra": value})
 
 
 def test_source_literal_prints_non_finite_floats_as_calls():
-    assert eval(codegen._py_literal([float("inf"), float("-inf")])) == [float("inf"), float("-inf")]  # noqa: S307
+    assert eval(printers.py_literal([float("inf"), float("-inf")])) == [float("inf"), float("-inf")]  # noqa: S307
 
 
 GENERATED = Path(__file__).resolve().parents[1] / "generated"
@@ -147,7 +148,7 @@ def test_every_committed_generated_module_passes_the_whitelist(path):
 
 def test_a_fresh_user_module_passes_the_whitelist(bowl):
     d, source = bowl
-    kernels.verify_text(codegen.module_text(d, source), "bowl.py")
+    kernels.verify_text(kernel_text.module_text(d, source), "bowl.py")
 
 
 #: Hand-made modules the whitelist refuses, and the word of the error that says why.
@@ -242,7 +243,7 @@ def test_tampered_cached_module_is_detected_and_regenerated(label, cache, tmp_pa
         again = load_kernels({**BOWL, "name": "bowl"})
     assert not marker.exists()
     assert path.read_text(encoding="utf-8") == good
-    assert again.PANEL == codegen.PANEL and float(again.z_scalar(2.0, 1.0)) == 2.0
+    assert again.PANEL == kernel_text.PANEL and float(again.z_scalar(2.0, 1.0)) == 2.0
     assert sorted(p.name for p in cache.iterdir()) == [path.name]
 
 
@@ -299,15 +300,15 @@ def test_big_integers_are_printed_as_floats(expr, numpy_text):
     import sympy as sp
 
     e = sp.sympify(expr)
-    assert codegen._NumPy().doprint(e) == numpy_text
-    assert codegen._Math().doprint(e) == numpy_text.replace("numpy.", "math.")
+    assert printers.NumPy().doprint(e) == numpy_text
+    assert printers.Math().doprint(e) == numpy_text.replace("numpy.", "math.")
 
 
 def test_numbers_beyond_float_are_refused():
     import sympy as sp
 
     with pytest.raises(CurveError, match=r"^curve: the number 1000.* is too large for a float kernel"):
-        codegen._Math().doprint(sp.Integer(10) ** 400 * sp.Symbol("x"))
+        printers.Math().doprint(sp.Integer(10) ** 400 * sp.Symbol("x"))
 
 
 def _scene(z, backend_curve_name):
@@ -461,7 +462,7 @@ def test_curves_with_abs_and_sign_generate_no_conditional(label, cache):
 
 def _module_namespace(d, source, tmp_path):
     """The kernels of derivation ``d`` as a namespace (the text checked by the whitelist first)."""
-    text = codegen.module_text(d, source)
+    text = kernel_text.module_text(d, source)
     kernels.verify_text(text, tmp_path / "m.py")
     namespace = {}
     exec(compile(text, str(tmp_path / "m.py"), "exec"), namespace)  # noqa: S102 - verified above
@@ -506,8 +507,8 @@ def test_sign_and_abs_print_without_a_conditional(expr, numpy_text, math_text):
     import sympy as sp
 
     e = sp.sympify(expr, locals={"q": sp.Symbol("q", real=True)})
-    assert codegen._NumPy().doprint(e) == numpy_text
-    assert codegen._Math().doprint(e) == math_text
+    assert printers.NumPy().doprint(e) == numpy_text
+    assert printers.Math().doprint(e) == math_text
 
 
 @pytest.mark.parametrize("expr", ["Piecewise((1, Eq(q, 0)), (q, True))", "Eq(q, 0)", "q > 0",
@@ -516,6 +517,6 @@ def test_printers_refuse_what_would_print_as_a_conditional(expr):
     import sympy as sp
 
     e = sp.sympify(expr, locals={"q": sp.Symbol("q", real=True)})
-    for printer in (codegen._NumPy(), codegen._Math()):
+    for printer in (printers.NumPy(), printers.Math()):
         with pytest.raises(CurveError, match="conditional"):
             printer.doprint(e)
