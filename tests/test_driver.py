@@ -54,6 +54,21 @@ def test_paper_scenes_match_reference(name, k):
     assert result.energy_budget.relative_residual < BUDGET_TOL
 
 
+@pytest.mark.slow
+def test_the_reference_without_closed_forms_finds_a_swing_shorter_than_its_grid_step():
+    """Under load the reference's derivation may spend its route budgets and integrate F_s' instead
+    (seen once in a full run: 100,000 reversals against the engine's 4 events). paper-circle-3.8 at
+    k = 0.8 reverses at phi = 0.1428 and swings back less than a grid step before it stops: from
+    rest, G(q) = 0 exactly, and the bracket's start was taken for the next turning point, again and
+    again. Without closed forms it must give the engine's events as the closed-form reference does."""
+    from symvib.symbolic.derive import derive
+
+    s = load_scene(SCENES / "paper-circle-3.8.toml").replace(k=0.8)
+    ref = phase_reference(s, max_events=10, derive=lambda curve, seconds: derive(curve, seconds=seconds, routes=()))
+    assert [e.kind for e in ref] == ["impact", "reversal", "reversal", "arrest"]
+    assert_matches_reference(simulate(s), ref)
+
+
 def test_result_is_immutable_and_serializable():
     result = simulate(load_scene(SCENES / "paper-parabola.toml"))
     with pytest.raises(dataclasses.FrozenInstanceError):

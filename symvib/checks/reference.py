@@ -49,6 +49,21 @@ class RefEvent:
 
 #: Budget (seconds) of each closed-form route when the reference derives a curve.
 ROUTE_SECONDS = 2.0
+#: Halvings of :func:`_inner_bracket` towards a start from rest, at most (2^-200 of a grid step:
+#: below the 30 digits of a position).
+INNER_HALVINGS = 200
+
+
+def _inner_bracket(G, q, x):
+    """``(a, b)`` with ``G(a) > 0 >= G(b)`` in ``(q, x]``, where ``G(q) = 0`` (a start from rest) and
+    ``G(x) <= 0``: halving towards ``q`` until ``G`` is positive; ``(None, None)`` when it is not
+    within :data:`INNER_HALVINGS` halvings (the motion cannot start)."""
+    b, a = x, q + (x - q) / 2
+    for _ in range(INNER_HALVINGS):
+        if G(a) > 0:
+            return a, b
+        b, a = a, q + (a - q) / 2
+    return None, None
 
 
 class _Model:
@@ -185,7 +200,11 @@ def phase_reference(scene, *, dps: int = 30, max_events: int | None = None, deri
             found = None
             for x in grid:
                 if G(x) <= 0:
-                    found = ("reversal", prev, x)
+                    if prev == q and w == 0:
+                        # From rest (a reversal), the next turning point may lie before the first
+                        # grid point, and the bracket's end q is a root itself: halve towards q.
+                        prev, x = _inner_bracket(G, q, x)
+                    found = ("reversal", prev, x) if prev is not None else ("stuck", q, q)
                     break
                 if Nn(x) < 0:
                     found = ("normal_sign_change", prev, x)
@@ -193,6 +212,9 @@ def phase_reference(scene, *, dps: int = 30, max_events: int | None = None, deri
                 prev = x
             if found is None:
                 qb = bound
+            elif found[0] == "stuck":   # G <= 0 on both sides of q: no motion from rest (the cone's edge)
+                events.append(RefEvent("arrest", t, q, mp(0), mp(0)))
+                break
             else:
                 what, a, b = found
                 f = G if what == "reversal" else Nn
