@@ -91,6 +91,8 @@ STARTUP_TIMEOUT = 120
 KERNEL_NAME = "python3"
 #: Cell metadata worth keeping (everything else is editor state).
 CELL_METADATA = ("tags",)
+#: Hex digits of the id :func:`normalize` gives a cell that has none (as Jupyter's own: 8).
+CELL_ID_DIGITS = 8
 #: Environment of the kernel: figures render off-screen.
 KERNEL_ENV = {"MPLBACKEND": "Agg"}
 #: Where ``render`` writes the pages.
@@ -130,10 +132,13 @@ def _lines(source) -> list:
 def normalize(nb: dict) -> dict:
     """The notebook with outputs stripped and only durable metadata kept (a new dict)."""
     cells = []
-    for cell in nb.get("cells", []):
+    for index, cell in enumerate(nb.get("cells", [])):
         out = {k: v for k, v in cell.items() if k not in ("outputs", "execution_count", "metadata", "source")}
         out["metadata"] = {k: v for k, v in cell.get("metadata", {}).items() if k in CELL_METADATA}
         out["source"] = _lines(cell.get("source", ""))
+        if "id" not in out:   # (nbformat 4.5 requires one; derived from the cell, so cleaning twice agrees)
+            text = f"{index}:{''.join(out['source'])}"
+            out["id"] = hashlib.sha256(text.encode("utf-8")).hexdigest()[:CELL_ID_DIGITS]
         if cell.get("cell_type") == "code":
             out["outputs"] = []
             out["execution_count"] = None
@@ -163,6 +168,8 @@ def problems(text: str) -> list:
         return [f"nbformat {nb.get('nbformat')!r}, expected 4"]
     found = []
     for i, cell in enumerate(nb.get("cells", []), 1):
+        if "id" not in cell:
+            found.append(f"cell {i} has no id")
         if cell.get("cell_type") != "code":
             continue
         if cell.get("outputs"):

@@ -8,6 +8,7 @@ README's "Your own curve" example is run here too.
 from __future__ import annotations
 
 import re
+import warnings
 from pathlib import Path
 
 import pytest
@@ -72,6 +73,25 @@ def test_check_flags_outputs_and_clean_strips_them(tmp_path):
     assert dirty.read_text(encoding="utf-8") == source
     assert nbtool.main(["check", str(dirty)]) == 0
     assert nbtool.main(["check", str(tmp_path / "missing.ipynb")]) == 2
+
+
+def test_a_cell_without_an_id_is_flagged_and_cleaning_gives_it_one(tmp_path):
+    """nbformat 4.5 wants an id on every cell (a MissingIDFieldWarning now, an error in later nbformat
+    versions): fit.ipynb had two cells without one, which only that warning showed."""
+    import json
+
+    nb = json.loads(NOTEBOOKS[0].read_text(encoding="utf-8"))
+    del nb["cells"][1]["id"]
+    path = tmp_path / "no-id.ipynb"
+    path.write_text(json.dumps(nb, indent=2), encoding="utf-8")
+    with warnings.catch_warnings():   # (nbformat's own MissingIDFieldWarning, in the versions that give it)
+        warnings.simplefilter("ignore")
+        found = nbtool.check([path])[path]
+    assert any("cell 2 has no id" in p for p in found)
+    assert nbtool.clean([path]) == [path]
+    cleaned = json.loads(path.read_text(encoding="utf-8"))
+    assert len(cleaned["cells"][1]["id"]) == nbtool.CELL_ID_DIGITS and nbtool.check([path]) == {}
+    assert nbtool.clean([path]) == []   # (the same id on a second cleaning)
 
 
 @pytest.mark.parametrize("path", [p for p in NOTEBOOKS if p.stem not in NOT_CURVES], ids=lambda p: p.stem)
