@@ -190,7 +190,7 @@ def whole_interval_part(scene, scenes: int, nodes: int, root_steps: int) -> None
         one = 0.5 * (t2 - t1) * sum(wj * dt(c - R * math.cos(tj)) * R * math.sin(tj) for tj, wj in zip(theta, w))
         ref = 0.0
         graded = [lo + (hi - lo) * 0.5 ** k for k in range(REF_LEVELS, 0, -1)]
-        edges = [lo, *graded, *[hi - (g_ - lo) for g_ in reversed(graded)], hi]
+        edges = [lo, *graded, *[hi - (g_ - lo) for g_ in reversed(graded[:-1])], hi]   # (the middle once)
         for a, b in zip(edges[:-1], edges[1:]):
             ref += 0.5 * (b - a) * sum(wj * dt(a + 0.5 * (b - a) * (xj + 1.0)) for xj, wj in zip(xr, wr))
         errors["one panel"].append(abs(one / ref - 1.0))
